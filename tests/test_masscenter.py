@@ -1,0 +1,149 @@
+"""The closed-form mass centre against mpmath's matrix exponential of the first-order system.
+
+Reference: d/dt (q, v, 1) = [[0, 1, 0], [-a, 0, -b/2], [0, 0, 0]] (q, v, 1), exponentiated by
+mpmath.expm at 40 digits: no eigen-decomposition, no case split by eigenvalue sign.
+"""
+import mpmath
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from thetasol._so3 import rodrigues
+from thetasol.masscenter import MassCenterMotion, mass_center, stumpff
+
+
+def expm_reference(a, b, q0, v0, t, dps=40):
+    ctx = mpmath.MPContext()
+    ctx.dps = dps
+    A = ctx.zeros(7, 7)
+    for i in range(3):
+        A[i, 3 + i] = 1
+        A[3 + i, 6] = -ctx.mpf(float(b[i])) / 2
+        for j in range(3):
+            A[3 + i, j] = -ctx.mpf(float(a[i, j]))
+    y0 = ctx.matrix([float(x) for x in q0] + [float(x) for x in v0] + [1])
+    out = []
+    for tk in np.atleast_1d(t):
+        y = ctx.expm(A * ctx.mpf(float(tk))) * y0
+        out.append([y[i] for i in range(6)])
+    return out
+
+
+def to_float(rows):
+    return np.array([[float(x) for x in r] for r in rows])
+
+
+def matrix_with_eigenvalues(lam, rotvec):
+    R = rodrigues(np.asarray(rotvec, dtype=float))
+    return R @ np.diag(lam) @ R.T
+
+
+@pytest.mark.parametrize("lam", [
+    [1.0, 2.5, 0.3],          # trigonometric
+    [-1.0, -0.4, -2.0],       # hyperbolic
+    [0.0, 0.0, 0.0],          # polynomial
+    [1.3, -0.7, 0.0],         # all three
+    [1.0, 1.0 + 1e-13, 2.0],  # nearly degenerate eigenvalues
+])
+def test_against_matrix_exponential(lam):
+    rng = np.random.default_rng(0)
+    a = matrix_with_eigenvalues(lam, [0.4, -1.1, 0.7])
+    b, q0, v0 = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+    t = np.array([0.0, 0.37, 1.0, -2.2, 5.0])
+    q, v = mass_center(a, b, q0, v0, t)
+    ref = to_float(expm_reference(a, b, q0, v0, t))
+    scale = 1 + np.max(np.abs(ref), axis=1, keepdims=True)
+    err = np.max(np.abs(np.concatenate([q, v], axis=1) - ref) / scale)
+    assert err < 2e-15 * (1 + np.max(np.abs(t)) * np.sqrt(np.max(np.abs(lam))) * 4)
+
+
+@settings(max_examples=60, deadline=None)
+@given(eps=st.one_of(st.sampled_from([0.0, 5e-324, -5e-324, 1e-300, -1e-300, 1e-17, -1e-17]),
+                     st.floats(-1e-3, 1e-3)),
+       t=st.floats(-20, 20), seed=st.integers(0, 2**16))
+def test_eigenvalue_through_zero(eps, t, seed):
+    """Accurate on both sides of and at a zero eigenvalue, any b, including the secular t^2 term."""
+    rng = np.random.default_rng(seed)
+    a = matrix_with_eigenvalues([0.8, eps, -0.3], rng.normal(size=3))
+    b, q0, v0 = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+    q, v = mass_center(a, b, q0, v0, t)
+    ref = to_float(expm_reference(a, b, q0, v0, [t], dps=30))[0]
+    scale = 1 + np.max(np.abs(ref))
+    # error budget: eigh backward error (~1e-16 |a|) times the sensitivity t^2 |b|, plus round-off
+    assert np.max(np.abs(np.concatenate([q, v]) - ref)) < 4e-15 * scale * (1 + abs(t)) ** 2
+
+
+def test_continuous_in_the_eigenvalue():
+    """q(t) is analytic in lam: the values at +-d straddle the value at 0 within O(d t^4)."""
+    a0, q0, v0, b = np.zeros((3, 3)), np.array([1.0, 2, 3]), np.array([0.5, -1, 2]), np.array([1.0, 0, -1])
+    t = 3.0
+    q_zero, _ = mass_center(a0, b, q0, v0, t)
+    # exact polynomial motion at lam = 0: q0 + v0 t - b t^2 / 4
+    assert np.allclose(q_zero, q0 + v0 * t - b * t**2 / 4, rtol=0, atol=1e-14)
+    for d in (1e-6, 1e-10, 1e-14):
+        qp, _ = mass_center(d * np.eye(3), b, q0, v0, t)
+        qm, _ = mass_center(-d * np.eye(3), b, q0, v0, t)
+        assert np.all(np.abs(qp - q_zero) <= 2 * d * t**4 * 3 + 1e-14)
+        # the odd part in lam cancels: what is left is O(d^2) or round-off
+        assert np.all(np.abs(0.5 * (qp + qm) - q_zero) <= d**2 * t**8 + 1e-14)
+
+
+def test_stumpff_functions():
+    lam = np.array([4.0, -4.0, 0.0, 1e-30])
+    C, S, P = stumpff(lam, 0.5)
+    assert np.allclose(C, [np.cos(1), np.cosh(1), 1, 1], rtol=1e-15)
+    assert np.allclose(S, [np.sin(1), np.sinh(1), 1, 1], rtol=1e-15)
+    assert np.allclose(P, [1 - np.cos(1), np.cosh(1) - 1, 0.5, 0.5], rtol=1e-15)
+    # no cancellation in P for small arguments (1 - cos x loses everything at x = 1e-9)
+    _, _, P = stumpff(1e-18, 1.0)
+    assert P == 0.5
+
+
+def test_shapes_energy_and_modes():
+    rng = np.random.default_rng(3)
+    a = matrix_with_eigenvalues([1.0, -0.5, 0.0], rng.normal(size=3))
+    mc = MassCenterMotion(a, rng.normal(size=3), rng.normal(size=3), rng.normal(size=3))
+    assert mc.kinds == ("hyperbolic", "polynomial", "trigonometric")
+    assert len(mc.describe()) == 3
+    q, v = mc(1.5)
+    assert q.shape == (3,) and v.shape == (3,)
+    t = np.linspace(-3, 3, 12).reshape(3, 4)
+    q, v = mc(t)
+    assert q.shape == (3, 4, 3) and v.shape == (3, 4, 3)
+    q1, _ = mc(t[1, 2])
+    assert np.allclose(q1, q[1, 2], rtol=0, atol=1e-15)
+    E = mc.energy(q, v)
+    assert np.max(np.abs(E - E.flat[0])) < 1e-13 * (1 + np.max(np.abs(v)) ** 2)
+
+
+def test_mpmath_path():
+    rng = np.random.default_rng(5)
+    a = matrix_with_eigenvalues([0.9, -0.2, 0.0], rng.normal(size=3))
+    b, q0, v0 = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+    before = mpmath.mp.dps
+    q, v = mass_center(a, b, q0, v0, np.array([0.5, 4.0]), dps=35)
+    assert mpmath.mp.dps == before
+    assert q.shape == (2, 3) and isinstance(q[0, 0], mpmath.mpf)
+    ref = expm_reference(a, b, q0, v0, [0.5, 4.0], dps=45)
+    for k in range(2):
+        for i in range(3):
+            assert abs(q[k, i] - ref[k][i]) < mpmath.mpf(10) ** -30
+            assert abs(v[k, i] - ref[k][3 + i]) < mpmath.mpf(10) ** -30
+
+
+def test_bad_input_and_overflow():
+    good = dict(a=np.eye(3), b=np.zeros(3), q0=np.zeros(3), v0=np.zeros(3))
+    with pytest.raises(ValueError, match="symmetric"):
+        MassCenterMotion(**{**good, "a": [[1, 2, 0], [0, 1, 0], [0, 0, 1]]})
+    with pytest.raises(ValueError, match="NaN"):
+        MassCenterMotion(**{**good, "b": [0, np.nan, 0]})
+    with pytest.raises(ValueError, match="shape"):
+        MassCenterMotion(**{**good, "q0": [0, 0]})
+    with pytest.raises(ValueError, match="NaN"):
+        MassCenterMotion(**good)(np.array([1.0, np.inf]))
+    mc = MassCenterMotion(**{**good, "a": -np.eye(3), "q0": [1, 0, 0]})
+    with pytest.raises(OverflowError, match="dps"):
+        mc(1000.0)
+    q, _ = mc(1000.0, dps=20)  # the mpmath path has no overflow
+    assert q[0] > mpmath.mpf(10) ** 400
