@@ -1,0 +1,216 @@
+"""Places over the critical values and infinity; local expansions; adjoint conditions.
+
+Method.  Around each critical value b (and around x = infinity) the sheets are continued from the
+reference vertex of b's cell to a circle of radius r (half the distance to the nearest other critical
+value) and once around it, sampled at M equispaced points.  The cycles of the resulting permutation
+are the places over b; concatenating the samples of the sheets of a cycle of length e gives the
+values on a circle |t| = r^(1/e) in the local parameter t (x = b + t^e, or x = t^(-e) at infinity),
+and an FFT gives Laurent-Puiseux coefficients of any function or differential there.  This one
+numerical tool replaces symbolic Puiseux expansions: it gives the limits of y at every place, the
+local expansions the Baker-Akhiezer construction needs, and the adjoint conditions (no negative
+powers of t in g/f_y dx/dt) that select the holomorphic differentials of a singular curve.
+"""
+from __future__ import annotations
+
+import numpy as np
+import sympy as sp
+
+from ._curve_quad import Piece
+
+M_SITE = 64
+M_INF = 128
+
+
+class LocalData:
+    """Samples of all sheets on a circle around a critical value or infinity."""
+
+    def __init__(self, kind, site, center, ref, x1, xs, ys, perm):
+        self.kind = kind  # 'critical' | 'infinity' | 'regular'
+        self.site = site
+        self.center = center  # b, or 0 for infinity
+        self.ref = ref
+        self.x1 = x1
+        self.xs = xs  # (M,)
+        self.ys = ys  # (n, M) indexed by reference labels
+        self.perm = perm
+        self.cycles = _cycles(perm)
+
+    def place_samples(self, cycle):
+        """(t samples, x samples, y samples) of length e*M for the place of this cycle."""
+        e = len(cycle)
+        M = self.xs.shape[0]
+        y = np.concatenate([self.ys[c] for c in cycle])
+        x = np.tile(self.xs, e)
+        m = np.arange(e * M)
+        if self.kind == "infinity":
+            t0 = self.x1 ** (-1.0 / e)
+        else:
+            t0 = (self.x1 - self.center) ** (1.0 / e)
+        t = t0 * np.exp(2j * np.pi * m / (e * M))
+        return t, x, y
+
+
+def _cycles(perm):
+    seen = np.zeros(len(perm), bool)
+    out = []
+    for i in range(len(perm)):
+        if not seen[i]:
+            cyc = []
+            j = i
+            while not seen[j]:
+                seen[j] = True
+                cyc.append(int(j))
+                j = perm[j]
+            out.append(tuple(cyc))
+    return out
+
+
+def local_data(curve):
+    """LocalData for every site (in order) and for infinity (last)."""
+    if "local" in curve._cache:
+        return curve._cache["local"]
+    G = curve._graph
+    sites = curve._sites
+    allsites = G.allsites
+    pieces1 = []
+    meta = []
+    for k, b in enumerate(sites):
+        ref = G.cell_vertices[k][0]
+        others = np.abs(allsites - b)
+        others = others[others > 0]
+        dmin = others.min() if len(others) else G.H
+        v = G.V[ref]
+        r = min(0.5 * dmin, 0.5 * abs(v - b))
+        x1 = b + r * (v - b) / abs(v - b)
+        pieces1.append(Piece("line", v, x1, curve._vroots[ref]))
+        meta.append(("critical", k, b, ref, x1, M_SITE, 1))
+    # infinity: out along the ray from the box centre through the base vertex
+    vb = G.V[G.base]
+    c = G.center
+    Rfar = 2.0 * (max(np.abs(allsites).max() if len(allsites) else 0.0, abs(c)) + 2 * G.H)
+    lam = 1.0
+    while abs(c + lam * (vb - c)) < Rfar:
+        lam *= 2.0
+    x1 = c + lam * (vb - c)
+    pieces1.append(Piece("line", vb, x1, curve._vroots[G.base]))
+    meta.append(("infinity", -1, 0j, G.base, x1, M_INF, -1))
+    tr1 = curve._tracker.track(pieces1)
+    pieces2 = []
+    for (kind, k, b, ref, x1, M, d), y1 in zip(meta, tr1.ends):
+        taus = np.arange(M + 1) / M
+        pieces2.append(Piece("circle", x1, b, y1, e=d, taus=taus))
+    tr2 = curve._tracker.track(pieces2)
+    out = []
+    for p, ((kind, k, b, ref, x1, M, d), y1) in enumerate(zip(meta, tr1.ends)):
+        xs, ys = tr2.values(p)
+        end = ys[:, -1]
+        dd = np.abs(end[:, None] - y1[None, :])
+        perm = np.argmin(dd, axis=1)
+        if len(set(perm.tolist())) != curve.n:
+            raise ValueError("sheet continuation around a critical value failed (numerically singular curve)")
+        out.append(LocalData(kind, k, b, ref, x1, xs[:M], ys[:, :M], perm))
+    curve._cache["local"] = out
+    return out
+
+
+def laurent(t, h):
+    """Laurent coefficients c_k (k = -K..K-1) of samples h(t) on a circle t = t0 * exp(2 pi i m / N)."""
+    N = len(t)
+    F = np.fft.fft(h) / N
+    k = np.fft.fftfreq(N, 1.0 / N).astype(int)
+    t0 = t[0]
+    with np.errstate(over="ignore", invalid="ignore"):
+        c = F / t0 ** k
+    order = np.argsort(k)
+    return k[order], c[order], F[order]
+
+
+def differential_samples(curve, ld, cycle, P):
+    """h(t) samples of g/f_y dx/dt for numerator arrays P (nd, I, J): shape (nd, e*M)."""
+    t, x, y = ld.place_samples(cycle)
+    e = len(cycle)
+    A = curve._poly.coeff_polys(x)
+    _, fy = curve._poly.horner_y(A, y[:, None])
+    fy = fy[:, 0]
+    Xp = x[:, None] ** np.arange(P.shape[1])[None, :]
+    Yp = y[:, None] ** np.arange(P.shape[2])[None, :]
+    g = np.einsum("ki,kj,dij->dk", Xp, Yp, P)
+    if ld.kind == "infinity":
+        dxdt = -e * t ** (-e - 1)
+    else:
+        dxdt = e * t ** (e - 1)
+    return t, g / fy * dxdt
+
+
+def adjoint_subspace(curve, candidates):
+    """Combinations of the candidate numerators whose differentials are holomorphic at every place."""
+    P = curve._numerators(candidates)
+    rows = []
+    for ld in local_data(curve):
+        for cyc in ld.cycles:
+            t, h = differential_samples(curve, ld, cyc, P)
+            N = h.shape[1]
+            F = np.fft.fft(h, axis=1) / N
+            k = np.fft.fftfreq(N, 1.0 / N).astype(int)
+            neg = F[:, (k < 0) & (k > -N // 2 + 2)]  # (ncand, nneg), coefficients c_k t0^k
+            scale = np.max(np.abs(h)) + 1e-300
+            rows.append(neg.T / scale)
+    Cm = np.vstack(rows) if rows else np.zeros((0, len(candidates)))
+    g = curve.genus
+    if Cm.shape[0] == 0:
+        N = np.eye(len(candidates))
+    else:
+        U, s, Vh = np.linalg.svd(Cm)
+        s_full = np.zeros(len(candidates))
+        s_full[:len(s)] = s
+        null = np.nonzero(s_full <= 1e-7 * max(s_full.max(), 1e-300))[0]
+        if len(null) != g:
+            raise RuntimeError(
+                f"adjoint conditions give {len(null)} holomorphic differentials, genus is {g} "
+                f"(singular values {np.array2string(s_full, precision=2)}): numerically singular curve")
+        gap = s_full[s_full > 1e-7 * s_full.max()].min() / max(s_full[null].max(), 1e-300) if len(null) < len(s_full) else np.inf
+        if gap < 1e4:
+            raise RuntimeError("adjoint conditions are numerically ambiguous (singular value gap "
+                               f"{gap:.2g}): the curve is nearly singular")
+        N = Vh.conj().T[:, null]  # (ncand, g)
+    return _nice_basis(N, candidates, curve.x, curve.y)
+
+
+def _nice_basis(N, candidates, x, y):
+    """Reduced row echelon form of the null space, cleaned to rationals where possible."""
+    B = N.T.copy()  # (g, ncand)
+    g, m = B.shape
+    piv_row = 0
+    for col in range(m):
+        if piv_row >= g:
+            break
+        r = piv_row + int(np.argmax(np.abs(B[piv_row:, col])))
+        if abs(B[r, col]) < 1e-8:
+            continue
+        B[[piv_row, r]] = B[[r, piv_row]]
+        B[piv_row] /= B[piv_row, col]
+        for rr in range(g):
+            if rr != piv_row:
+                B[rr] -= B[rr, col] * B[piv_row]
+        piv_row += 1
+    out = []
+    from fractions import Fraction
+    for row in B:
+        expr = 0
+        for c, cand in zip(row, candidates):
+            if abs(c) < 1e-10:
+                continue
+            re, im = c.real, c.imag
+            parts = []
+            for v in (re, im):
+                if abs(v) < 1e-10:
+                    parts.append(sp.Integer(0))
+                    continue
+                fr = Fraction(v).limit_denominator(10000)
+                if abs(float(fr) - v) < 1e-11 * max(1.0, abs(v)):
+                    parts.append(sp.Rational(fr.numerator, fr.denominator))
+                else:
+                    parts.append(sp.Float(v))
+            expr += (parts[0] + sp.I * parts[1]) * sp.sympify(cand)
+        out.append(sp.expand(expr))
+    return out

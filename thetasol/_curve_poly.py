@@ -1,0 +1,346 @@
+"""Exact and numerical data of a plane curve f(x, y) = 0 (private to :mod:`thetasol.curves`).
+
+The curve is kept twice: exactly (rational coefficients: a float coefficient is converted to
+the rational number it represents in binary, so "the curve as given" is an exact object), and
+as a complex128 coefficient array for the vectorized hot paths (roots in y by companion
+eigenvalues plus a Newton polish, values and derivatives of f and of differential numerators).
+sympy is used only once per curve, for the exact discriminant and its square-free part, so that
+multiple critical values (nodes, cusps, exactly degenerate spectral curves) are recognised
+exactly instead of appearing as clusters of nearly equal floating roots.
+"""
+from __future__ import annotations
+
+from fractions import Fraction
+from math import gcd
+
+import mpmath
+import numpy as np
+import sympy as sp
+
+EPS = np.finfo(float).eps
+
+
+def _to_fraction_pair(c) -> tuple[Fraction, Fraction]:
+    """Exact (real, imaginary) parts of a sympy number; floats are converted exactly."""
+    c = sp.sympify(c)
+    if c.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
+        raise ValueError(f"coefficient {c} is not finite (NaN or infinity)")
+    re, im = c.as_real_imag()
+    out = []
+    for part in (re, im):
+        if not part.is_Number:
+            # an exact irrational (sqrt(2), pi): use its float64 value
+            try:
+                part = sp.Float(float(sp.N(part, 30)))
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"coefficient {c} is not a number") from exc
+        if part.is_Float:
+            val = float(part)
+            if not np.isfinite(val):
+                raise ValueError(f"coefficient {c} is not finite (NaN or infinity)")
+            out.append(Fraction(val))
+        else:
+            q = sp.Rational(part)
+            out.append(Fraction(int(q.p), int(q.q)))
+    return out[0], out[1]
+
+
+class CurvePoly:
+    """f(x, y) = sum c[i, j] x^i y^j with exact and complex128 coefficients.
+
+    Attributes
+    ----------
+    exact : dict {(i, j): (Fraction re, Fraction im)}
+    C : complex array (dx + 1, n + 1)
+    n : degree in y (number of sheets)
+    """
+
+    def __init__(self, f, x, y):
+        if not isinstance(x, sp.Symbol) or not isinstance(y, sp.Symbol):
+            raise ValueError("x and y must be sympy Symbols")
+        if x == y:
+            raise ValueError("x and y must be different symbols")
+        expr = f.as_expr() if isinstance(f, sp.Poly) else sp.sympify(f)
+        if isinstance(expr, sp.Equality):
+            expr = expr.lhs - expr.rhs
+        if expr.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
+            raise ValueError("f has NaN or infinite coefficients")
+        extra = expr.free_symbols - {x, y}
+        if extra:
+            raise ValueError(f"f must be a polynomial in {x}, {y} only; it also involves {sorted(map(str, extra))}")
+        try:
+            P = sp.Poly(sp.expand(expr), x, y)
+        except sp.PolynomialError as exc:
+            raise ValueError(f"f is not a polynomial in {x}, {y}: {exc}") from exc
+        exact = {}
+        for (i, j), c in P.terms():
+            re, im = _to_fraction_pair(c)
+            if re != 0 or im != 0:
+                exact[(int(i), int(j))] = (re, im)
+        if not exact:
+            raise ValueError("f is the zero polynomial")
+        n = max(j for _, j in exact)
+        if n == 0:
+            raise ValueError(f"f does not involve {y}: it does not define a cover of the {x}-line")
+        dx = max(i for i, _ in exact)
+        self.x, self.y = x, y
+        self.exact = exact
+        self.n = n
+        self.dx = dx
+        self.is_real = all(im == 0 for _, im in exact.values())
+        C = np.zeros((dx + 1, n + 1), dtype=complex)
+        for (i, j), (re, im) in exact.items():
+            C[i, j] = float(re) + 1j * float(im)
+        if not np.all(np.isfinite(C)):
+            raise ValueError("f has coefficients that overflow float64")
+        # Normalize so that max |c| = 1 (periods are scaled back by the differentials' own factor).
+        self.C = C
+        self.absC = np.abs(C)
+        self.Cx = C[1:, :] * np.arange(1, dx + 1)[:, None] if dx > 0 else np.zeros((1, n + 1), complex)
+        self._sympy = None
+
+    # ------------------------------------------------------------------ sympy / exact
+    def sympy_expr(self):
+        I = sp.I
+        return sum((sp.Rational(re.numerator, re.denominator) + I * sp.Rational(im.numerator, im.denominator))
+                   * self.x**i * self.y**j for (i, j), (re, im) in self.exact.items())
+
+    def sympy_poly(self):
+        if self._sympy is None:
+            dom = "QQ" if self.is_real else "QQ_I"
+            self._sympy = sp.Poly(self.sympy_expr(), self.x, self.y, domain=dom)
+        return self._sympy
+
+    def coeffs_in_y(self):
+        """Exact univariate polynomials a_j(x) (sympy Poly in x) with f = sum a_j(x) y^j."""
+        P = self.sympy_poly()
+        out = []
+        for j in range(self.n + 1):
+            terms = {(i,): c for (i, jj), c in P.terms() if jj == j}
+            out.append(sp.Poly.from_dict(terms, self.x, domain=P.domain) if terms
+                       else sp.Poly(0, self.x, domain=P.domain))
+        return out
+
+    def x_content_is_constant(self) -> bool:
+        a = [p for p in self.coeffs_in_y() if not p.is_zero]
+        g = a[0]
+        for p in a[1:]:
+            g = g.gcd(p)
+            if g.degree() == 0:
+                return True
+        return g.degree() <= 0
+
+    def critical_polynomial(self):
+        """Square-free exact polynomial whose roots are the finite critical x-values.
+
+        Returns (F, factors) with F the square-free part of disc_y(f) * lc_y(f) and factors the
+        square-free decomposition [(poly, multiplicity)] of the discriminant (for diagnostics).
+        """
+        P = self.sympy_poly()
+        lc = self.coeffs_in_y()[self.n]
+        if self.n == 1:
+            disc = sp.Poly(1, self.x, domain=P.domain)
+        else:
+            disc = sp.Poly(sp.discriminant(P.as_expr(), self.y), self.x, domain=P.domain)
+        if disc.is_zero:
+            raise ValueError("f is not square-free (its discriminant in y vanishes identically): "
+                             "it has a repeated factor, so it is reducible")
+        prod = disc * lc
+        F = prod.sqf_part() if prod.degree() > 0 else prod
+        return F, disc.sqf_list()[1], disc
+
+    # ------------------------------------------------------------------ numerics
+    def coeff_polys(self, x):
+        """a_j(x) for a 1-D complex array x: shape (K, n + 1)."""
+        x = np.asarray(x, dtype=complex)
+        A = np.broadcast_to(self.C[-1], x.shape + (self.n + 1,)).copy()
+        for i in range(self.dx - 1, -1, -1):
+            A *= x[..., None]
+            A += self.C[i]
+        return A
+
+    def coeff_polys_dx(self, x):
+        x = np.asarray(x, dtype=complex)
+        if self.dx == 0:
+            return np.zeros(x.shape + (self.n + 1,), complex)
+        Cx = self.Cx
+        A = np.broadcast_to(Cx[-1], x.shape + (self.n + 1,)).copy()
+        for i in range(Cx.shape[0] - 2, -1, -1):
+            A *= x[..., None]
+            A += Cx[i]
+        return A
+
+    def abs_coeff_polys(self, ax):
+        """sum_i |c_ij| |x|^i: for rounding-error bounds; ax = |x|."""
+        A = np.broadcast_to(self.absC[-1], ax.shape + (self.n + 1,)).copy()
+        for i in range(self.dx - 1, -1, -1):
+            A *= ax[..., None]
+            A += self.absC[i]
+        return A
+
+    def roots(self, x, polish: int = 2):
+        """All n roots in y of f(x, y) at each x (1-D array): shape (K, n), unordered.
+
+        Companion-matrix eigenvalues (backward stable), then ``polish`` vectorized Newton steps.
+        Raises ValueError where the leading coefficient vanishes (a pole of y).
+        """
+        A = self.coeff_polys(x)
+        return self.roots_from_coeffs(A, polish), A
+
+    def roots_from_coeffs(self, A, polish: int = 2):
+        n = self.n
+        lead = A[:, n]
+        if np.any(lead == 0):
+            raise ValueError("leading coefficient in y vanishes at a tracking point")
+        if n == 1:
+            return (-A[:, 0] / lead)[:, None]
+        mon = A[:, :n] / lead[:, None]
+        K = A.shape[0]
+        comp = np.zeros((K, n, n), dtype=complex)
+        comp[:, 1:, :-1] = np.eye(n - 1)
+        comp[:, :, -1] = -mon
+        Y = np.linalg.eigvals(comp)
+        for _ in range(polish):
+            p, dp = self.horner_y(A, Y)
+            ok = dp != 0
+            step = np.where(ok, p / np.where(ok, dp, 1), 0)
+            # Newton only where it helps (clustered roots can make it wander).
+            Y = np.where(np.abs(step) < 0.1 * (np.abs(Y) + 1e-300) + 1e-300, Y - step, Y)
+        return Y
+
+    @staticmethod
+    def horner_y(A, Y):
+        """p(Y), p'(Y) for p(y) = sum_j A[:, j] y^j, Y of shape (K, m)."""
+        n = A.shape[1] - 1
+        p = np.broadcast_to(A[:, n:n + 1], Y.shape).copy()
+        dp = np.zeros_like(p)
+        for j in range(n - 1, -1, -1):
+            dp = dp * Y + p
+            p = p * Y + A[:, j:j + 1]
+        return p, dp
+
+    def fy_fx(self, x, Y, A=None):
+        """f_y and f_x at (x[k], Y[k, s])."""
+        if A is None:
+            A = self.coeff_polys(x)
+        _, fy = self.horner_y(A, Y)
+        Ax = self.coeff_polys_dx(x)
+        fx, _ = self.horner_y(Ax, Y)
+        return fy, fx
+
+    def root_error_bound(self, x, Y, fy):
+        """First-order bound on the rounding error of each computed root: eps * sum|c||x|^i|y|^j / |f_y|."""
+        absA = self.abs_coeff_polys(np.abs(x))
+        aY = np.abs(Y)
+        s = np.broadcast_to(absA[:, -1:], Y.shape).copy()
+        for j in range(self.n - 1, -1, -1):
+            s = s * aY + absA[:, j:j + 1]
+        return 4 * self.n * EPS * s / np.maximum(np.abs(fy), 1e-300)
+
+    # ------------------------------------------------------------------ Newton polygon
+    def newton_polygon(self):
+        pts = sorted(set(self.exact))
+        return _convex_hull(pts)
+
+    def interior_points(self):
+        """Interior lattice points (i, j) of the Newton polygon, sorted by (j, i)."""
+        hull = self.newton_polygon()
+        if len(hull) < 3:
+            return []
+        xs = [p[0] for p in hull]
+        ys = [p[1] for p in hull]
+        out = []
+        for j in range(min(ys) + 1, max(ys)):
+            for i in range(min(xs) + 1, max(xs)):
+                if all(_cross(hull[k], hull[(k + 1) % len(hull)], (i, j)) > 0 for k in range(len(hull))):
+                    out.append((i, j))
+        out.sort(key=lambda p: (p[1], p[0]))
+        return out
+
+
+def _cross(o, a, b):
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+
+def _convex_hull(pts):
+    """Counter-clockwise convex hull of integer points (monotone chain), collinear points dropped."""
+    pts = sorted(set(pts))
+    if len(pts) <= 2:
+        return pts
+    lower, upper = [], []
+    for p in pts:
+        while len(lower) >= 2 and _cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and _cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return lower[:-1] + upper[:-1]
+
+
+# ---------------------------------------------------------------------- univariate roots
+def _poly_to_fracs(P):
+    """Exact coefficients (descending) of a sympy univariate Poly over QQ or QQ_I as Fraction pairs."""
+    return [_to_fraction_pair(c) for c in P.all_coeffs()]
+
+
+def _fracs_to_complex(coef, scale_exp=0):
+    return np.array([float(r) + 1j * float(i) for r, i in coef], dtype=complex)
+
+
+def polynomial_roots(P) -> np.ndarray:
+    """All complex roots of a square-free exact univariate polynomial (sympy Poly).
+
+    numpy's companion-matrix roots, polished by Newton's method; where roots are clustered
+    (ill-conditioned in float64) they are recomputed with mpmath.polyroots at raised precision from
+    the exact coefficients, so close but distinct critical values keep full relative accuracy.
+    """
+    deg = P.degree()
+    if deg <= 0:
+        return np.zeros(0, complex)
+    coef = _poly_to_fracs(P)
+    # Scale exactly by a power of 2 so the largest coefficient is ~1 (avoids float overflow).
+    mags = [max(abs(r), abs(i)) for r, i in coef]
+    big = max(m for m in mags if m != 0)
+    sh = big.numerator.bit_length() - big.denominator.bit_length()
+    fac = Fraction(1, 2**sh) if sh >= 0 else Fraction(2**(-sh), 1)
+    coef = [(r * fac, i * fac) for r, i in coef]
+    c = _fracs_to_complex(coef)
+    r = np.roots(c) if deg > 0 else np.zeros(0, complex)
+    if len(r) != deg:
+        # leading coefficient underflowed in float: fall back to mpmath entirely
+        return _mp_polyroots(coef, deg)
+    for _ in range(3):
+        p = np.polyval(c, r)
+        dp = np.polyval(np.polyder(c), r)
+        step = np.where(dp != 0, p / np.where(dp != 0, dp, 1), 0)
+        r = np.where(np.abs(step) < 0.1 * (np.abs(r) + 1), r - step, r)
+    # Conditioning check: error bound vs distance to the nearest other root.
+    ar = np.abs(r)
+    absval = np.polyval(np.abs(c), ar)
+    dp = np.abs(np.polyval(np.polyder(c), r))
+    err = 8 * deg * EPS * absval / np.maximum(dp, 1e-300)
+    if deg > 1:
+        D = np.abs(r[:, None] - r[None, :]) + np.diag(np.full(deg, np.inf))
+        sep = D.min(axis=1)
+    else:
+        sep = np.full(1, np.inf)
+    if np.all(err < 1e-6 * sep) and np.all(np.isfinite(r)):
+        return r
+    return _mp_polyroots(coef, deg)
+
+
+def _mp_polyroots(coef, deg):
+    dps = 40
+    for _ in range(4):
+        with mpmath.workdps(dps):
+            cc = [mpmath.mpc(mpmath.mpf(rr.numerator) / rr.denominator, mpmath.mpf(ii.numerator) / ii.denominator)
+                  for rr, ii in coef]
+            try:
+                roots = mpmath.polyroots(cc, maxsteps=200 + 20 * deg, extraprec=4 * dps)
+            except mpmath.libmp.NoConvergence:
+                dps *= 2
+                continue
+            return np.array([complex(z) for z in roots])
+    raise ValueError("could not isolate the critical values of the curve (roots of the discriminant)")

@@ -1,0 +1,260 @@
+"""The path graph on the x-line: Voronoi cells of the critical values clipped by a square.
+
+Method.  The critical x-values (sites) are separated by the edges of their Voronoi diagram,
+clipped by a square box around them.  Every cell is convex and contains exactly one site; the
+outside of the box contains only x = infinity.  Every point of an edge is at least as far from
+all sites as from the two it separates, so edges keep the largest possible distance from the
+singularities of the integrands; quadrature is refined where two sites are close.  The diagram is
+computed here by half-plane clipping (O(m^2) for m sites) rather than with scipy's Qhull, because
+Qhull rejects collinear sites (all critical values real is common) and the clipping keeps exact
+track of which face lies on each side of an edge, which the intersection pairing needs.
+
+Paths (documented in docs/curves.md):
+* the graph's vertices and edges are the corners and sides of the clipped cells;
+* a point x inside the box lies in the cell of its nearest site s; its path leaves the graph at
+  the point q where the ray from s through x exits the cell, then runs straight from q to x;
+* a point outside the box is reached by the ray from the box centre: q is where it leaves the box;
+* a place over a site s is reached straight from the cell's first vertex;
+* a place over infinity is reached along the ray from the box centre through the base vertex
+  (the lower-left corner of the box).
+"""
+from __future__ import annotations
+
+import numpy as np
+
+
+def _clip(poly, labels, mid, d, lab, tol):
+    """Clip a convex ccw polygon by {z : Re((z - mid) conj(d)) <= 0}; labels[i] names edge i->i+1."""
+    h = ((poly - mid) * np.conj(d)).real / abs(d)
+    N = len(poly)
+    out, outl = [], []
+    for i in range(N):
+        j = (i + 1) % N
+        P, Q, L = poly[i], poly[j], labels[i]
+        hp, hq = h[i], h[j]
+        if hp <= tol:
+            out.append(P)
+            outl.append(L)
+            if hq > tol:
+                t = hp / (hp - hq)
+                out.append(P + t * (Q - P))
+                outl.append(lab)
+        elif hq <= tol:
+            t = hp / (hp - hq)
+            out.append(P + t * (Q - P))
+            outl.append(L)
+    # remove zero-length edges (keep the label of the later vertex)
+    changed = True
+    while changed and len(out) > 2:
+        changed = False
+        for i in range(len(out)):
+            j = (i + 1) % len(out)
+            if abs(out[i] - out[j]) <= tol:
+                del out[i]
+                del outl[i]
+                changed = True
+                break
+    return np.array(out, dtype=complex), outl
+
+
+class CellGraph:
+    """Planar graph of clipped Voronoi cells of ``sites``.
+
+    Attributes
+    ----------
+    sites : (m,) complex
+    center, H : box centre and half-width
+    V : (nv,) complex vertices;  edges : (ne, 2) int (tail, head)
+    cells : list over sites of [(edge, sign)] ccw around the site (sign +1: tail -> head)
+    cell_vertices : list over sites of vertex indices (ccw, first = the reference vertex)
+    outer : [(edge, sign)] ccw around the box starting at the base vertex
+    base : index of the base vertex (lower-left box corner)
+    star : list over vertices of [(edge, is_tail)] sorted counter-clockwise by direction
+    """
+
+    def __init__(self, sites, extra_sites=None):
+        sites = np.asarray(sites, dtype=complex).ravel()
+        self.sites = sites
+        allsites = sites if extra_sites is None else np.concatenate([sites, np.asarray(extra_sites, complex)])
+        m = len(allsites)
+        if m:
+            lo = np.array([allsites.real.min(), allsites.imag.min()])
+            hi = np.array([allsites.real.max(), allsites.imag.max()])
+            c = complex(*(0.5 * (lo + hi)))
+            R = float(np.max(np.abs(allsites - c)))
+        else:
+            c, R = 0j, 0.0
+        H = 1.5 * R if R > 0 else max(1.0, abs(c))
+        H = max(H, 1e-12 * max(abs(c), 1.0))
+        self.center, self.H = c, H
+        if m > 1:
+            D = np.abs(allsites[:, None] - allsites[None, :]) + np.diag(np.full(m, np.inf))
+            min_sep = float(D.min())
+        else:
+            min_sep = H
+        self.min_sep = min_sep
+        tol = 1e-9 * min(min_sep, H)
+        self.tol = tol
+        box = c + H * np.array([-1 - 1j, 1 - 1j, 1 + 1j, -1 + 1j])
+        cells_poly = []
+        for k in range(max(m, 1)):
+            poly = box.copy()
+            labels = [("box", i) for i in range(4)]
+            if m:
+                sk = allsites[k]
+                order = np.argsort(np.abs(allsites - sk))
+                for j in order:
+                    if j == k:
+                        continue
+                    d = allsites[j] - sk
+                    # skip sites that cannot cut the current polygon
+                    hmax = np.max(((poly - 0.5 * (sk + allsites[j])) * np.conj(d)).real) / abs(d)
+                    if hmax <= tol:
+                        continue
+                    poly, labels = _clip(poly, labels, 0.5 * (sk + allsites[j]), d, ("site", int(j)), tol)
+            cells_poly.append((poly, labels))
+        # merge vertices
+        Vlist: list[complex] = []
+        def vid(z):
+            if Vlist:
+                arr = np.asarray(Vlist)
+                dd = np.abs(arr - z)
+                i = int(np.argmin(dd))
+                if dd[i] <= 10 * tol:
+                    return i
+            Vlist.append(complex(z))
+            return len(Vlist) - 1
+        cell_vids = []
+        for poly, _ in cells_poly:
+            cell_vids.append([vid(z) for z in poly])
+        self.V = np.asarray(Vlist, dtype=complex)
+        edge_index: dict[tuple[int, int], int] = {}
+        edges: list[tuple[int, int]] = []
+        count: dict[int, int] = {}
+        cells = []
+        cell_vertices = []
+        box_directed = {}
+        for k, ((poly, labels), vids) in enumerate(zip(cells_poly, cell_vids)):
+            seq = []
+            verts = []
+            N = len(vids)
+            for i in range(N):
+                a, b = vids[i], vids[(i + 1) % N]
+                if a == b:
+                    continue
+                verts.append(a)
+                key = (min(a, b), max(a, b))
+                if key not in edge_index:
+                    edge_index[key] = len(edges)
+                    edges.append(key)
+                e = edge_index[key]
+                count[e] = count.get(e, 0) + 1
+                seq.append((e, 1 if (a, b) == key else -1))
+                if labels[i][0] == "box":
+                    box_directed[a] = (e, 1 if (a, b) == key else -1, b)
+            cells.append(seq)
+            cell_vertices.append(verts)
+        self.edges = np.asarray(edges, dtype=int).reshape(-1, 2)
+        ne = len(edges)
+        nbox = len(box_directed)
+        bad = [e for e in range(ne) if count[e] > 2]
+        if bad:
+            raise RuntimeError("inconsistent Voronoi graph (an edge borders more than two cells)")
+        # outer boundary walk, ccw, from the base vertex (lower-left corner)
+        base = int(np.argmin(np.abs(self.V - box[0])))
+        self.base = base
+        outer = []
+        v = base
+        for _ in range(nbox + 1):
+            if v not in box_directed:
+                raise RuntimeError("the box boundary of the Voronoi graph is not closed")
+            e, s, w = box_directed[v]
+            outer.append((e, s))
+            v = w
+            if v == base:
+                break
+        else:
+            raise RuntimeError("the box boundary of the Voronoi graph is not closed")
+        if len(outer) != nbox:
+            raise RuntimeError("the box boundary of the Voronoi graph is not a single cycle")
+        # every interior edge twice, every box edge once
+        on_box = {e for e, _ in outer}
+        for e in range(ne):
+            want = 1 if e in on_box else 2
+            if count[e] != want:
+                raise RuntimeError("inconsistent Voronoi graph (edge multiplicities)")
+        nv = len(self.V)
+        F = len(cells) + 1
+        if nv - ne + F != 2:
+            raise RuntimeError(f"Voronoi graph fails Euler's formula: V - E + F = {nv - ne + F}")
+        self.cells = cells[:len(sites)] if m else []
+        self.extra_cells = cells[len(sites):] if m else cells
+        self.cell_vertices = cell_vertices[:len(sites)] if m else []
+        self.cells_poly = [p for p, _ in cells_poly[:len(sites)]] if m else []
+        self.allsites = allsites
+        self.outer = outer
+        self.box = box
+        # counter-clockwise star of each vertex
+        star = [[] for _ in range(nv)]
+        for e, (a, b) in enumerate(self.edges):
+            star[a].append((e, True))
+            star[b].append((e, False))
+        for v in range(nv):
+            def ang(item, v=v):
+                e, is_tail = item
+                a, b = self.edges[e]
+                other = b if is_tail else a
+                return np.angle(self.V[other] - self.V[v])
+            star[v].sort(key=ang)
+        self.star = star
+
+    # ------------------------------------------------------------------ point location
+    def locate(self, x):
+        """Where the path to x leaves the graph.
+
+        Returns (kind, k, edge, sign, q): kind 'cell' (x in the cell of site k) or 'outer'; the
+        graph path ends at the tail (in the walk direction ``sign``) of ``edge``, then follows the
+        edge to q, then runs straight from q to x.
+        """
+        x = complex(x)
+        c, H = self.center, self.H
+        if abs((x - c).real) >= H or abs((x - c).imag) >= H or len(self.allsites) == 0:
+            d = x - c if x != c else 1.0
+            return ("outer", -1) + self._exit(self.outer, c, d, x)
+        k = int(np.argmin(np.abs(self.allsites - x)))
+        seq = self.cells[k] if k < len(self.sites) else self.extra_cells[k - len(self.sites)]
+        s = self.allsites[k]
+        if x == s:
+            raise ValueError("point at a critical value: pass a place")
+        return ("cell", k) + self._exit(seq, s, x - s, x)
+
+    def _exit(self, seq, s, d, x):
+        best = None
+        for e, sg in seq:
+            a, b = self.edges[e]
+            if sg < 0:
+                a, b = b, a
+            A, B = self.V[a], self.V[b]
+            # s + t d = A + u (B - A)
+            M = np.array([[d.real, -(B - A).real], [d.imag, -(B - A).imag]])
+            rhs = np.array([(A - s).real, (A - s).imag])
+            det = np.linalg.det(M)
+            if abs(det) < 1e-300:
+                continue
+            t, u = np.linalg.solve(M, rhs)
+            if t > 0 and -1e-12 <= u <= 1 + 1e-12:
+                if best is None or t < best[0]:
+                    best = (t, e, sg, A + min(max(u, 0.0), 1.0) * (B - A))
+        if best is None:
+            raise RuntimeError("ray does not leave its Voronoi cell (internal error)")
+        return best[1], best[2], best[3]
+
+
+def edge_sites(graph: CellGraph):
+    """For each edge, the sites (indices into allsites; -1 for the outside) on either side."""
+    ne = len(graph.edges)
+    sides = [[] for _ in range(ne)]
+    for k, seq in enumerate(graph.cells + graph.extra_cells):
+        for e, _ in seq:
+            sides[e].append(k)
+    return sides
