@@ -12,6 +12,8 @@ Conventions are fixed once, in docs/conventions.md.
 """
 from .equations import invariants, spectral_coefficients, torque
 from .integrate import integrate_rotation
+from .rotation import RotationSolution, solve_rotation
 
-__all__ = ["integrate_rotation", "invariants", "spectral_coefficients", "torque"]
+__all__ = ["integrate_rotation", "invariants", "spectral_coefficients", "torque",
+           "RotationSolution", "solve_rotation"]
 __version__ = "0.1.0"

@@ -1,0 +1,565 @@
+"""The free rigid body (Euler top) with full attitude, in Jacobi elliptic functions.
+
+Inertial rotation (Section 4 I, (4.5)-(4.7); the a = 0 case of every effective body): the
+body angular momentum ``m = I omega`` obeys ``mdot = m x omega`` ((4.6) in vector form) and
+conserves ``|m|^2`` and ``2T = m . I^{-1} m`` (4.7).
+
+Angular momentum
+    Let ``c`` be the principal axis the momentum circles (the axis of largest inertia if
+    ``G^2 > 2T I_mid``, of smallest inertia if ``G^2 < 2T I_mid``), ``b`` the middle axis
+    and ``a`` the third one.  In a right-handed *working frame* (a signed permutation of the
+    principal axes) in which ``m_c > 0``::
+
+        m_a = G A_a cn(tau),  m_b = G A_b sn(tau),  m_c = G A_c dn(tau),  tau = lam t + u0,
+
+    with amplitudes, parameter and frequency computed from sums of positive terms (only the
+    distance to the separatrix, ``mc = k'^2``, is a difference, and it is the problem's own
+    conditioning).  Exactly on the separatrix (``G^2 = 2T I_mid``) ``cn, dn -> sech`` and
+    ``sn -> tanh`` ("euler-top/separatrix"); with two equal moments ``k = 0`` and the
+    functions are trigonometric ("euler-top/symmetric"); a momentum along a principal axis,
+    or a sphere, gives a steady rotation ("euler-top/steady"); ``m = 0`` is "rest".
+
+Attitude
+    As in Celledoni, Fasso, Safstrom & Zanna (SIAM J. Sci. Comput. 30, 2008) with the
+    corrections of Principia's documentation/Celledoni.tex: ``Q(t) = S R_3(psi(t)) B(m(t))``
+    where ``B(m)`` is the minimal rotation taking ``m/G`` to ``e_3`` (in the working frame;
+    singular only at ``m = -G e_3``, which ``m_c > 0`` keeps away: there is no singularity
+    where ``mdot = 0``), ``S`` is constant and the precession angle obeys
+    ``psi' = G/I_c + (2T - G^2/I_c) / (G + m_c)``.  The published formulas have a sign error
+    in lambda (case i), a wrong separatrix solution, a wrong characteristic of Pi and a frame
+    singular where mdot = 0; all are avoided here by the construction above, and every formula
+    below was re-derived and is tested against numerical integration.
+
+    ``int dtau / (G + A dn tau)`` is an integral of the third kind.  The textbook
+    decomposition into ``Pi(n; am tau | m)`` and an arctangent (Principia's (integraldn))
+    cancels catastrophically near steady rotation (both terms grow like ``1/A_a^2``).  Here the
+    Gauss (descending Landen) transformation ``k1 = (1 - k')/(1 + k')``,
+    ``dn(tau, k) = (1 - k1 s^2)/(1 + k1 s^2)``, ``s = sn(tau/(1 + k1), k1) = (1 + k') sn/(1 + dn)``
+    turns it into ``int (1 + k1 s^2)/(1 - N s^2)``, whose non-linear part is
+    ``(N/3) s^3 R_J(c^2, 1 - k1^2 s^2, 1, 1 - N s^2)`` with ``N = -k1 (G - A)/(G + A) <= 0``:
+    every term is positive and nothing cancels, from steady rotation to the separatrix.  The
+    angle is split into a secular part ``nu t`` (``nu`` the mean precession rate) and a
+    periodic part evaluated on the argument reduced modulo ``2K``; ``lam t``, ``nu t`` are
+    formed as exact products and reduced with compensated arithmetic, so a far time costs and
+    loses nothing more than a near one.
+
+Precision: ``dps=`` evaluates the same closed form with mpmath at ``dps`` digits.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import special as _sp
+
+from . import elliptic as _el
+from .equations import invariants as _invariants
+from .rotation import RotationSolution
+
+__all__ = ["EulerTopSolution"]
+
+_TWO_PI_HI = 6.283185307179586
+_TWO_PI_LO = 2.4492935982947064e-16
+
+
+# -- scalar arithmetic, float or mpmath --------------------------------------------------------
+
+class _FloatOps:
+    """Scalar operations for the float64 setup."""
+
+    pi = math.pi
+
+    @staticmethod
+    def num(x):
+        return float(x)
+
+    sqrt = staticmethod(math.sqrt)
+    hypot = staticmethod(math.hypot)
+    asinh = staticmethod(math.asinh)
+    atan = staticmethod(math.atan)
+    tanh = staticmethod(math.tanh)
+
+    @staticmethod
+    def K(mc):
+        return float(_sp.ellipkm1(mc))
+
+    @staticmethod
+    def RF(x, y, z):
+        return float(_sp.elliprf(x, y, z))
+
+    @staticmethod
+    def RJ(x, y, z, p):
+        return float(_sp.elliprj(x, y, z, p))
+
+
+class _MpOps:
+    """Scalar operations for the mpmath setup (used inside ``mpmath.workdps``)."""
+
+    def __init__(self):
+        import mpmath
+
+        self.mp = mpmath
+        self.pi = mpmath.pi
+        self.sqrt = mpmath.sqrt
+        self.hypot = mpmath.hypot
+        self.asinh = mpmath.asinh
+        self.atan = mpmath.atan
+        self.tanh = mpmath.tanh
+
+    def num(self, x):
+        return self.mp.mpf(x)
+
+    def K(self, mc):
+        return self.mp.ellipk(1 - mc)
+
+    def RF(self, x, y, z):
+        return self.mp.elliprf(x, y, z)
+
+    def RJ(self, x, y, z, p):
+        return self.mp.elliprj(x, y, z, p)
+
+
+def _F_sc(X, s, c, mc, K):
+    """F(phi | 1 - mc) from sin(phi) = s, cos(phi) = c, phi in [-pi, pi] (scalar)."""
+    f = abs(s) * X.RF(c * c, c * c + mc * s * s, 1) if s != 0 else 0 * s
+    if c < 0:
+        f = 2 * K - f
+    return -f if s < 0 else f
+
+
+# -- the constants of one motion ---------------------------------------------------------------
+
+@dataclass
+class _Consts:
+    kind: str                 # rest | steady | elliptic | separatrix
+    G: object = 0.0           # |m|
+    W: np.ndarray = None      # working frame -> principal frame (signed permutation)
+    Iw: tuple = ()            # inertias along the working axes a, b, c
+    A: tuple = ()             # unit amplitudes (A_a, A_b, A_c)
+    m: object = 0.0           # parameter k^2
+    mc: object = 1.0          # k'^2
+    K: object = 0.0
+    lam: object = 0.0         # dtau/dt
+    u0: object = 0.0
+    nu: object = 0.0          # mean precession rate
+    kappa: object = 0.0       # coefficient of the periodic part of psi
+    kp: object = 1.0          # k'
+    k1p2: object = 0.0        # 1 - k1^2 of the Gauss transformation
+    N: object = 0.0           # characteristic of the transformed third-kind integral
+    RJc: object = 0.0         # complete R_J of the periodic part
+    rho: object = 0.0         # separatrix: A_a / (1 + A_c)
+    period: object = 0.0
+    symmetric: bool = False
+    extra: dict = field(default_factory=dict)
+
+
+def _setup(Jp, mvec, X) -> _Consts:
+    """Constants of the motion from principal second moments ``Jp`` and momentum ``mvec``.
+
+    ``X`` supplies scalar arithmetic (float64 or mpmath); differences of inertia are formed
+    from the second moments (``I_i - I_j = J_j - J_i``), never as differences of inertias.
+    """
+    J = [X.num(v) for v in Jp]
+    mv = [X.num(v) for v in mvec]
+    Ip = [J[1] + J[2], J[0] + J[2], J[0] + J[1]]
+
+    def dI(i, j):  # I_i - I_j
+        return J[j] - J[i]
+
+    G = X.sqrt(mv[0] * mv[0] + mv[1] * mv[1] + mv[2] * mv[2])
+    if G == 0:
+        return _Consts(kind="rest")
+    # steady rotation: m x omega vanishes exactly (m along a principal axis, or a sphere)
+    steady = all(mv[j] * mv[k] * dI(j, k) == 0 for j, k in ((1, 2), (2, 0), (0, 1)))
+    if steady:
+        return _Consts(kind="steady", G=G)
+    n = [v / G for v in mv]
+    lo, mid, hi = sorted(range(3), key=lambda i: (Ip[i], i))
+    sep = False
+    if dI(mid, lo) == 0:
+        c, a = hi, lo
+    elif dI(hi, mid) == 0:
+        c, a = lo, hi
+    else:
+        rho4 = dI(mid, lo) * Ip[hi] / (dI(hi, mid) * Ip[lo])
+        num = n[hi] * n[hi] - rho4 * n[lo] * n[lo]
+        if num > 0:
+            c, a, numc = hi, lo, num
+        elif num < 0:
+            c, a, numc = lo, hi, -num / rho4
+        else:
+            c, a, numc, sep = hi, lo, 0 * num, True
+    b = mid
+    # right-handed working frame with n_c >= 0 (and n_a >= 0 on the separatrix)
+    sc = -1 if n[c] < 0 else 1
+    sa = (-1 if n[a] < 0 else 1) if sep else 1
+    P = np.zeros((3, 3))
+    P[a, 0] = P[b, 1] = P[c, 2] = 1.0
+    sb = sa * sc * int(round(np.linalg.det(P)))
+    W = P * np.array([sa, sb, sc], dtype=float)
+    na, nb, nc = sa * n[a], sb * n[b], sc * n[c]
+    Ia, Ib, Ic = Ip[a], Ip[b], Ip[c]
+    dcb, dca, dba = abs(dI(c, b)), abs(dI(c, a)), abs(dI(b, a))
+    sg = 1 if Ic > Ib else -1
+    symmetric = dba == 0
+    rho1 = dcb * Ia / (dca * Ib)
+    rho2 = dca * Ib / (dcb * Ia)
+    rho3 = dba * Ic / (Ib * dca)
+    Aa = X.hypot(na, nb * X.sqrt(rho1))
+    Ab = X.hypot(nb, na * X.sqrt(rho2))
+    Ac = X.hypot(nc, nb * X.sqrt(rho3))
+    if symmetric:
+        m_par, mc = 0 * Aa, 1 + 0 * Aa
+    elif sep:
+        m_par, mc = 1 + 0 * Aa, 0 * Aa
+    else:
+        m_dir = rho3 * (Ab / Ac) ** 2
+        if m_dir < 0.5:
+            m_par, mc = m_dir, 1 - m_dir
+        else:
+            mc = numc / (Ac * Ac) if c == hi else numc / (Ac * Ac)
+            m_par = 1 - mc
+    lam = sg * G * Ac * X.sqrt(dcb * dca / (Ia * Ib)) / Ic
+    # C = 2T - G^2/I_c as a sum of terms of one sign
+    C = sg * G * G * (na * na * dca / (Ia * Ic) + nb * nb * dcb / (Ib * Ic))
+    out = _Consts(kind="separatrix" if sep else "elliptic", G=G, W=W, Iw=(Ia, Ib, Ic),
+                  A=(Aa, Ab, Ac), m=m_par, mc=mc, lam=lam, symmetric=symmetric)
+    if sep:
+        out.u0 = X.asinh((nb * Aa) / (na * Ab))
+        out.nu = G / Ic + C / G
+        out.kappa = C * 2 * Ac / (lam * G * Aa)
+        out.rho = Aa / (1 + Ac)
+        out.A = (Aa, 1 + 0 * Aa, Ac)  # A_b = 1 on the separatrix (m -> G e_b)
+        out.period = math.inf
+        return out
+    K = X.K(mc)
+    kp = X.sqrt(mc)
+    k1 = (1 - kp) / (1 + kp)
+    k1p2 = 4 * kp / ((1 + kp) * (1 + kp))
+    N = -k1 * Aa * Aa / ((1 + Ac) * (1 + Ac))  # -k1 (1 - A_c)/(1 + A_c), 1 - A_c^2 = A_a^2
+    Gam = (1 + k1) * 2 * Ac * k1 / (3 * (1 + Ac) * (1 + Ac))
+    RJc = X.RJ(0 * K, k1p2, 1, 1 - N) if k1 != 0 else 0 * K
+    Ibar = (1 / (1 + Ac) + Gam * RJc / K) / G
+    s0, c0 = nb / Ab, na / Aa
+    r0 = X.hypot(s0, c0)
+    out.u0 = _F_sc(X, s0 / r0, c0 / r0, mc, K)
+    out.K, out.kp, out.k1p2, out.N, out.RJc = K, kp, k1p2, N, RJc
+    out.nu = G / Ic + C * Ibar
+    out.kappa = C * Gam / (G * lam)
+    out.period = 4 * K / abs(lam)  # cn, sn have period 4K (dn alone 2K)
+    return out
+
+
+# -- float64 evaluation ------------------------------------------------------------------------
+
+def _minimal_rotation(nv):
+    """B with B n = e_3 (rotation about n x e_3), for unit n with n_3 > -1; shape (..., 3, 3)."""
+    n1, n2, n3 = nv[..., 0], nv[..., 1], nv[..., 2]
+    q = 1.0 / (1.0 + n3)
+    B = np.empty(nv.shape[:-1] + (3, 3))
+    B[..., 0, 0] = 1.0 - n1 * n1 * q
+    B[..., 0, 1] = -n1 * n2 * q
+    B[..., 0, 2] = -n1
+    B[..., 1, 0] = -n1 * n2 * q
+    B[..., 1, 1] = 1.0 - n2 * n2 * q
+    B[..., 1, 2] = -n2
+    B[..., 2, 0] = n1
+    B[..., 2, 1] = n2
+    B[..., 2, 2] = n3
+    return B
+
+
+def _angle_mod_2pi(rate, t, extra):
+    """``rate * t + extra`` reduced modulo 2 pi with an exact product (float arrays)."""
+    p, e = _el._two_prod(rate, t)
+    n = np.rint(p / _TWO_PI_HI)
+    q1, q1e = _el._two_prod(n, _TWO_PI_HI)
+    r = ((p - q1) - q1e) + (e - n * _TWO_PI_LO)
+    return r + extra
+
+
+def _eval_float(c: _Consts, t):
+    """Working-frame momentum (n, 3) and precession angle (n,) at flat times t (float64)."""
+    G = c.G
+    Aa, Ab, Ac = c.A
+    if c.kind == "separatrix":
+        p, e = _el._two_prod(c.lam, t)
+        tau_hi, tau_e = _el._two_sum(p, c.u0)
+        tau = tau_hi + (tau_e + e)
+        with np.errstate(over="ignore"):
+            sech = 1.0 / np.cosh(tau)
+        th = np.tanh(tau)
+        mw = G * np.stack([Aa * sech, th, Ac * sech], -1)
+        per = np.arctan(c.rho * np.tanh(0.5 * tau)) - math.atan(c.rho * math.tanh(0.5 * c.u0))
+        psi = _angle_mod_2pi(c.nu, t, -c.kappa * per)
+        return mw, psi
+    p, e = _el._two_prod(c.lam, t)
+    hi, e2 = _el._two_sum(p, c.u0)
+    K2 = 2.0 * c.K
+    r, nper = _el._reduce(hi, e + e2, K2)
+    r = np.clip(r, -c.K, c.K)
+    x = np.abs(r)
+    mp_ = np.full_like(x, c.m)
+    mcp = np.full_like(x, c.mc)
+    sn, cn, dn = _el._sncndn_0K(x, mp_, mcp, c.K)
+    sgn = np.where(r < 0, -1.0, 1.0)
+    par = np.where(np.fmod(np.abs(nper), 2.0) == 1.0, -1.0, 1.0)
+    mw = G * np.stack([Aa * par * cn, Ab * par * sgn * sn, Ac * dn], -1)
+    per = _periodic(c, x, sn, cn, dn) * sgn
+    psi = _angle_mod_2pi(c.nu, t, c.kappa * (per - c.extra["P0"]))
+    return mw, psi
+
+
+def _periodic(c: _Consts, x, sn, cn, dn):
+    """Periodic part of the third-kind integral on 0 <= x <= K (Gauss transformation + R_J)."""
+    if c.N == 0 or c.symmetric:
+        return np.zeros_like(x)
+    kp = c.kp
+    s1 = (1.0 + kp) * sn / (1.0 + dn)
+    s1 = np.minimum(s1, 1.0)
+    xx = 2.0 * (1.0 + kp) * cn * cn / ((1.0 + dn) * (dn + kp))
+    yy = xx + c.k1p2 * s1 * s1
+    pp = 1.0 - c.N * s1 * s1
+    return s1 ** 3 * _sp.elliprj(xx, yy, 1.0, pp) - x * (c.RJc / c.K)
+
+
+# -- mpmath evaluation -------------------------------------------------------------------------
+
+def _eval_mp(c: _Consts, tval, mp):
+    """Working-frame momentum (3 mpf) and precession angle at one time (mpmath)."""
+    G = c.G
+    Aa, Ab, Ac = c.A
+    t = mp.mpf(tval)
+    tau = c.lam * t + c.u0
+    if c.kind == "separatrix":
+        sech = mp.sech(tau)
+        mw = [G * Aa * sech, G * mp.tanh(tau), G * Ac * sech]
+        per = mp.atan(c.rho * mp.tanh(tau / 2)) - mp.atan(c.rho * mp.tanh(c.u0 / 2))
+        return mw, c.nu * t - c.kappa * per
+    nper = mp.nint(tau / (2 * c.K))
+    r = tau - 2 * c.K * nper
+    x = abs(r)
+    sn = mp.ellipfun("sn", x, m=c.m)
+    cn = mp.ellipfun("cn", x, m=c.m)
+    dn = mp.ellipfun("dn", x, m=c.m)
+    sgn = -1 if r < 0 else 1
+    par = -1 if int(nper) % 2 else 1
+    mw = [G * Aa * par * cn, G * Ab * par * sgn * sn, G * Ac * dn]
+    if c.N == 0 or c.symmetric:
+        per = 0
+    else:
+        kp = c.kp
+        s1 = min((1 + kp) * sn / (1 + dn), mp.mpf(1))
+        xx = 2 * (1 + kp) * cn * cn / ((1 + dn) * (dn + kp))
+        yy = xx + c.k1p2 * s1 * s1
+        per = sgn * (s1 ** 3 * mp.elliprj(xx, yy, 1, 1 - c.N * s1 * s1) - x * c.RJc / c.K)
+    return mw, c.nu * t + c.kappa * (per - c.extra["P0"])
+
+
+def _mp_minimal_rotation(nv, mp):
+    n1, n2, n3 = nv
+    q = 1 / (1 + n3)
+    return mp.matrix([[1 - n1 * n1 * q, -n1 * n2 * q, -n1],
+                      [-n1 * n2 * q, 1 - n2 * n2 * q, -n2],
+                      [n1, n2, n3]])
+
+
+# -- the solution object -----------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class EulerTopSolution(RotationSolution):
+    """Closed-form free rotation (see the module docstring); built by :func:`thetasol.solve_rotation`."""
+
+    _c: _Consts = field(default=None, repr=False)
+    _P: np.ndarray = field(default=None, repr=False)   # working frame -> body frame
+    _S: np.ndarray = field(default=None, repr=False)   # Q = S R3(psi) B(m) P^T
+    _Iw: np.ndarray = field(default=None, repr=False)
+    _mp: object = field(default=None, repr=False)
+
+    # float64 ------------------------------------------------------------------------------
+    def _evaluate(self, t):
+        if self.dps is not None:
+            return self._evaluate_mp(t)
+        c = self._c
+        n = t.size
+        if c.kind == "rest":
+            return np.zeros((n, 3)), np.broadcast_to(self.Q0, (n, 3, 3)).copy()
+        if c.kind == "steady":
+            w = self.omega0
+            wn = float(np.linalg.norm(w))
+            ax = w / wn
+            ang = _angle_mod_2pi(wn, t, 0.0)
+            K = np.array([[0, -ax[2], ax[1]], [ax[2], 0, -ax[0]], [-ax[1], ax[0], 0]])
+            R = (np.eye(3) + np.sin(ang)[:, None, None] * K
+                 + (1.0 - np.cos(ang))[:, None, None] * (K @ K))
+            return np.broadcast_to(w, (n, 3)).copy(), self.Q0 @ R
+        mw, psi = _eval_float(c, t)
+        nv = mw / np.linalg.norm(mw, axis=-1, keepdims=True)
+        B = _minimal_rotation(nv)
+        cp, sp = np.cos(psi), np.sin(psi)
+        R3 = np.zeros((n, 3, 3))
+        R3[:, 0, 0] = cp
+        R3[:, 0, 1] = -sp
+        R3[:, 1, 0] = sp
+        R3[:, 1, 1] = cp
+        R3[:, 2, 2] = 1.0
+        Q = self._S @ R3 @ B @ self._P.T
+        omega = (mw / self._Iw) @ self._P.T
+        return omega, Q
+
+    def _omega(self, t):
+        if self.dps is not None or self._c.kind in ("rest", "steady"):
+            return self._evaluate(t)[0]
+        mw, _ = _eval_float_momentum_only(self._c, t)
+        return (mw / self._Iw) @ self._P.T
+
+    # mpmath -------------------------------------------------------------------------------
+    def _evaluate_mp(self, t):
+        import mpmath as mp
+
+        c = self._c
+        n = t.size
+        om = np.empty((n, 3), dtype=object)
+        Qo = np.empty((n, 3, 3), dtype=object)
+        with mp.workdps(self.dps + 10):
+            P = self._mp.get("P")
+            S = self._mp.get("S")
+            Q0 = self._mp["Q0"]
+            w0 = self._mp["w0"]
+            for i, tv in enumerate(t):
+                if c.kind == "rest":
+                    w, Q = mp.matrix(3, 1), Q0
+                elif c.kind == "steady":
+                    tt = mp.mpf(tv)
+                    wn = mp.norm(w0)
+                    ax = w0 / wn
+                    Kx = mp.matrix([[0, -ax[2], ax[1]], [ax[2], 0, -ax[0]], [-ax[1], ax[0], 0]])
+                    ang = wn * tt
+                    Q = Q0 * (mp.eye(3) + mp.sin(ang) * Kx + (1 - mp.cos(ang)) * Kx * Kx)
+                    w = w0
+                else:
+                    mw, psi = _eval_mp(c, tv, mp)
+                    G = mp.sqrt(mw[0] ** 2 + mw[1] ** 2 + mw[2] ** 2)
+                    B = _mp_minimal_rotation([v / G for v in mw], mp)
+                    R3 = mp.matrix([[mp.cos(psi), -mp.sin(psi), 0], [mp.sin(psi), mp.cos(psi), 0], [0, 0, 1]])
+                    Q = S * R3 * B * P.T
+                    w = P * mp.matrix([mw[k] / self._mp["Iw"][k] for k in range(3)])
+                for k in range(3):
+                    om[i, k] = +w[k]
+                    for j in range(3):
+                        Qo[i, k, j] = +Q[k, j]
+        return om, Qo
+
+
+def _eval_float_momentum_only(c, t):
+    """Working-frame momentum without the precession angle (cheaper)."""
+    G = c.G
+    Aa, Ab, Ac = c.A
+    if c.kind == "separatrix":
+        p, e = _el._two_prod(c.lam, t)
+        tau = p + (c.u0 + e)
+        with np.errstate(over="ignore"):
+            sech = 1.0 / np.cosh(tau)
+        return G * np.stack([Aa * sech, np.tanh(tau), Ac * sech], -1), None
+    p, e = _el._two_prod(c.lam, t)
+    hi, e2 = _el._two_sum(p, c.u0)
+    r, nper = _el._reduce(hi, e + e2, 2.0 * c.K)
+    r = np.clip(r, -c.K, c.K)
+    x = np.abs(r)
+    sn, cn, dn = _el._sncndn_0K(x, np.full_like(x, c.m), np.full_like(x, c.mc), c.K)
+    sgn = np.where(r < 0, -1.0, 1.0)
+    par = np.where(np.fmod(np.abs(nper), 2.0) == 1.0, -1.0, 1.0)
+    return G * np.stack([Aa * par * cn, Ab * par * sgn * sn, Ac * dn], -1), None
+
+
+def _principal_frame(Jm):
+    """Principal values and a right-handed principal frame R (body = R principal)."""
+    off = Jm - np.diag(np.diag(Jm))
+    if not np.any(off):
+        return np.diag(Jm).copy(), np.eye(3)
+    Jp, R = np.linalg.eigh(Jm)
+    if np.linalg.det(R) < 0:
+        R[:, 2] *= -1.0
+    return Jp, R
+
+
+def _steady_rate(c, omega0):
+    return float(np.linalg.norm(omega0)) if c.kind == "steady" else 0.0
+
+
+def _method(c) -> str:
+    if c.kind == "rest":
+        return "rest"
+    if c.kind in ("steady", "separatrix"):
+        return "euler-top/" + c.kind
+    return "euler-top/symmetric" if c.symmetric else "euler-top/elliptic"
+
+
+def _solve_euler_top(Jm, am, Q0, omega0, dps=None) -> EulerTopSolution:
+    """Build the Euler-top solution from validated data (``a`` isotropic or zero)."""
+    inv = {k: (float(v) if k != "curve" else v) for k, v in _invariants(Jm, am, Q0, omega0).items()}
+    if dps is not None:
+        return _solve_mp(Jm, am, Q0, omega0, dps, inv)
+    Jp, R = _principal_frame(Jm)
+    Ip = np.array([Jp[1] + Jp[2], Jp[0] + Jp[2], Jp[0] + Jp[1]])
+    c = _setup(Jp, Ip * (R.T @ omega0), _FloatOps)
+    method = _method(c)
+    if c.kind in ("rest", "steady"):
+        inv.update(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0)
+        return EulerTopSolution(Jm, am, Q0, omega0, method, inv, None, _c=c)
+    inv.update(period=float(c.period), precession_rate=float(c.nu), m=float(c.m))
+    P = R @ c.W
+    Iw = np.array([float(v) for v in c.Iw])
+    c.extra["P0"] = 0.0
+    if c.kind == "elliptic":
+        r0 = float(_el._reduce(np.array([c.u0]), np.zeros(1), 2 * c.K)[0][0])
+        x0 = np.array([min(abs(r0), c.K)])
+        sn, cn, dn = _el._sncndn_0K(x0, np.full(1, c.m), np.full(1, c.mc), c.K)
+        c.extra["P0"] = float(_periodic(c, x0, sn, cn, dn)[0]) * (-1.0 if r0 < 0 else 1.0)
+    mw0, _ = _eval_float(c, np.zeros(1))
+    n0 = mw0[0] / np.linalg.norm(mw0[0])
+    S = Q0 @ P @ _minimal_rotation(n0).T
+    return EulerTopSolution(Jm, am, Q0, omega0, method, inv, None, _c=c, _P=P, _S=S, _Iw=Iw)
+
+
+def _solve_mp(Jm, am, Q0, omega0, dps, inv):
+    import mpmath as mp
+
+    with mp.workdps(dps + 10):
+        X = _MpOps()
+        Jmp = mp.matrix([[mp.mpf(float(v)) for v in row] for row in Jm])
+        off = Jm - np.diag(np.diag(Jm))
+        if not np.any(off):
+            Jp = [Jmp[i, i] for i in range(3)]
+            R = mp.eye(3)
+        else:
+            ev, R = mp.eigsy(Jmp)
+            Jp = [ev[i] for i in range(3)]
+            if mp.det(R) < 0:
+                for i in range(3):
+                    R[i, 2] = -R[i, 2]
+        Ip = [Jp[1] + Jp[2], Jp[0] + Jp[2], Jp[0] + Jp[1]]
+        w0 = mp.matrix([mp.mpf(float(v)) for v in omega0])
+        wp = R.T * w0
+        mvec = [Ip[i] * wp[i] for i in range(3)]
+        c = _setup(Jp, mvec, X)
+        Q0m = mp.matrix([[mp.mpf(float(v)) for v in row] for row in Q0])
+        store = {"Q0": Q0m, "w0": w0}
+        method = _method(c)
+        if c.kind in ("rest", "steady"):
+            inv.update(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0)
+            return EulerTopSolution(Jm, am, Q0, omega0, method, inv, dps, _c=c, _mp=store)
+        inv.update(period=float(c.period), precession_rate=float(c.nu), m=float(c.m))
+        Wm = mp.matrix(c.W.tolist())
+        P = R * Wm
+        c.extra["P0"] = 0
+        mw0, _ = _eval_mp(c, 0, mp)
+        if c.kind == "elliptic" and not (c.N == 0 or c.symmetric):
+            # P0 = periodic part at u0 (the evaluation above used P0 = 0)
+            c.extra["P0"] = _eval_mp(c, 0, mp)[1] / c.kappa if c.kappa != 0 else 0
+        G = mp.sqrt(mw0[0] ** 2 + mw0[1] ** 2 + mw0[2] ** 2)
+        B0 = _mp_minimal_rotation([v / G for v in mw0], mp)
+        S = Q0m * P * B0.T
+        store.update(P=P, S=S, Iw=list(c.Iw))
+        return EulerTopSolution(Jm, am, Q0, omega0, method, inv, dps, _c=c, _mp=store)

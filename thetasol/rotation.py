@@ -1,0 +1,187 @@
+"""Closed-form rotation of one effective rigid body: the entry point and the result protocol.
+
+:func:`solve_rotation` takes the data of :func:`thetasol.integrate_rotation` (second
+moments ``J``, potential matrix ``a``, initial attitude ``Q0``, initial body angular
+velocity ``omega0``) and returns a :class:`RotationSolution`, an immutable object that
+evaluates the motion at any times, in any order, at the cost of a few elementary and
+elliptic function evaluations per time (no time stepping).
+
+Dispatch (one small function per branch, tried in order, see ``_BRANCHES``):
+
+* ``a = c 1`` (zero or isotropic: no torque, Section 4 I): the Euler top of
+  :mod:`thetasol.euler_top` in Jacobi elliptic functions;
+* any other ``a`` (Section 4 II, the theta-function solution) raises
+  :class:`NotImplementedError` until issue 6 adds its branch.
+
+The free gyrostat (8.39)-(8.40) has its own entry point, :func:`thetasol.solve_gyrostat`,
+and returns an object with the same protocol.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from . import _validate as V
+from ._so3 import hat
+from .equations import inertia_from_moments
+
+__all__ = ["RotationSolution", "solve_rotation"]
+
+
+@dataclass(frozen=True, eq=False)
+class RotationSolution:
+    """The motion ``t -> (omega(t), Q(t))`` of one body, in the conventions of ``integrate_rotation``.
+
+    Subclasses implement ``_evaluate(t) -> (omega, Q)`` for a flat float array ``t``
+    (shapes ``(n, 3)``, ``(n, 3, 3)``) and may override ``_omega`` when the angular
+    velocity alone is cheaper.  Everything else (shapes, validation, ``M``, ``u``) is here.
+
+    Attributes
+    ----------
+    J : ndarray, shape (3, 3)
+        Second moments in the body frame (``I = tr(J) 1 - J``).
+    a : ndarray, shape (3, 3)
+        Potential matrix, ``phi = 1/2 x^T a x``.
+    Q0, omega0 : ndarray
+        Initial attitude (body to space) and body angular velocity.
+    method : str
+        Short name of the closed form used, e.g. ``"euler-top/elliptic"``.
+    invariants : dict
+        First integrals and characteristic constants (energy, ``m2 = |m|^2``, periods, ...).
+    dps : int or None
+        When set, values are computed with mpmath at ``dps`` digits and returned as object
+        arrays of ``mpmath.mpf``.
+    """
+
+    J: np.ndarray
+    a: np.ndarray
+    Q0: np.ndarray
+    omega0: np.ndarray
+    method: str
+    invariants: dict = field(repr=False)
+    dps: int | None = None
+
+    # -- to implement ------------------------------------------------------------------------
+    def _evaluate(self, t: np.ndarray):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _omega(self, t: np.ndarray) -> np.ndarray:
+        return self._evaluate(t)[0]
+
+    # -- protocol ----------------------------------------------------------------------------
+    def _times(self, t):
+        tt = V.times(t, "t")
+        return tt, tt.ravel()
+
+    def __call__(self, t):
+        """``(omega(t), Q(t))`` with shapes ``t.shape + (3,)`` and ``t.shape + (3, 3)``."""
+        tt, flat = self._times(t)
+        w, Q = self._evaluate(flat)
+        return w.reshape(tt.shape + (3,)), Q.reshape(tt.shape + (3, 3))
+
+    def omega(self, t):
+        """Body angular velocity, shape ``t.shape + (3,)``."""
+        tt, flat = self._times(t)
+        return self._omega(flat).reshape(tt.shape + (3,))
+
+    def Q(self, t):
+        """Attitude (body to space), shape ``t.shape + (3, 3)``."""
+        return self(t)[1]
+
+    def m(self, t):
+        """Body angular momentum ``m = I omega``, shape ``t.shape + (3,)``."""
+        return self.omega(t) @ inertia_from_moments(self.J).T
+
+    def M(self, t):
+        """The paper's skew matrix ``M = J hat(omega) + hat(omega) J = hat(I omega)`` (4.5)."""
+        return hat(self.m(t))
+
+    def u(self, t):
+        """The paper's ``u = -Q^T a Q`` (sign of (7.13), docs/conventions.md), ``t.shape + (3, 3)``."""
+        Q = self.Q(t)
+        return -(np.swapaxes(Q, -1, -2) @ self.a @ Q)
+
+
+# -- dispatcher --------------------------------------------------------------------------------
+
+def _isotropic(a: np.ndarray) -> bool:
+    """``a = c 1`` up to a few ulps of ``c`` (no torque on any body)."""
+    c = np.trace(a) / 3.0
+    dev = np.max(np.abs(a - c * np.eye(3)))
+    return bool(dev <= 8 * np.finfo(float).eps * abs(c))
+
+
+def _free_branch(J, a, Q0, omega0, dps):
+    if not _isotropic(a):
+        return None
+    from .euler_top import _solve_euler_top
+
+    return _solve_euler_top(J, a, Q0, omega0, dps=dps)
+
+
+def _potential_branch(J, a, Q0, omega0, dps):
+    raise NotImplementedError(
+        "solve_rotation: a non-isotropic potential (Section 4 II, theta functions) is issue 6 "
+        "and not implemented yet; use thetasol.integrate_rotation meanwhile"
+    )
+
+
+#: Tried in order; each returns a RotationSolution or None (not its case).
+_BRANCHES: list[Callable] = [_free_branch, _potential_branch]
+
+
+def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolution:
+    """Exact rotation of a rigid body in the potential ``phi = 1/2 x^T a x`` (closed form).
+
+    Parameters
+    ----------
+    J : array_like, shape (3,) or (3, 3)
+        Second moments ``sum m r r^T`` in the body frame: principal values or a symmetric
+        tensor (then a right-handed principal frame is used internally and results are
+        mapped back).  Inertia ``I = tr(J) 1 - J``.
+    a : array_like, shape (3, 3)
+        Symmetric potential matrix.  ``a = 0`` or ``a = c 1`` (no torque) gives the Euler
+        top; other ``a`` are not implemented yet (issue 6).
+    Q0 : array_like, shape (3, 3)
+        Initial attitude, body to space (``x = Q r``).
+    omega0 : array_like, shape (3,)
+        Initial body-frame angular velocity (``Qdot = Q hat(omega)``).
+    dps : int, optional
+        Compute with mpmath at ``dps`` decimal digits (the float data taken as exact);
+        ``omega``/``Q`` then return object arrays of ``mpmath.mpf``.
+
+    Returns
+    -------
+    RotationSolution
+        ``sol(t) -> (omega, Q)``, ``sol.omega(t)``, ``sol.Q(t)``, ``sol.M(t)``, ``sol.u(t)``,
+        ``sol.method``, ``sol.invariants``.
+
+    Raises
+    ------
+    ValueError
+        Non-finite, wrongly shaped or unphysical data.
+    NotImplementedError
+        A potential with torque (issue 6).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> sol = solve_rotation([1.0, 2.0, 3.5], np.zeros((3, 3)), np.eye(3), [0.1, 1.0, 0.2])
+    >>> sol.method
+    'euler-top/elliptic'
+    >>> sol.omega(np.array([0.0, 1e6])).shape
+    (2, 3)
+    """
+    Jm = V.second_moments(J, "J")
+    am = V.symmetric_matrix(a, "a")
+    Q0m = V.rotation_matrix(Q0, "Q0")
+    w0 = V.vector3(omega0, "omega0")
+    if dps is not None and (not isinstance(dps, (int, np.integer)) or dps < 15):
+        raise ValueError(f"dps must be an integer >= 15, got {dps!r}")
+    for branch in _BRANCHES:
+        sol = branch(Jm, am, Q0m, w0, dps)
+        if sol is not None:
+            return sol
+    raise AssertionError("unreachable: the last branch always answers")  # pragma: no cover
