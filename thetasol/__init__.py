@@ -16,4 +16,12 @@ from .rotation import RotationSolution, solve_rotation
 
 __all__ = ["integrate_rotation", "invariants", "spectral_coefficients", "torque",
            "RotationSolution", "solve_rotation"]
+# mechanics of C^k-central configurations (issue 2)
+from .bodies import Body  # noqa: E402
+from .configuration import Configuration, Joint, Trajectories  # noqa: E402
+from .masscenter import MassCenterMotion, mass_center  # noqa: E402
+from .multibody import integrate_multibody  # noqa: E402
+from .scene import Scene, load_scene, run, solve_configuration  # noqa: E402
+__all__ += ["Body", "Configuration", "Joint", "Trajectories", "MassCenterMotion", "mass_center",
+            "integrate_multibody", "Scene", "load_scene", "run", "solve_configuration"]
 __version__ = "0.1.0"
