@@ -102,3 +102,105 @@ def test_holomorphic_differentials(name, expected):
         return Q.reshape(P.shape[0], -1)
     M = np.vstack([pad(P1), pad(P2)])
     assert np.linalg.matrix_rank(M, tol=1e-9) == C.genus
+
+
+# ---------------------------------------------------------------------- Abel map, Riemann constant
+from thetasol._curve_theta import theta_normalized_abs  # noqa: E402
+
+
+def _reduce(z, tau):
+    m = np.rint(np.linalg.solve(tau.imag, z.imag))
+    z = z - tau @ m
+    return z - np.rint(z.real)
+
+
+def _random_points(C, k, rng, scale=1.0):
+    pts = []
+    for i in range(k):
+        x0 = complex(rng.normal(), rng.normal()) * scale
+        R, _ = C._poly.roots(np.array([x0]))
+        pts.append((x0, complex(R[0, i % C.n])))
+    return pts
+
+
+ABEL_CURVES = ["elliptic", "hyp_x5m1", "fermat4", "klein", "spectral_g4", "spectral_nodal_g3",
+               "spectral_symmetric", "cusp_quintic", "nodal_quartic"]
+
+
+@pytest.mark.parametrize("name", ABEL_CURVES)
+def test_abel_jacobi_divisor_of_x_minus_c(name):
+    """div(x - c) = (points over c) - sum e_P P over infinity maps to 0 modulo the lattice."""
+    _, f, _, _ = load_ref(name)
+    C = PlaneCurve(f, x, y)
+    tau = C.riemann_matrix()
+    for c in (0.37 + 0.21j, -1.3 + 0.05j):
+        D = {P: 1 for P in C.places_over(c)}
+        for P in C.places_at_infinity():
+            D[P] = D.get(P, 0) - P.e
+        assert sum(D.values()) == 0
+        assert np.max(np.abs(_reduce(C.abel_map(D), tau))) < 1e-12
+    # divisor of x - b at a critical value b: sum of e_P P over b minus the poles
+    b = C.branch_points[0]
+    D = {P: P.e for P in C.places_over(b)}
+    for P in C.places_at_infinity():
+        D[P] = D.get(P, 0) - P.e
+    assert np.max(np.abs(_reduce(C.abel_map(D), tau))) < 1e-11
+
+
+@pytest.mark.parametrize("name", ABEL_CURVES)
+def test_jacobi_inversion_round_trip(name):
+    """theta(A(P) - A(D) - K) vanishes at the g points of D and not elsewhere."""
+    _, f, _, _ = load_ref(name)
+    C = PlaneCurve(f, x, y)
+    g = C.genus
+    tau = C.riemann_matrix()
+    K = C.riemann_constant()
+    rng = np.random.default_rng(7)
+    D = _random_points(C, g, rng)
+    AD = C.abel_map(D).sum(axis=0)
+    zeros = theta_normalized_abs(C.abel_map(D) - AD - K, tau)
+    others = theta_normalized_abs(C.abel_map(_random_points(C, 4, rng)) - AD - K, tau)
+    assert zeros.max() < 1e-9
+    assert others.min() > 1e-4
+    # the same with another base point: K_{P1} = K + (g - 1) A(P1)
+    P1 = _random_points(C, 1, rng)[0]
+    K1 = C.riemann_constant(base=P1)
+    A1 = C.abel_map(D, base=P1)
+    z = A1 - A1.sum(axis=0) - K1
+    assert theta_normalized_abs(z, tau).max() < 1e-9
+
+
+def test_abel_map_derivative_and_shapes():
+    C = PlaneCurve(y**2 - (x**5 - 1), x, y)
+    x0, h = 0.3 + 0.2j, 1e-6
+    R, _ = C._poly.roots(np.array([x0, x0 + h]))
+    y0 = R[0, 0]
+    y1 = R[1, np.argmin(np.abs(R[1] - y0))]
+    A = C.abel_map([(x0, y0), (x0 + h, y1)], normalized=False)
+    assert A.shape == (2, 2)
+    expected = np.array([1, x0]) / (2 * y0)
+    assert np.allclose((A[1] - A[0]) / h, expected, rtol=1e-5)
+    assert C.abel_map((x0, y0)).shape == (2,)
+    assert np.allclose(C.abel_map(C.base_point), 0, atol=1e-15)
+    # divisor form equals the signed sum
+    D = {(x0, y0): 2, (x0 + h, y1): -1}
+    assert np.allclose(C.abel_map(D), 2 * C.abel_map((x0, y0)) - C.abel_map((x0 + h, y1)))
+
+
+def test_abel_map_at_branch_points_and_infinity_limits():
+    """A place over a critical value or infinity is the limit of nearby points (same sheet)."""
+    C = PlaneCurve(y**2 - (x**3 + x + 1), x, y)
+    tau = C.riemann_matrix()
+    for P in C.places_over(C.branch_points[1]):
+        x0 = P.x + 1e-10
+        R, _ = C._poly.roots(np.array([x0]))
+        A = C.abel_map([(x0, r) for r in R[0]])
+        d = [np.abs(_reduce(a - C.abel_map(P), tau)).max() for a in A]
+        assert min(d) < 1e-4
+    (Pinf,) = C.places_at_infinity()
+    assert Pinf.e == 2 and np.isinf(abs(Pinf.y))
+    # P + sigma(P) - 2 infinity is principal (divisor of x - x0)
+    x0 = 0.4 - 0.7j
+    R, _ = C._poly.roots(np.array([x0]))
+    D = {(x0, R[0, 0]): 1, (x0, R[0, 1]): 1, Pinf: -2}
+    assert np.max(np.abs(_reduce(C.abel_map(D), tau))) < 1e-12

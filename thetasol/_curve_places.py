@@ -25,7 +25,8 @@ class LocalData:
     """Samples of all sheets on a circle around a critical value or infinity."""
 
     def __init__(self, kind, site, center, ref, x1, xs, ys, perm):
-        self.kind = kind  # 'critical' | 'infinity' | 'regular'
+        self.kind = kind  # 'critical' | 'infinity'
+        self.index = None  # position in the list of local data (= piece index of the approach line)
         self.site = site
         self.center = center  # b, or 0 for infinity
         self.ref = ref
@@ -108,9 +109,49 @@ def local_data(curve):
         perm = np.argmin(dd, axis=1)
         if len(set(perm.tolist())) != curve.n:
             raise ValueError("sheet continuation around a critical value failed (numerically singular curve)")
-        out.append(LocalData(kind, k, b, ref, x1, xs[:M], ys[:, :M], perm))
+        ld = LocalData(kind, k, b, ref, x1, xs[:M], ys[:, :M], perm)
+        ld.index = p
+        out.append(ld)
     curve._cache["local"] = out
+    curve._cache["local_lines"] = tr1
     return out
+
+
+def place_series(curve, ld, cycle, P):
+    """FFT Laurent data of the place (ld, cycle): (k, t0, Fy, Fh) with Fh (nd, N) for numerators P.
+
+    Coefficients are stored scaled: c_k t0^k = F[k], so that sums over (t / t0)^k are stable.
+    """
+    t, x, y = ld.place_samples(cycle)
+    N = len(t)
+    k = np.fft.fftfreq(N, 1.0 / N).astype(int)
+    Fy = np.fft.fft(y) / N
+    Fh = None
+    if P is not None:
+        _, h = differential_samples(curve, ld, cycle, P)
+        Fh = np.fft.fft(h, axis=1) / N
+    return k, t[0], Fy, Fh
+
+
+def series_eval(k, t0, F, t):
+    """sum_k F[k] (t / t0)^k for arrays F (..., N); t scalar."""
+    r = t / t0
+    scale = np.max(np.abs(F)) + 1e-300
+    # negative powers only where the coefficient is significant (a pole), never rounding noise
+    keep = (k >= 0) | ((k > -len(k) // 4) & (np.abs(F) > 1e-9 * scale).reshape(-1, len(k)).any(axis=0))
+    return (F[..., keep] * r ** k[keep]).sum(axis=-1)
+
+
+def series_integral(k, t0, Fh, t, what="differential"):
+    """Integral from the place (t = 0) to t of h(t) dt from its scaled Laurent data Fh (nd, N)."""
+    scale = np.max(np.abs(Fh), axis=-1, keepdims=True) + 1e-300
+    neg = (k < 0) & (k > -len(k) // 4)
+    if np.any(np.abs(Fh[..., neg]) > 1e-9 * scale):
+        raise ValueError(f"the {what} has a pole at this place: its integral to the place diverges")
+    pos = k >= 0
+    kk = k[pos]
+    r = t / t0
+    return (Fh[..., pos] * r ** kk / (kk + 1)).sum(axis=-1) * t
 
 
 def laurent(t, h):
@@ -160,7 +201,9 @@ def adjoint_subspace(curve, candidates):
     if Cm.shape[0] == 0:
         N = np.eye(len(candidates))
     else:
-        U, s, Vh = np.linalg.svd(Cm)
+        if Cm.shape[0] < Cm.shape[1]:
+            Cm = np.vstack([Cm, np.zeros((Cm.shape[1] - Cm.shape[0], Cm.shape[1]))])
+        U, s, Vh = np.linalg.svd(Cm, full_matrices=False)
         s_full = np.zeros(len(candidates))
         s_full[:len(s)] = s
         null = np.nonzero(s_full <= 1e-7 * max(s_full.max(), 1e-300))[0]

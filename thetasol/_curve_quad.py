@@ -26,6 +26,7 @@ import numpy as np
 
 RHO_TARGET = 2.5
 SAFETY = 0.25
+MOVE = 0.5
 
 
 @lru_cache(maxsize=None)
@@ -223,21 +224,24 @@ class Tracker:
 
     # -------------------------------------------------------------- matching
     @staticmethod
-    def _match(yp, ydp, dt, roots, rootd, sep):
-        """Index of the root continuing yp (Hermite midpoint test) and whether it is safe."""
+    def _match(yp, ydp, dt, roots, rootd, sep, sepp):
+        """Index of the root continuing yp and whether the step is safe.
+
+        Safe: each root moves by less than half its distance to the others (the linear model of the
+        step is valid) and the tangents from both ends meet at the midpoint much closer than the
+        roots are to each other (Hermite test).
+        """
         mp = yp + 0.5 * dt * ydp
         mc = roots - 0.5 * dt * rootd
         d = np.abs(mc - mp)
         i = int(np.argmin(d))
         d1 = d[i]
-        if len(d) > 1:
-            d2 = np.partition(d, 1)[1]
-        else:
-            d2 = np.inf
-        safe = bool(d1 <= SAFETY * d2 and d1 <= SAFETY * sep[i])
+        d2 = np.partition(d, 1)[1] if len(d) > 1 else np.inf
+        safe = bool(d1 <= SAFETY * d2 and d1 <= SAFETY * sep[i]
+                    and abs(dt * ydp) <= MOVE * sepp and abs(dt * rootd[i]) <= MOVE * sep[i])
         return i, safe
 
-    def _refine(self, pc, t0, y0, yd0, t1, roots1, rootd1, sep1, depth=0):
+    def _refine(self, pc, t0, y0, yd0, t1, roots1, rootd1, sep1, sep0, depth=0):
         """Bisect the step t0 -> t1 until matching is safe; return the root index at t1."""
         self.n_refined_steps += 1
         if depth > 48 or abs(t1 - t0) < 1e-15:
@@ -247,12 +251,12 @@ class Tracker:
         xm = np.atleast_1d(pc.x(tm))
         Rm, _, _, Dm, sepm = self._eval_nodes(xm, np.atleast_1d(pc.dx(tm)))
         Rm, Dm, sepm = Rm[0], Dm[0], sepm[0]
-        i, safe = self._match(y0, yd0, tm - t0, Rm, Dm, sepm)
+        i, safe = self._match(y0, yd0, tm - t0, Rm, Dm, sepm, sep0)
         if not safe:
-            i = self._refine(pc, t0, y0, yd0, tm, Rm, Dm, sepm, depth + 1)
-        j, safe = self._match(Rm[i], Dm[i], t1 - tm, roots1, rootd1, sep1)
+            i = self._refine(pc, t0, y0, yd0, tm, Rm, Dm, sepm, sep0, depth + 1)
+        j, safe = self._match(Rm[i], Dm[i], t1 - tm, roots1, rootd1, sep1, sepm[i])
         if not safe:
-            j = self._refine(pc, tm, Rm[i], Dm[i], t1, roots1, rootd1, sep1, depth + 1)
+            j = self._refine(pc, tm, Rm[i], Dm[i], t1, roots1, rootd1, sep1, sepm[i], depth + 1)
         return j
 
     # -------------------------------------------------------------- main entry
@@ -284,6 +288,7 @@ class Tracker:
         choice[:, 0] = c0
         ycur = R[k0, c0]
         ydcur = Dt[k0, c0]
+        sepcur = sep[k0, c0]
         n = R.shape[1]
         for k in range(1, int(lens.max())):
             act = np.nonzero(lens[tp] > k)[0]
@@ -297,16 +302,20 @@ class Tracker:
             i = np.argmin(dd, axis=1)
             d1 = dd[np.arange(len(act)), i]
             d2 = np.partition(dd, 1, axis=1)[:, 1] if n > 1 else np.full(len(act), np.inf)
-            safe = (d1 <= SAFETY * d2) & (d1 <= SAFETY * sep[node, i])
+            sepi = sep[node, i]
+            safe = ((d1 <= SAFETY * d2) & (d1 <= SAFETY * sepi)
+                    & (np.abs(dt * ydcur[act]) <= MOVE * sepcur[act])
+                    & (np.abs(dt * Dt[node, i]) <= MOVE * sepi))
             for q in np.nonzero(~safe)[0]:
                 t = act[q]
                 pc = pieces[tp[t]]
                 nd = node[q]
                 i[q] = self._refine(pc, nodes.tau[nd - 1], ycur[t], ydcur[t], nodes.tau[nd],
-                                    R[nd], Dt[nd], sep[nd])
+                                    R[nd], Dt[nd], sep[nd], sepcur[t])
             choice[act, k] = i
             ycur[act] = R[node, i]
             ydcur[act] = Dt[node, i]
+            sepcur[act] = sep[node, i]
         ends = []
         pos = 0
         for p, pc in enumerate(pieces):

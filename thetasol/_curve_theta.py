@@ -80,7 +80,7 @@ def theta_uv(z, tau, tol=1e-14):
     yr = zr.imag
     cr = yr @ Yinv
     xr = zr.real
-    R2 = np.log(1.0 / tol) + 2.0 * np.log(10.0) + 2 * g
+    R2 = np.log(1.0 / tol) + 2.0 + g
     Lc = np.linalg.cholesky(Y)  # Y = Lc Lc^T
     # bound |n_i + c_i| <= sqrt(R2 / pi * (Y^-1)_ii)
     rad = np.sqrt(R2 / np.pi * np.diag(Yinv)) + 0.5
@@ -90,10 +90,12 @@ def theta_uv(z, tau, tol=1e-14):
     q = np.sqrt(np.einsum("ki,ij,kj->k", pts, Y, pts) * np.pi)
     cmax = 0.5 * np.sqrt(np.pi * np.abs(Y).sum())
     pts = pts[q <= np.sqrt(R2) + cmax]
-    nc = pts[None, :, :] + cr[:, None, :]  # (N, K, g)
-    expo = (1j * np.pi * np.einsum("ki,ij,kj->k", pts, X, pts)[None, :]
-            + 2j * np.pi * np.einsum("ki,ni->nk", pts, xr)
-            - np.pi * np.einsum("nki,ij,nkj->nk", nc, Y, nc))
+    pY = pts @ Y
+    quad = (pY * pts).sum(axis=1)  # (K,)
+    Q = quad[None, :] + 2.0 * (cr @ pY.T) + ((cr @ Y) * cr).sum(axis=1)[:, None]
+    expo = (1j * np.pi * ((pts @ X) * pts).sum(axis=1)[None, :]
+            + 2j * np.pi * (xr @ pts.T)
+            - np.pi * Q)
     v = np.exp(expo).sum(axis=1)
     u = np.pi * np.einsum("ni,ij,nj->n", yr, Yinv, yr)
     # theta(z) = exp(log_fac) * exp(u) * v ; fold the phase of log_fac into v and its modulus into u
@@ -116,3 +118,52 @@ def theta_normalized_abs(z, tau, tol=1e-14):
 def theta(z, tau, tol=1e-14):
     u, v = theta_uv(z, tau, tol)
     return np.exp(u) * v
+
+
+def half_period_scan(z0, tau, tol=1e-9):
+    """|theta| exp(-pi y^T Y^-1 y) at all 4^g points z0 + (a + tau b)/2, a, b in {0, 1}^g.
+
+    One lattice sum per b (grouped by n mod 2, then a sign transform over a) instead of 4^g sums.
+    Returns (values (4^g,), a (4^g, g), b (4^g, g)) with a, b integer arrays.
+    """
+    z0 = np.asarray(z0, dtype=complex).ravel()
+    tau = np.asarray(tau, dtype=complex)
+    tau = 0.5 * (tau + tau.T)
+    g = len(z0)
+    U = lll_gram(tau.imag)
+    Uinv = np.rint(np.linalg.inv(U)).astype(np.int64)
+    taup = U.T @ tau @ U
+    zp = U.T @ z0
+    Y, X = taup.imag, taup.real
+    Yinv = np.linalg.inv(Y)
+    m = np.rint(Yinv @ zp.imag)
+    zp = zp - taup @ m  # lattice shift: same candidate set modulo the lattice
+    c = Yinv @ zp.imag
+    x0 = zp.real
+    R2 = np.log(1.0 / tol) + 2.0 + g
+    rad = np.sqrt(R2 / np.pi * np.diag(Yinv)) + 1.5
+    ranges = [np.arange(-int(np.ceil(r)), int(np.ceil(r)) + 1) for r in rad]
+    pts = np.array(list(itertools.product(*ranges)), dtype=float)
+    bits = np.array([[(i >> k) & 1 for k in range(g)] for i in range(2 ** g)], dtype=np.int64)
+    par = np.mod(pts.astype(np.int64), 2) @ (1 << np.arange(g))  # class of n mod 2
+    sign = 1 - 2 * (np.mod(bits @ bits.T, 2))  # (-1)^{class . a}, indexed [class, a]
+    vals = np.zeros((2 ** g, 2 ** g))  # [b, a]
+    for ib, b in enumerate(bits):
+        mm = pts + 0.5 * b  # m_n = n + b/2
+        w = mm + c
+        q = ((w @ Y) * w).sum(axis=1)
+        sel = q <= R2 / np.pi
+        mm, ww, qq = mm[sel], w[sel], q[sel]
+        phase = np.pi * ((mm @ X) * mm).sum(axis=1) + 2 * np.pi * (pts[sel] @ x0)
+        T = np.exp(1j * phase - np.pi * qq)
+        S = np.bincount(par[sel], weights=T.real, minlength=2 ** g) + 1j * np.bincount(
+            par[sel], weights=T.imag, minlength=2 ** g)
+        vals[ib] = np.abs(S @ sign)
+    # back to the original (a, b): a = U^-T a' (mod 2), b = U b' (mod 2)
+    A_out, B_out, V_out = [], [], []
+    for ib, bp in enumerate(bits):
+        for ia, ap in enumerate(bits):
+            A_out.append(np.mod(Uinv.T @ ap, 2))
+            B_out.append(np.mod(U @ bp, 2))
+            V_out.append(vals[ib, ia])
+    return np.array(V_out), np.array(A_out, dtype=np.int64), np.array(B_out, dtype=np.int64)

@@ -367,3 +367,363 @@ class PlaneCurve:
                 raise RuntimeError("Im tau is not positive definite (internal error)")
             self._cache["tau"] = tau
         return self._cache["tau"].copy()
+
+    # ------------------------------------------------------------------ places
+    def _all_places(self):
+        if "places" not in self._cache:
+            from ._curve_places import local_data
+            out_sites, out_inf = [], []
+            for ld in local_data(self):
+                for cyc in ld.cycles:
+                    if ld.kind == "critical":
+                        out_sites.append(Place(self, "critical", ld.center, len(cyc), site=ld.site,
+                                               ref=ld.ref, label=cyc[0], cycle=cyc))
+                    else:
+                        out_inf.append(Place(self, "infinity", INF, len(cyc), site=-1,
+                                             ref=ld.ref, label=cyc[0], cycle=cyc))
+            self._cache["places"] = (out_sites, out_inf)
+        return self._cache["places"]
+
+    def _place_limits(self, places):
+        from ._curve_places import local_data, laurent
+        lds = local_data(self)
+        for P in places:
+            ld = lds[P._site] if P.kind == "critical" else lds[-1]
+            t, xs, ys = ld.place_samples(P._cycle)
+            k, c, _ = laurent(t, ys)
+            scale = np.max(np.abs(ys)) + 1e-300
+            neg = np.abs(c[k < 0] * t[0] ** k[k < 0])
+            P._y = INF if neg.size and neg.max() > 1e-8 * scale else complex(c[k == 0][0])
+
+    def places_at_infinity(self) -> list:
+        """The places over x = infinity (one per cycle of the monodromy at infinity)."""
+        return list(self._all_places()[1])
+
+    def places_over(self, x0) -> list:
+        """All places over x = x0 (a complex number or ``inf``)."""
+        x0 = complex(x0)
+        if not np.isfinite(x0):
+            return self.places_at_infinity()
+        k = self._site_index(x0)
+        if k >= 0:
+            return [P for P in self._all_places()[0] if P._site == k]
+        R, _ = self._poly.roots(np.array([x0]))
+        return [Place(self, "regular", x0, 1, y=complex(v)) for v in R[0]]
+
+    def _site_index(self, x0, rtol=1e-10):
+        if len(self._sites) == 0:
+            return -1
+        d = np.abs(self._sites - x0)
+        k = int(np.argmin(d))
+        scale = max(abs(self._sites[k]), self._graph.min_sep, 1e-300)
+        return k if d[k] <= rtol * scale else -1
+
+    def place(self, x0, y0=None) -> Place:
+        """The place over x0 (finite or ``inf``) with y-limit y0 (optional if it is unique)."""
+        cands = self.places_over(x0)
+        if y0 is None:
+            if len(cands) == 1:
+                return cands[0]
+            raise ValueError(f"{len(cands)} places over x = {x0}: give y0 or pick one from places_over")
+        y0 = complex(y0)
+        ys = np.array([P.y for P in cands])
+        if np.isinf(abs(y0)):
+            hit = [P for P in cands if np.isinf(abs(P.y))]
+        else:
+            fin = np.isfinite(ys)
+            d = np.where(fin, np.abs(ys - y0), np.inf)
+            tol = 1e-6 * (1 + abs(y0))
+            hit = [P for P, dd in zip(cands, d) if dd <= max(tol, 1e-6 * d.min())] if d.min() <= 1e-4 * (1 + abs(y0)) else []
+            if not hit:
+                raise ValueError(f"({x0}, {y0}) is not a point of the curve (nearest y over x0: "
+                                 f"{ys[np.argmin(d)]:.8g})")
+        if len(hit) != 1:
+            raise ValueError(f"{len(hit)} places over ({x0}, {y0}) (a singular point): pick one from places_over")
+        return hit[0]
+
+    # ------------------------------------------------------------------ Abel map
+    def _potentials(self, P, key):
+        """Integral from the base (base vertex, sheet 0) to every lifted vertex along the lifted tree."""
+        ck = ("phi", key)
+        if ck not in self._cache:
+            L = self._lifted
+            Iv = self._edge_integrals(P)
+            phi = np.zeros((L.nv * L.n, Iv.shape[1]), dtype=complex)
+            for u in L.order[1:]:
+                le, sg = L.parent[u], L.psign[u]
+                prev = L.ltail[le] if sg == 1 else L.lhead[le]
+                phi[u] = phi[prev] + sg * Iv[le]
+            self._cache[ck] = phi
+        return self._cache[ck]
+
+    def _parse_targets(self, points):
+        """Normalize the input of abel_map: returns (targets, weights, shape) where shape is
+        'single', 'list' or 'divisor'."""
+        def is_scalar(v):
+            return isinstance(v, (int, float, complex, np.number)) or (isinstance(v, sp.Basic) and v.is_number)
+
+        if isinstance(points, Place):
+            return [points], None, "single"
+        if isinstance(points, dict):
+            items = list(points.items())
+            return [self._as_target(p) for p, _ in items], np.array([m for _, m in items], dtype=float), "divisor"
+        if isinstance(points, (tuple, list)) and len(points) == 2 and all(is_scalar(v) for v in points):
+            return [self._as_target(tuple(points))], None, "single"
+        arr = points
+        if isinstance(arr, np.ndarray) and arr.ndim == 2 and arr.shape[1] == 2:
+            return [self._as_target((a, b)) for a, b in arr], None, "list"
+        return [self._as_target(p) for p in points], None, "list"
+
+    def _as_target(self, p):
+        if isinstance(p, Place):
+            if p.curve is not self:
+                raise ValueError("place belongs to another curve")
+            return p
+        try:
+            x0, y0 = p
+            x0, y0 = complex(x0), complex(y0)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"a point must be a Place or an (x, y) pair, got {p!r}") from exc
+        if not (np.isfinite(x0) and np.isfinite(y0)):
+            raise ValueError(f"point ({x0}, {y0}) is not finite: use places_at_infinity() for points at infinity")
+        # on the curve?
+        A = self._poly.coeff_polys(np.array([x0]))
+        val, _ = self._poly.horner_y(A, np.array([[y0]]))
+        absA = self._poly.abs_coeff_polys(np.array([abs(x0)]))
+        sc, _ = self._poly.horner_y(absA, np.array([[abs(y0)]]))
+        if abs(val[0, 0]) > 1e-8 * sc[0, 0]:
+            raise ValueError(f"({x0}, {y0}) is not on the curve: |f| = {abs(val[0, 0]):.3g} "
+                             f"(relative {abs(val[0, 0]) / sc[0, 0]:.3g})")
+        k = self._site_index(x0, rtol=1e-14)
+        if k >= 0:
+            return self.place(self._sites[k], y0)
+        return (x0, y0)
+
+    def _local(self):
+        from ._curve_places import local_data
+        return local_data(self)
+
+    def _place_data(self, place, P, key):
+        """(k, t0, Fy, Fh) Laurent data of a critical or infinite place for numerators P."""
+        from ._curve_places import place_series
+        ck = ("pser", key, place._key())
+        if ck not in self._cache:
+            lds = self._local()
+            ld = lds[place._site] if place.kind == "critical" else lds[-1]
+            self._cache[ck] = place_series(self, ld, place._cycle, P)
+        return self._cache[ck]
+
+    def _place_value(self, place, P, key):
+        """Integral from the default base to a critical or infinite place."""
+        from ._curve_places import series_integral
+        lds = self._local()
+        ld = lds[place._site] if place.kind == "critical" else lds[-1]
+        ck = ("lines", key)
+        if ck not in self._cache:
+            self._cache[ck] = self._cache["local_lines"].integrate(P)
+        lines = self._cache[ck]
+        phi = self._potentials(P, key)
+        k, t0, Fy, Fh = self._place_data(place, P, key)
+        tail = series_integral(k, t0, Fh, t0)
+        return phi[ld.ref * self.n + place._label] + lines[ld.index][place._label] - tail
+
+    def _near_place(self, x0, y0):
+        """If (x0, y0) is inside the disc where a local series converges fast: (place, t)."""
+        from ._curve_places import series_eval
+        lds = self._local()
+        ld = None
+        if len(self._sites):
+            kk = int(np.argmin(np.abs(self._sites - x0)))
+            b = self._sites[kk]
+            if abs(x0 - b) < 0.25 * abs(lds[kk].x1 - b):
+                ld = lds[kk]
+        if ld is None and abs(x0) > 4 * abs(lds[-1].x1):
+            ld = lds[-1]
+        if ld is None:
+            return None
+        sites, infs = self._all_places()
+        cands = [P for P in (infs if ld.kind == "infinity" else sites)
+                 if (ld.kind == "infinity" or P._site == ld.site)]
+        best = []
+        for P in cands:
+            k, t0, Fy, _ = self._place_data(P, None, None)
+            e = P.e
+            base_t = x0 ** (-1.0 / e) if ld.kind == "infinity" else (x0 - ld.center) ** (1.0 / e)
+            for j in range(e):
+                t = base_t * np.exp(2j * np.pi * j / e)
+                yv = series_eval(k, t0, Fy, t)
+                best.append((abs(yv - y0), P, t))
+        best.sort(key=lambda r: r[0])
+        if best[0][0] > 1e-6 * (1 + abs(y0)) or (len(best) > 1 and best[1][0] < 10 * best[0][0]):
+            raise ValueError(f"cannot identify the branch of ({x0}, {y0}) near a critical value "
+                             "(not on the curve, or too close to a singular point): pass a Place")
+        return best[0][1], best[0][2]
+
+    def _abel_raw(self, targets, P, key):
+        """Integrals of the numerators P from the default base point to every target: (N, nd)."""
+        from ._curve_places import series_integral
+        G = self._graph
+        n = self.n
+        phi = self._potentials(P, key)
+        out = np.zeros((len(targets), P.shape[0]), dtype=complex)
+        pts_idx, pieces1, starts = [], [], []
+        for i, t in enumerate(targets):
+            if isinstance(t, Place) and t.kind != "regular":
+                out[i] = self._place_value(t, P, key)
+                continue
+            x0, yv = (t.x, t.y) if isinstance(t, Place) else t
+            near = self._near_place(x0, yv)
+            if near is not None:
+                pl, tt = near
+                k, t0, _, Fh = self._place_data(pl, P, key)
+                out[i] = self._place_value(pl, P, key) + series_integral(k, t0, Fh, tt)
+                continue
+            kind, k, e, sg, q = G.locate(x0)
+            a, b = G.edges[e]
+            u = a if sg == 1 else b
+            pts_idx.append(i)
+            starts.append(u)
+            pieces1.append(Piece("line", G.V[u], q, self._vroots[u]))
+        if pieces1:
+            tr1 = self._tracker.track(pieces1)
+            pieces2 = [Piece("line", pc.b, (targets[i].x if isinstance(targets[i], Place) else targets[i][0]), y1)
+                       for i, pc, y1 in zip(pts_idx, pieces1, tr1.ends)]
+            tr2 = self._tracker.track(pieces2)
+            I1 = tr1.integrate(P)
+            I2 = tr2.integrate(P)
+            for j, i in enumerate(pts_idx):
+                t = targets[i]
+                yv = t.y if isinstance(t, Place) else t[1]
+                ends = tr2.ends[j]
+                d = np.abs(ends - yv)
+                ell = int(np.argmin(d))
+                sep = np.partition(d, 1)[1] if n > 1 else np.inf
+                if d[ell] > 1e-6 * (1 + abs(yv)) or d[ell] > 0.1 * sep:
+                    raise ValueError(f"point ({t[0] if not isinstance(t, Place) else t.x}, {yv}) is not on "
+                                     "the curve (or too close to a singular point to identify its sheet)")
+                out[i] = phi[starts[j] * n + ell] + I1[j][ell] + I2[j][ell]
+        return out
+
+    def _holo_arrays(self):
+        if "holoP" not in self._cache:
+            self._cache["holoP"] = self._numerators(self.holomorphic_differentials())
+        return self._cache["holoP"]
+
+    def normalization(self) -> np.ndarray:
+        """A^-1 (g x g): multiplies holomorphic-differential integrals into normalized coordinates."""
+        g = self.genus
+        P = self.period_matrix()
+        return np.linalg.inv(P[:, :g])
+
+    def abel_map(self, points, base=None, *, normalized: bool = True) -> np.ndarray:
+        """Abel map of points, places or divisors.
+
+        Parameters
+        ----------
+        points : Place, (x, y) pair, sequence of these, or dict {point or place: multiplicity}
+            Finite points are (x, y) pairs on the curve; places over critical values and infinity come
+            from :meth:`places_over` / :meth:`places_at_infinity` (an (x, y) pair at a critical value
+            is accepted when it determines the place).
+        base : Place or (x, y), optional
+            Base point; default :attr:`base_point`.
+        normalized : bool
+            True (default): coordinates in which the period lattice is Z^g + tau Z^g
+            (integrals of the normalized differentials A^-1 omega); False: integrals of the
+            differentials of :meth:`holomorphic_differentials`, lattice = columns of period_matrix().
+
+        Returns
+        -------
+        (g,) for one point or a divisor (sum of multiplicity * image), (N, g) for a sequence.
+        Values are path integrals along the documented paths (docs/curves.md); they are defined modulo
+        the lattice: another path adds a lattice vector.
+        """
+        g = self.genus
+        targets, weights, shape = self._parse_targets(points)
+        P = self._holo_arrays()
+        raw = self._abel_raw(targets, P, "holo")
+        if base is not None:
+            braw = self._abel_raw([self._as_target(base) if not isinstance(base, Place) else base], P, "holo")[0]
+            raw = raw - braw[None, :]
+        if normalized:
+            raw = raw @ self.normalization().T
+        if shape == "single":
+            return raw[0]
+        if shape == "divisor":
+            return weights @ raw
+        return raw
+
+    def integrate(self, numerators, points, base=None) -> np.ndarray:
+        """Integrals of the differentials p dx / f_y (p polynomials) from the base to the points.
+
+        Same paths as :meth:`abel_map` (use :meth:`period_matrix` with ``differentials=`` for the
+        periods over the same cycles).  Poles of the differentials must not lie on the paths: a place
+        where the differential has a pole cannot be a target (the integral diverges; regularization is
+        left to the caller).  Returns (N, len(numerators)) or (len(numerators),) for a single point.
+        """
+        targets, weights, shape = self._parse_targets(points)
+        P = self._numerators(list(numerators))
+        key = tuple(map(str, numerators))
+        raw = self._abel_raw(targets, P, key)
+        if base is not None:
+            raw = raw - self._abel_raw([self._as_target(base) if not isinstance(base, Place) else base], P, key)[0]
+        if shape == "single":
+            return raw[0]
+        if shape == "divisor":
+            return weights @ raw
+        return raw
+
+    # ------------------------------------------------------------------ Riemann constant
+    def canonical_divisor(self) -> dict:
+        """The divisor of dx: finite ramification points (multiplicity e - 1) minus (e + 1) at infinity."""
+        sites, infs = self._all_places()
+        D = {P: P.e - 1 for P in sites if P.e > 1}
+        for P in infs:
+            D[P] = D.get(P, 0) - (P.e + 1)
+        return D
+
+    def riemann_constant(self, base=None) -> np.ndarray:
+        """Vector of Riemann constants K (normalized coordinates, same base and paths as abel_map).
+
+        For a generic effective divisor D of degree g, theta(A(P) - A(D) - K) vanishes exactly at
+        the points of D.  Computed as in the literature: 2K = -A(div dx) fixes K up to a half period,
+        and the half period is the one with theta(K + A(D')) = 0 for effective D' of degree g - 1
+        (D' = (g - 1) base point and random D').
+        """
+        from ._curve_theta import half_period_scan, theta_normalized_abs
+        g = self.genus
+        if g == 0:
+            return np.zeros(0, complex)
+        if "K" not in self._cache:
+            tau = self.riemann_matrix()
+            AC = self.abel_map(self.canonical_divisor())
+            K0 = -0.5 * AC
+            vals, a_bits, b_bits = half_period_scan(K0, tau, tol=1e-9)
+            cands = K0[None, :] + 0.5 * a_bits + 0.5 * (b_bits @ tau.T)
+            # D' = (g - 1) * base point: theta(K) = 0; keep the few smallest, then random D'
+            keep = np.argsort(vals)[:min(len(vals), 8)]
+            cands = cands[keep]
+            tests = [vals[keep]]
+            if g > 1:
+                rng = np.random.default_rng(12345)
+                G = self._graph
+                for _ in range(3):
+                    pts = []
+                    for _ in range(g - 1):
+                        x0 = G.center + 0.7 * G.H * (rng.uniform(-1, 1) + 1j * rng.uniform(-1, 1))
+                        if self._site_index(x0, rtol=1e-3) >= 0:
+                            x0 += 0.01 * G.H
+                        R, _ = self._poly.roots(np.array([x0]))
+                        pts.append((x0, R[0, rng.integers(self.n)]))
+                    AD = self.abel_map(pts).sum(axis=0)
+                    tests.append(theta_normalized_abs(cands + AD[None, :], tau, tol=1e-9))
+            score = np.max(np.array(tests), axis=0)
+            order = np.argsort(score)
+            best, second = score[order[0]], score[order[1]] if len(order) > 1 else np.inf
+            if not (best < 1e-6 and best < 1e-4 * second):
+                raise RuntimeError(f"Riemann constant: no half-period candidate makes theta vanish "
+                                   f"(best {best:.2g}, next {second:.2g})")
+            self._cache["K"] = cands[order[0]]
+        K = self._cache["K"].copy()
+        if base is not None:
+            K = K + (g - 1) * self.abel_map(base)
+        return K
