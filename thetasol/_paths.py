@@ -93,7 +93,8 @@ class CellGraph:
         else:
             min_sep = H
         self.min_sep = min_sep
-        tol = 1e-9 * min(min_sep, H)
+        # clipping decisions are only as good as float rounding at the scale of the box
+        tol = 8 * np.finfo(float).eps * (abs(c) + 2 * H)
         self.tol = tol
         box = c + H * np.array([-1 - 1j, 1 - 1j, 1 + 1j, -1 + 1j])
         cells_poly = []
@@ -113,20 +114,52 @@ class CellGraph:
                         continue
                     poly, labels = _clip(poly, labels, 0.5 * (sk + allsites[j]), d, ("site", int(j)), tol)
             cells_poly.append((poly, labels))
-        # merge vertices
-        Vlist: list[complex] = []
-        def vid(z):
-            if Vlist:
-                arr = np.asarray(Vlist)
-                dd = np.abs(arr - z)
-                i = int(np.argmin(dd))
-                if dd[i] <= 10 * tol:
-                    return i
-            Vlist.append(complex(z))
-            return len(Vlist) - 1
+        # Merge the corners of the cells into graph vertices.  A Voronoi vertex is identified by the
+        # sites (and box sides) it is equidistant to, read off the labels of the two cell edges
+        # meeting there; this is exact even where two nearly parallel bisectors make its
+        # coordinates ill-conditioned.  Rounding-level geometric proximity merges the corners of
+        # co-circular (degenerate) configurations.
+        keys, pts = [], []
+        for k, (poly, labels) in enumerate(cells_poly):
+            kl = []
+            for i in range(len(poly)):
+                key = frozenset([("site", k), labels[i - 1], labels[i]]) if m else frozenset([labels[i - 1], labels[i]])
+                kl.append(len(keys))
+                keys.append(key)
+                pts.append(complex(poly[i]))
+        parent = list(range(len(keys)))
+
+        def find(i):
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+
+        first = {}
+        for i, key in enumerate(keys):
+            if key in first:
+                parent[find(i)] = find(first[key])
+            else:
+                first[key] = i
+        P = np.asarray(pts)
+        for i in range(len(P)):
+            dsite = np.min(np.abs(allsites - P[i])) if m else H
+            close = np.nonzero(np.abs(P[:i] - P[i]) <= max(2 * tol, 1e-9 * dsite))[0]
+            for j in close:
+                parent[find(i)] = find(int(j))
+        groups = {}
+        for i in range(len(keys)):
+            groups.setdefault(find(i), []).append(i)
+        Vlist = []
+        gid = {}
+        for r, members in groups.items():
+            gid[r] = len(Vlist)
+            Vlist.append(_vertex_position([keys[i] for i in members], [pts[i] for i in members], allsites, box))
         cell_vids = []
+        pos = 0
         for poly, _ in cells_poly:
-            cell_vids.append([vid(z) for z in poly])
+            cell_vids.append([gid[find(pos + i)] for i in range(len(poly))])
+            pos += len(poly)
         self.V = np.asarray(Vlist, dtype=complex)
         edge_index: dict[tuple[int, int], int] = {}
         edges: list[tuple[int, int]] = []
@@ -248,6 +281,42 @@ class CellGraph:
         if best is None:
             raise RuntimeError("ray does not leave its Voronoi cell (internal error)")
         return best[1], best[2], best[3]
+
+
+def _line_intersection(p1, d1, p2, d2):
+    """Intersection of the lines p1 + s d1 and p2 + t d2 (complex numbers as plane vectors)."""
+    den = (d1.conjugate() * d2).imag
+    if den == 0:
+        return None
+    s = ((p2 - p1).conjugate() * d2).imag / den
+    return p1 + s * d1
+
+
+def _vertex_position(keys, pts, sites, box):
+    """Coordinates of a Voronoi vertex from the best-conditioned pair of lines defining it."""
+    lines = []
+    for key in keys:
+        ss = sorted(j for kind, j in key if kind == "site")
+        bb = sorted(j for kind, j in key if kind == "box")
+        for a in range(len(ss)):
+            for b in range(a + 1, len(ss)):
+                p, q = sites[ss[a]], sites[ss[b]]
+                lines.append((0.5 * (p + q), 1j * (q - p)))
+        for i in bb:
+            A, B = box[i], box[(i + 1) % 4]
+            lines.append((A, B - A))
+    best, bestang = None, -1.0
+    for i in range(len(lines)):
+        for j in range(i + 1, len(lines)):
+            (p1, d1), (p2, d2) = lines[i], lines[j]
+            ang = abs((d1.conjugate() * d2).imag) / (abs(d1) * abs(d2))
+            if ang > bestang:
+                z = _line_intersection(p1, d1, p2, d2)
+                if z is not None:
+                    best, bestang = z, ang
+    if best is None or bestang < 1e-3:
+        return complex(np.mean(pts))
+    return complex(best)
 
 
 def edge_sites(graph: CellGraph):

@@ -1,0 +1,142 @@
+"""spectral_curve: the curve (4.12), its involution, special places and degenerations.
+
+References: sympy's exact determinant, Sage period matrices at 212 bits (tests/data/curves), and
+identities (sigma acts on the holomorphic differentials {1, E, E^2, w} dE/f_w by -1, +1, -1, -1).
+"""
+import numpy as np
+import pytest
+import sympy as sp
+
+from thetasol._so3 import hat
+from thetasol.spectral import spectral_curve
+
+from test_curves import assert_same_lattice, load_ref
+
+E, w = sp.symbols("E w")
+
+
+def generic_data(seed=3):
+    rng = np.random.default_rng(seed)
+    J = np.array([1.0, 1.7, 2.9])
+    m = rng.normal(size=3)
+    Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+    a = rng.normal(size=(3, 3))
+    a = a + a.T
+    return J, hat(m), -Q.T @ a @ Q, Q
+
+
+def test_polynomial_is_the_determinant():
+    J, M, u, _ = generic_data()
+    C = spectral_curve(J, M, u)
+    Jm = sp.diag(*[sp.Rational(v) for v in J])
+    Mm = sp.Matrix(3, 3, [sp.Rational(v) for v in M.ravel()])
+    Um = sp.Matrix(3, 3, [sp.Rational(v) for v in u.ravel()])
+    det = sp.Poly((Jm**2 * E**2 + Mm * E + Um - w * sp.eye(3)).det(), E, w)
+    ours = sp.Poly(C._poly.sympy_expr(), E, w)
+    for (i, j), c in det.terms():
+        c2 = ours.coeff_monomial(E**i * w**j)
+        assert abs(float(c - c2)) <= 1e-14 * max(1.0, abs(float(c))), (i, j)
+
+
+def test_generic_curve_structure():
+    J, M, u, _ = generic_data()
+    C = spectral_curve(J, M, u)
+    assert C.genus == 4 and C.arithmetic_genus == 4 and C.degeneracy == [] and C.node is None
+    b = np.sort_complex(C.branch_points)
+    assert len(b) == 12
+    assert np.allclose(np.sort_complex(-b), b, atol=1e-12)
+    assert [str(g) for g in C.holomorphic_differentials()] == ["1", "E", "E**2", "w"]
+    lims = [P._limit_w_over_E2 for P in C.places_at_infinity()]
+    assert np.allclose(lims, J**2, atol=1e-12)
+    assert all(P.e == 1 for P in C.places_at_infinity())
+    ys = np.sort([P.y.real for P in C.places_over_zero()])
+    assert np.allclose(ys, np.linalg.eigvalsh(u), atol=1e-12)
+
+
+def test_involution_on_the_jacobian():
+    """A(sigma P) = diag(-1, 1, -1, -1) A(P) + const modulo the lattice (raw coordinates)."""
+    J, M, u, _ = generic_data()
+    C = spectral_curve(J, M, u)
+    P = C.period_matrix()
+    s = np.array([-1, 1, -1, -1])
+    rng = np.random.default_rng(1)
+    vals = []
+    for _ in range(3):
+        E0 = complex(rng.normal(), rng.normal())
+        R, _ = C._poly.roots(np.array([E0]))
+        p = (E0, R[0, 0])
+        A = C.abel_map([p, C.involution(p)], normalized=False)
+        vals.append(A[1] - s * A[0])
+    for v in vals[1:]:
+        d = v - vals[0]
+        T = np.linalg.solve(np.vstack([P.real, P.imag]), np.concatenate([d.real, d.imag]))
+        assert np.max(np.abs(T - np.rint(T))) < 1e-10
+    for Pl in C.places_at_infinity() + C.places_over_zero():
+        assert C.involution(Pl) == Pl
+
+
+def test_generic_periods_match_sage():
+    d, f, diffs, Pref = load_ref("spectral_g4")
+    q = sp.Rational
+    J = np.array([1, 1.7, 2.9])
+    m = np.array([0.3, -0.7, 1.1])
+    u = np.array([[-1.2, 0.3, 0.1], [0.3, 0.5, -0.4], [0.1, -0.4, 0.9]])
+    C = spectral_curve(J, hat(m), u)
+    P = C.period_matrix([g.subs({sp.Symbol("x"): E, sp.Symbol("y"): w}) for g in diffs])
+    assert_same_lattice(P, Pref, tol=1e-12)
+
+
+def test_rank_one_potential_is_nodal_and_matches_sage():
+    _, _, diffs, Pref = load_ref("spectral_nodal_g3")
+    J = np.array([1, 1.7, 2.9])
+    m = np.array([0.3, -0.7, 1.1])
+    v = np.array([2.0, -1.0, 2.0]) / 3
+    u = 0.2 * np.eye(3) - (1 / 3) * np.outer(v, v)
+    C = spectral_curve(J, hat(m), u)
+    assert C.genus == 3 and C.arithmetic_genus == 4
+    assert C.node is not None and abs(C.node[1] - 0.2) < 1e-15
+    assert any("rank-one" in s for s in C.degeneracy)
+    P = C.period_matrix([g.subs({sp.Symbol("x"): E, sp.Symbol("y"): w}) for g in diffs])
+    assert_same_lattice(P, Pref, tol=1e-12)
+    b1, b2 = C.node_branches()
+    assert C.involution(b1) == b2 and C.involution(b2) == b1
+    assert b1 != b2 and b1.e == b2.e == 1
+    # the node's branches are distinct points of the Jacobian, exchanged by sigma
+    A = C.abel_map([b1, b2])
+    assert np.max(np.abs(A[0] - A[1])) > 1e-3
+
+
+def test_near_rank_one_within_tolerance_is_snapped():
+    J, M, _, Q = generic_data()
+    gam = np.array([0.3, -1.2, 0.8])
+    a = 2.0 * np.outer(gam, gam) + 1e-12 * np.diag([1.0, 2.0, 3.0])
+    C = spectral_curve(J, M, -Q.T @ a @ Q)
+    assert C.genus == 3 and C.node is not None
+    assert "changed by" in C.degeneracy[0]
+
+
+def test_symmetric_body_matches_sage():
+    _, _, diffs, Pref = load_ref("spectral_symmetric")
+    J = np.array([1, 1, 2.9])
+    m = np.array([0.3, -0.7, 1.1])
+    u = np.array([[-1.2, 0.3, 0.1], [0.3, 0.5, -0.4], [0.1, -0.4, 0.9]])
+    C = spectral_curve(J, hat(m), u)
+    assert C.symmetric_body and C.genus == 3
+    P = C.period_matrix([g.subs({sp.Symbol("x"): E, sp.Symbol("y"): w}) for g in diffs])
+    assert_same_lattice(P, Pref, tol=1e-12)
+    with pytest.raises(ValueError, match="symmetric body"):
+        C.place_at_infinity(0)
+
+
+def test_bad_input():
+    J, M, u, _ = generic_data()
+    with pytest.raises(ValueError, match="triple eigenvalue"):
+        spectral_curve(J, M, 0.7 * np.eye(3))
+    with pytest.raises(ValueError, match="NaN"):
+        spectral_curve(J, M, np.full((3, 3), np.nan))
+    with pytest.raises(ValueError, match="skew"):
+        spectral_curve(J, M + np.eye(3), u)
+    with pytest.raises(ValueError, match="symmetric"):
+        spectral_curve(J, M, u + np.triu(np.ones((3, 3)), 1))
+    with pytest.raises(ValueError, match="reducible"):
+        spectral_curve(J, np.zeros((3, 3)), np.diag([0.1, 0.5, 0.9]))
