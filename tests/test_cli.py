@@ -89,3 +89,10 @@ def test_failed_check_exits_1(tmp_path, capsys, monkeypatch):
     monkeypatch.setattr(scene_mod, "MassCenterMotion", Off)
     assert main(["solve", str(EXAMPLE), "--no-check"]) == 1
     assert "verdict: FAILED" in capsys.readouterr().out
+
+
+def test_example_script_runs():
+    res = subprocess.run([sys.executable, str(ROOT / "examples" / "solve_scene.py")], capture_output=True,
+                         text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert "split vs unsplit" in res.stdout and "shifts:" in res.stdout

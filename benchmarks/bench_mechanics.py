@@ -1,0 +1,148 @@
+"""Speed against error for the mechanics of issue 2 (results in docs/bench_mechanics.md).
+
+1. The mass centre (3.2) on 1000 times in [0, 100]: closed form (thetasol.masscenter) against
+   scipy DOP853 at several tolerances and scipy.linalg.expm per time; errors against mpmath's
+   matrix exponential at 40 digits.
+2. The split against the unsplit multibody system (thetasol.multibody) for a 5-body
+   C^2-central tree over t <= 60: multibody cost and gap at several tolerances, the split's
+   cost with numerical rotations (DOP853 and heyoka if installed).
+3. The CLI demo, wall time.
+
+Run: python benchmarks/bench_mechanics.py   (best of `REPEAT` runs; the machine is shared)
+"""
+from __future__ import annotations
+
+import os
+import platform
+import subprocess
+import sys
+import time
+
+import mpmath
+import numpy as np
+import scipy
+from scipy.integrate import solve_ivp
+from scipy.linalg import expm
+
+from thetasol._so3 import rodrigues
+from thetasol.bodies import Body
+from thetasol.configuration import Configuration, Joint
+from thetasol.masscenter import mass_center
+from thetasol.multibody import integrate_multibody
+from thetasol.scene import solve_configuration
+
+REPEAT = 3
+
+
+def best(f, repeat=REPEAT):
+    out, times = None, []
+    for _ in range(repeat):
+        s = time.perf_counter()
+        out = f()
+        times.append(time.perf_counter() - s)
+    return out, min(times)
+
+
+def machine():
+    cpu = "?"
+    try:
+        with open("/proc/cpuinfo") as fh:
+            for line in fh:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return (f"CPU {cpu}, {os.cpu_count()} cores; Python {platform.python_version()}, numpy {np.__version__}, "
+            f"scipy {scipy.__version__}, mpmath {mpmath.__version__}")
+
+
+def mass_centre_table():
+    print("## 1. mass centre on 1000 times in [0, 100]")
+    cases = {"trigonometric": [1.0, 0.5, 0.2], "mixed (+, 0, -)": [1.0, 0.0, -0.05]}
+    rng = np.random.default_rng(0)
+    for label, lam in cases.items():
+        R = rodrigues(np.array([0.3, -0.7, 0.4]))
+        a = R @ np.diag(lam) @ R.T
+        b, q0, v0 = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+        t = np.linspace(0, 100, 1000)
+        A = np.zeros((7, 7))
+        A[:3, 3:6] = np.eye(3)
+        A[3:6, :3] = -a
+        A[3:6, 6] = -b / 2
+        y0 = np.r_[q0, v0, 1.0]
+        with mpmath.workdps(40):
+            Am = mpmath.matrix(A.tolist())
+            tsub = t[::50]
+            ref = np.array([[float(x) for x in (mpmath.expm(Am * mpmath.mpf(float(tk))) * mpmath.matrix(y0.tolist()))[:3]]
+                            for tk in tsub])
+        scale = np.max(np.abs(ref))
+        rows = []
+        (q, _), sec = best(lambda: mass_center(a, b, q0, v0, t))
+        rows.append(("closed form (thetasol)", sec, np.max(np.abs(q[::50] - ref)) / scale))
+        for rtol in (1e-8, 1e-11, 1e-13):
+            def run(rtol=rtol):
+                return solve_ivp(lambda _t, y: np.r_[y[3:], -(a @ y[:3] + b / 2)], (0, 100), y0[:6],
+                                 t_eval=t, method="DOP853", rtol=rtol, atol=rtol * 1e-3).y[:3].T
+            qd, sec = best(run)
+            rows.append((f"DOP853 rtol={rtol:g}", sec, np.max(np.abs(qd[::50] - ref)) / scale))
+        qe, sec = best(lambda: np.array([(expm(A * tk) @ y0)[:3] for tk in t]))
+        rows.append(("scipy.linalg.expm per time", sec, np.max(np.abs(qe[::50] - ref)) / scale))
+        print(f"\n### {label}: eigenvalues {lam}\n")
+        print("| method | time (ms) | max error / max |q| |")
+        print("|---|---|---|")
+        for name, sec, err in rows:
+            print(f"| {name} | {sec * 1e3:.2f} | {err:.1e} |")
+
+
+def make_system(seed=11):
+    rng = np.random.default_rng(seed)
+    names = "ABCDE"
+    bodies = [Body.from_point_masses(rng.uniform(0.5, 2, 5), rng.normal(size=(5, 3)), name=n) for n in names]
+    edges = [("A", "B"), ("B", "C"), ("A", "D"), ("D", "E")]
+    cfg = Configuration(bodies, [Joint(p, c, rng.normal(size=3), np.zeros(3)) for p, c in edges]).make_central()
+    R = rodrigues(rng.normal(size=3))
+    a = R @ np.diag([2.0, 1.0, 0.4]) @ R.T
+    b = rng.normal(size=3) * 0.2
+    state = dict(q0=rng.normal(size=3), v0=rng.normal(size=3), Q0={n: rodrigues(rng.normal(size=3)) for n in names},
+                 omega0={n: rng.normal(size=3) for n in names})
+    return cfg, a, b, state
+
+
+def split_table():
+    print("\n## 2. split vs unsplit, 5-body C^2-central tree (tests/test_multibody.py data), t in [0, 60], 241 outputs\n")
+    cfg, a, b, s = make_system()
+    t = np.linspace(0, 60, 241)
+    try:
+        import heyoka  # noqa: F401
+        ref = solve_configuration(cfg, a, b, t=t, rotation="numerical", method="heyoka", rtol=1e-16, **s)
+        ref_name = "split with heyoka rotations (tol 1e-16)"
+    except ImportError:
+        ref = solve_configuration(cfg, a, b, t=t, rotation="numerical", rtol=1e-14, **s)
+        ref_name = "split with DOP853 rotations (rtol 1e-14)"
+    print(f"reference: {ref_name}\n")
+    print("| solution | time (s) | RHS evals | max position / attitude deviation from the reference |")
+    print("|---|---|---|---|")
+    for rtol in (1e-10, 1e-12, 1e-13):
+        sp, sec = best(lambda rtol=rtol: solve_configuration(cfg, a, b, t=t, rotation="numerical", rtol=rtol, **s), 1)
+        d = sp.deviation(ref)
+        print(f"| split, DOP853 rotations rtol={rtol:g} | {sec:.2f} | - | {d['position']:.1e} / {d['attitude']:.1e} |")
+    for rtol in (1e-10, 1e-11, 1e-12, 1e-13):
+        mb, sec = best(lambda rtol=rtol: integrate_multibody(cfg, a, b, t=t, rtol=rtol, **s), 1)
+        d = mb.deviation(ref)
+        print(f"| unsplit multibody, DOP853 rtol={rtol:g} | {sec:.2f} | {mb.info['nfev']} | "
+              f"{d['position']:.1e} / {d['attitude']:.1e} |")
+
+
+def demo_table():
+    print("\n## 3. `python -m thetasol demo` (6 bodies, t <= 30, 601 outputs, with the multibody check)\n")
+    _, sec = best(lambda: subprocess.run([sys.executable, "-m", "thetasol", "demo"], check=True,
+                                         capture_output=True), 2)
+    print(f"wall time {sec:.1f} s (best of 2)")
+
+
+if __name__ == "__main__":
+    print(f"machine: {machine()}\n")
+    mass_centre_table()
+    split_table()
+    demo_table()
