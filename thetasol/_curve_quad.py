@@ -27,6 +27,7 @@ import numpy as np
 RHO_TARGET = 2.5
 SAFETY = 0.25
 MOVE = 0.5
+FLAG = 1e-11
 
 
 @lru_cache(maxsize=None)
@@ -146,15 +147,18 @@ class _Nodes:
     """All tracking/quadrature nodes of a batch of pieces, flattened."""
 
     def __init__(self, pieces, sites, tol):
-        taus, wts, owner = [], [], []
+        taus, wts = [], []
         self.offsets = [0]
+        self.plans = []
         for p, pc in enumerate(pieces):
             if pc.taus is not None:
                 taus.append(np.asarray(pc.taus, dtype=float))
                 wts.append(np.zeros(len(pc.taus)))
                 self.offsets.append(self.offsets[-1] + len(pc.taus))
+                self.plans.append([])
                 continue
             iv = plan(pc, sites, tol)
+            self.plans.append(iv)
             tt = [0.0]
             ww = [0.0]
             for lo, hi, N in iv:
@@ -207,7 +211,9 @@ class Tracker:
             D = -fx / fy
         sep = _separations(R)
         err = poly.root_error_bound(x, R, fy)
-        bad = ~(err <= 1e-4 * sep) | ~np.isfinite(D).all(axis=1)[:, None]
+        # float64 roots whose rounding error is not negligible against the gaps between sheets
+        # (nearly colliding branch points) are recomputed in mpmath
+        bad = ~(err <= FLAG * sep) | ~np.isfinite(D).all(axis=1)[:, None]
         bad = bad.any(axis=1)
         if np.any(bad):
             if self.mp_fallback is None:

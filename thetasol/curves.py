@@ -149,7 +149,9 @@ class PlaneCurve:
         self._disc_factors = disc_factors
         self._sites = polynomial_roots(F)
         self._graph = CellGraph(self._sites, _extra_sites)
-        self._tracker = Tracker(self._poly, self._graph.allsites, tol=_tol)
+        from ._curve_mp import ExactEvaluator
+        self._exact = ExactEvaluator(self._poly)
+        self._tracker = Tracker(self._poly, self._graph.allsites, tol=_tol, mp_fallback=self._exact.fallback)
         self._setup_sheets()
         self._cache = {}
 
@@ -157,7 +159,7 @@ class PlaneCurve:
     def _setup_sheets(self):
         G = self._graph
         poly = self._poly
-        R, _ = poly.roots(G.V)
+        R = self._tracker._eval_nodes(G.V, np.zeros(len(G.V), complex))[0]
         order = np.lexsort((R.imag, R.real), axis=1) if R.shape[1] > 1 else np.zeros(R.shape, int)
         self._vroots = np.take_along_axis(R, order, axis=1)
         pieces = [Piece("line", G.V[a], G.V[b], self._vroots[a]) for a, b in G.edges]
@@ -333,7 +335,43 @@ class PlaneCurve:
         ints = self._edge_tracks.integrate(P)
         return np.concatenate(ints, axis=0)  # (ne * n, nd), row e * n + s
 
-    def period_matrix(self, differentials=None) -> np.ndarray:
+    def _numerators_exact(self, exprs):
+        from ._curve_poly import _to_fraction_pair
+        out = []
+        for g in exprs:
+            p = sp.Poly(sp.sympify(g), self.x, self.y)
+            out.append({(int(i), int(j)): _to_fraction_pair(c) for (i, j), c in p.terms()})
+        return out
+
+    def _period_matrix_mp(self, diffs, dps):
+        import mpmath
+        from ._curve_mp import integrate_mp
+        key = ("pm_mp", tuple(map(str, diffs)), dps)
+        if key in self._cache:
+            return self._cache[key].copy()
+        G = self._graph
+        tr_mp = Tracker(self._poly, G.allsites, tol=10.0 ** (-(dps + 3)), mp_fallback=self._exact.fallback)
+        pieces = [Piece("line", G.V[a], G.V[b], self._vroots[a]) for a, b in G.edges]
+        tr = tr_mp.track(pieces)
+        for e, (a, b) in enumerate(G.edges):
+            p = np.argmin(np.abs(tr.ends[e][:, None] - self._vroots[b][None, :]), axis=1)
+            if not np.array_equal(p, self._perms[e]):
+                raise RuntimeError("the dps path found a different sheet permutation (internal error)")
+        res = integrate_mp(tr, self._exact, self._numerators_exact(diffs), dps)
+        A, B, _ = self._homology()
+        g, nd, n = self.genus, len(diffs), self.n
+        with mpmath.workdps(dps + 10):
+            Pm = mpmath.matrix(nd, 2 * g)
+            for col, cyc in enumerate(list(A) + list(B)):
+                for le in np.nonzero(cyc)[0]:
+                    e, s_ = divmod(int(le), n)
+                    c = int(cyc[le])
+                    for d in range(nd):
+                        Pm[d, col] += c * res[e][s_][d]
+        self._cache[key] = Pm
+        return Pm.copy()
+
+    def period_matrix(self, differentials=None, dps: int | None = None):
         """Periods [A | B] (g x 2g complex) of the differentials g dx / f_y over the symplectic basis.
 
         Parameters
@@ -341,7 +379,15 @@ class PlaneCurve:
         differentials : list of sympy polynomials, optional
             Numerators g; default :meth:`holomorphic_differentials`.  Any polynomial numerators are
             accepted (meromorphic differentials give their periods over the same cycles).
+        dps : int, optional
+            Decimal digits: return an ``mpmath.matrix`` computed at that precision (same cycles as the
+            float64 result, quadrature and roots redone in mpmath from the exact coefficients).
         """
+        if dps is not None:
+            if int(dps) != dps or dps < 15:
+                raise ValueError(f"dps must be an integer >= 15, got {dps}")
+            diffs = self.holomorphic_differentials() if differentials is None else list(differentials)
+            return self._period_matrix_mp(diffs, int(dps))
         key = ("pm", None if differentials is None else tuple(map(str, differentials)))
         if key not in self._cache:
             diffs = self.holomorphic_differentials() if differentials is None else list(differentials)
@@ -352,8 +398,21 @@ class PlaneCurve:
             self._cache[key] = np.hstack([PA, PB])
         return self._cache[key].copy()
 
-    def riemann_matrix(self) -> np.ndarray:
-        """tau = A^-1 B for the default holomorphic differentials; symmetric with Im tau > 0."""
+    def riemann_matrix(self, dps: int | None = None):
+        """tau = A^-1 B for the default holomorphic differentials; symmetric with Im tau > 0.
+
+        With ``dps``: an ``mpmath.matrix`` at that precision.
+        """
+        if dps is not None:
+            import mpmath
+            P = self.period_matrix(dps=dps)
+            g = self.genus
+            with mpmath.workdps(int(dps) + 10):
+                A = P[:, :g]
+                B = P[:, g:]
+                tau = mpmath.lu_solve(A, B) if g else mpmath.matrix(0, 0)
+                tau = (tau + tau.T) / 2
+            return tau
         if "tau" not in self._cache:
             g = self.genus
             P = self.period_matrix()
