@@ -229,9 +229,9 @@ def test_dps_path_30_digits(name):
         scale = max(abs(Pref[i, j]) for i in range(Pref.rows) for j in range(Pref.cols))
     assert err / scale < 1e-30
     tau = C.riemann_matrix(dps=30)
-    assert np.allclose(np.array(tau.tolist(), dtype=complex), C.riemann_matrix(), atol=1e-13) or True
-    # the mp tau is a symmetric matrix with positive-definite imaginary part
     tf = np.array(tau.tolist(), dtype=complex)
+    if [str(g) for g in diffs] == [str(g) for g in C.holomorphic_differentials()]:
+        assert np.allclose(tf, C.riemann_matrix(), atol=1e-13)
     assert np.min(np.linalg.eigvalsh(tf.imag)) > 0
 
 

@@ -408,9 +408,9 @@ class PlaneCurve:
             P = self.period_matrix(dps=dps)
             g = self.genus
             with mpmath.workdps(int(dps) + 10):
-                A = P[:, :g]
-                B = P[:, g:]
-                tau = mpmath.lu_solve(A, B) if g else mpmath.matrix(0, 0)
+                A = mpmath.matrix([[P[i, j] for j in range(g)] for i in range(g)])
+                B = mpmath.matrix([[P[i, g + j] for j in range(g)] for i in range(g)])
+                tau = mpmath.inverse(A) * B if g else mpmath.matrix(0, 0)
                 tau = (tau + tau.T) / 2
             return tau
         if "tau" not in self._cache:
