@@ -25,7 +25,7 @@ centres; :meth:`Configuration.place` rebuilds every body's position and velocity
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Iterable, Mapping, Sequence
+from typing import Mapping, Sequence
 
 import numpy as np
 
@@ -106,7 +106,7 @@ class JointViolation:
     child: str
     offset: np.ndarray
     distance: float
-    relative: float  # distance / size of the child subtree (sqrt(tr J_eff / m_eff))
+    relative: float  # distance / max(subtree radius sqrt(tr J_eff / m_eff), |c_eff|, |child_point|)
 
 
 class Configuration:
