@@ -6,6 +6,8 @@ effective bodies.
 """
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from thetasol._so3 import hat, rodrigues
 from thetasol.bodies import Body
@@ -251,3 +253,26 @@ def test_place_refuses_non_central():
     Q = {n: np.eye(3) for n in cfg.order}
     with pytest.raises(ValueError, match="not C\\^k-central"):
         cfg.place(np.zeros(3), np.zeros(3), Q)
+
+
+@settings(max_examples=40, deadline=None)
+@given(parents=st.lists(st.integers(0, 100), min_size=0, max_size=7), seed=st.integers(0, 2**16))
+def test_random_trees(parents, seed):
+    """Any tree shape: make_central() is central, the mass centre stays put, and T splits."""
+    rng = np.random.default_rng(seed)
+    names = [f"b{i}" for i in range(len(parents) + 1)]
+    edges = [(names[p % (i + 1)], names[i + 1]) for i, p in enumerate(parents)]  # parent index < child
+    clouds = {n: (rng.uniform(0.3, 2.0, 4), rng.normal(size=(4, 3))) for n in names}
+    bodies = [Body.from_point_masses(*clouds[n], name=n) for n in names]
+    cfg = Configuration(bodies, [Joint(p, c, rng.normal(size=3), rng.normal(size=3)) for p, c in edges])
+    cfg = cfg.make_central()
+    assert cfg.is_central() and cfg.root == "b0"
+    Q = random_rotations(rng, cfg.order)
+    W = {n: rng.normal(size=3) for n in cfg.order}
+    m, x, v = forward_states(cfg, clouds, np.zeros(3), np.zeros(3), Q, W)
+    assert np.allclose(m @ x / m.sum(), Q["b0"] @ cfg.effective_body("b0").center, atol=1e-12)
+    qd = m @ v / m.sum()
+    T = 0.5 * np.sum(m * np.sum(v * v, axis=1))
+    eff = cfg.effective_bodies()
+    T_split = 0.5 * cfg.mass * qd @ qd + sum(0.5 * W[n] @ eff[n].I @ W[n] for n in cfg.order)
+    assert T == pytest.approx(T_split, rel=1e-12)

@@ -257,7 +257,7 @@ class Configuration:
         bad = [v for v in self.violations() if v.relative > rtol]
         if bad:
             lines = "; ".join(
-                f"{v.parent!r} -> {v.child!r}: child_point is {v.distance:.3g} ({v.relative:.2g} of the subtree size) "
+                f"{v.parent!r} -> {v.child!r}: child_point is {v.distance:.3g} (relative {v.relative:.2g}) "
                 f"from the subtree mass centre {self._effective[v.child].center.tolist()}"
                 for v in bad)
             raise ValueError(f"the configuration is not C^k-central: {lines}. "
