@@ -1,0 +1,94 @@
+"""Double-double helpers for the few O(g^2)-per-point steps of :mod:`thetasol.theta` whose
+float64 rounding is amplified: reduction of ``z`` modulo the period lattice (``z - tau k - j``
+with integers ``k`` up to ~100 for large ``Im z``), the quasi-periodicity phase
+``pi k.X.k`` taken modulo 2 pi, and the map ``u = M z`` into the reduced frame.
+
+Error-free transformations (Knuth two-sum, Dekker/Veltkamp two-product), vectorized with numpy;
+no FMA is assumed.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+_SPLIT = 134217729.0  # 2^27 + 1
+
+
+def two_sum(a, b):
+    s = a + b
+    bb = s - a
+    return s, (a - (s - bb)) + (b - bb)
+
+
+def _split(a):
+    t = _SPLIT * a
+    hi = t - (t - a)
+    return hi, a - hi
+
+
+def two_prod(a, b):
+    p = a * b
+    ah, al = _split(a)
+    bh, bl = _split(b)
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+class DD:
+    """Unevaluated sum ``hi + lo`` of float arrays (real)."""
+
+    __slots__ = ("hi", "lo")
+
+    def __init__(self, hi, lo=None):
+        self.hi = np.asarray(hi, dtype=float)
+        self.lo = np.zeros_like(self.hi) if lo is None else np.asarray(lo, dtype=float)
+
+    def __add__(self, other):
+        if not isinstance(other, DD):
+            other = DD(other)
+        s, e = two_sum(self.hi, other.hi)
+        e = e + self.lo + other.lo
+        return DD(*two_sum(s, e))
+
+    def __neg__(self):
+        return DD(-self.hi, -self.lo)
+
+    def __sub__(self, other):
+        return self + (-other if isinstance(other, DD) else DD(-np.asarray(other, float)))
+
+    def mul(self, b):
+        """Product with a float array ``b`` (exact part by two-product)."""
+        p, e = two_prod(self.hi, b)
+        e = e + self.lo * b
+        return DD(*two_sum(p, e))
+
+    def mul_dd(self, other: "DD"):
+        p, e = two_prod(self.hi, other.hi)
+        e = e + (self.hi * other.lo + self.lo * other.hi)
+        return DD(*two_sum(p, e))
+
+    def frac(self):
+        """``self mod 1`` in [-1/2, 1/2] as a float (the rounding of hi is exact)."""
+        n = np.rint(self.hi)
+        return (self.hi - n) + self.lo
+
+    def value(self):
+        return self.hi + self.lo
+
+
+def dd_split_mp(values) -> tuple[np.ndarray, np.ndarray]:
+    """Split mpmath reals (any nesting handled by np.vectorize) into float hi + lo."""
+    hi = np.vectorize(lambda x: float(x))(values)
+    lo = np.vectorize(lambda x, h: float(x - h))(values, hi)
+    return hi.astype(float), lo.astype(float)
+
+
+def dd_matvec(A_hi, A_lo, x: list) -> list:
+    """``y_i = sum_j A_ij x_j`` with A given as hi/lo float (g, g) and x a list of DD (P,)."""
+    g = A_hi.shape[0]
+    out = []
+    for i in range(g):
+        acc = DD(np.zeros_like(x[0].hi))
+        for j in range(g):
+            term = x[j].mul(A_hi[i, j]) + DD(x[j].hi * A_lo[i, j])
+            acc = acc + term
+        out.append(acc)
+    return out

@@ -1,0 +1,507 @@
+"""Riemann theta functions with characteristics, derivatives and error control.
+
+Definition (DLMF 21.2.5), for ``tau`` symmetric with ``Im tau`` positive definite::
+
+    theta[alpha; beta](z | tau) = sum_{n in Z^g} exp(2 pi i (1/2 (n+alpha).tau.(n+alpha)
+                                                     + (n+alpha).(z+beta)))
+
+Method
+------
+* **Siegel reduction** (Frauendiener, Jaber, Klein 2019): LLL reduction of ``Im tau``,
+  ``|Re tau_ij| <= 1/2`` and the quasi-inversion of ``tau_11`` while ``|tau_11| < 1``.  The
+  composition of these elementary symplectic steps is kept exactly, so points map linearly,
+  characteristics map through ``gamma^{-T}`` and the prefactor is an explicit
+  ``exp(quadratic)`` without any eighth-root-of-unity ambiguity.  Ill-conditioned ``tau``
+  (pinched cycles, ``Im tau`` eigenvalues from 0.05 to 50) thus cost no more than reduced ones.
+* **Exponent separation**: ``theta = exp(e) v`` with ``e = pi y.(Im tau)^{-1}.y``, ``y = Im z``,
+  and ``|v|`` bounded; ``v`` is what is summed, so nothing overflows (Deconinck, Heil, Bobenko,
+  van Hoeij, Schmies, Math. Comp. 73 (2004), eqs. (4)-(6)).  ``z`` is first reduced modulo the
+  period lattice of the *original* ``tau`` (exact quasi-periodicity), then mapped to the reduced
+  frame, where each point is shifted again by Babai nearest-plane rounding of ``(Im tau)^{-1} Im z``.
+* **Ellipsoid summation** over the union of the ellipsoids ``||T(m + f)|| < R`` for all Babai
+  remainders ``f``, with ``R`` from the bound of Deconinck et al. (Thm 2), extended to the
+  polynomial weights of derivatives.  One lattice set serves a whole batch of points, so the hot
+  loop is a complex matrix product (see :mod:`thetasol._theta_core`).
+* **All 2^(2g) half-integer characteristics** at once: the sums are grouped by ``alpha`` and the
+  ``beta`` signs ``(-1)^{n.b}`` are columns of the same matrix product.
+
+Written by hand because no allowed dependency evaluates Riemann theta functions in float64
+(python-flint's certified ``acb_theta`` is an optional test oracle, ~100x slower per point).
+An mpmath path (``dps=``) sums the defining series directly in the original frame.
+
+Conventions
+-----------
+* ``z`` has shape ``(..., g)``; results have shape ``z.shape[:-1]`` (plus ``(2^(2g),)`` for
+  ``char="all"``, plus ``(g,)``/``(g, g)`` for gradients/Hessians).
+* ``char="all"`` orders characteristics as python-flint: index ``a * 2^g + b`` where
+  ``a, b`` in ``{0,1}^g`` are read as binary numbers with the first coordinate most significant,
+  ``alpha = a/2, beta = b/2``.
+* ``tol`` bounds the truncation error of ``v`` (absolute, i.e. relative to ``exp(e)``); the
+  k-th derivative's bound is ``tol * prod_i (1 + |v_i.(c - alpha)|)`` with ``c = (Im tau)^{-1} y``
+  (the natural size of the derivative).  Float64 round-off adds ~1e-15 .. 1e-14.
+"""
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+
+from ._theta_dd import DD, dd_matvec, dd_split_mp, two_prod
+from ._theta_core import TWO_PI_I, ReducedLattice, group_jets, jet_layout
+from ._theta_lattice import MAX_GENUS, babai, siegel_reduction
+from ._validate import finite_array
+
+__all__ = ["RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce"]
+
+#: Relative tolerance on the symmetry of tau (issue 3).
+TAU_SYM_RTOL = 1e-12
+#: Largest derivative order accepted.
+MAX_ORDER = 8
+#: pi - float(pi)
+_PI_LO = 1.2246467991473532e-16
+
+
+# ----------------------------------------------------------------------------------------
+# Validation
+# ----------------------------------------------------------------------------------------
+def _check_tau(tau) -> np.ndarray:
+    t = finite_array(tau, "tau", dtype=complex)
+    if t.ndim != 2 or t.shape[0] != t.shape[1] or t.shape[0] < 1:
+        raise ValueError(f"tau must be a square g x g matrix, got shape {t.shape}")
+    g = t.shape[0]
+    if g > MAX_GENUS:
+        raise ValueError(f"genus g = {g} is not supported (g <= {MAX_GENUS})")
+    scale = max(float(np.max(np.abs(t))), np.finfo(float).tiny)
+    asym = float(np.max(np.abs(t - t.T))) / scale
+    if asym > TAU_SYM_RTOL:
+        raise ValueError(f"tau must be symmetric: max|tau - tau^T| / max|tau| = {asym:.3g} > {TAU_SYM_RTOL:g}")
+    t = 0.5 * (t + t.T)
+    ev = np.linalg.eigvalsh(t.imag)
+    if not ev[0] > 0:
+        raise ValueError(f"Im(tau) must be positive definite, its eigenvalues are {ev}")
+    try:
+        np.linalg.cholesky(t.imag)
+    except np.linalg.LinAlgError as exc:  # pragma: no cover - eigvalsh said > 0
+        raise ValueError(f"Im(tau) is numerically not positive definite (eigenvalues {ev})") from exc
+    return t
+
+
+def _check_z(z, g: int) -> np.ndarray:
+    zz = finite_array(z, "z", dtype=complex)
+    if zz.ndim < 1 or zz.shape[-1] != g:
+        raise ValueError(f"z must have shape (..., {g}) for genus {g}, got {zz.shape}")
+    return zz
+
+
+def _check_char(char, g: int):
+    """None -> zero characteristic; "all" -> the 2^(2g) half-integer ones; (alpha, beta)."""
+    if char is None:
+        return np.zeros((1, g)), np.zeros((1, g)), False
+    if isinstance(char, str):
+        if char != "all":
+            raise ValueError(f"char must be None, 'all' or a pair (alpha, beta), got {char!r}")
+        idx = np.arange(4 ** g)
+        bits = (idx[:, None] >> np.arange(2 * g - 1, -1, -1)[None, :]) & 1
+        return bits[:, :g] / 2.0, bits[:, g:] / 2.0, True
+    try:
+        alpha, beta = char
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"char must be None, 'all' or a pair (alpha, beta), got {char!r}") from exc
+    alpha = finite_array(alpha, "char alpha", (g,))
+    beta = finite_array(beta, "char beta", (g,))
+    return alpha[None, :], beta[None, :], False
+
+
+def _check_dirs(derivs, g: int) -> np.ndarray:
+    if derivs is None:
+        derivs = ()
+    try:
+        V = [finite_array(v, f"derivs[{i}]", (g,), dtype=complex) for i, v in enumerate(derivs)]
+    except TypeError as exc:
+        raise ValueError("derivs must be a sequence of direction vectors of length g") from exc
+    if len(V) > MAX_ORDER:
+        raise ValueError(f"derivative order {len(V)} > {MAX_ORDER} is not supported")
+    return np.array(V, dtype=complex).reshape(len(V), g)
+
+
+def _check_tol(tol) -> float:
+    try:
+        tol = float(tol)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"tol must be a positive float, got {tol!r}") from exc
+    if not (0.0 < tol <= 0.1) or math.isnan(tol):
+        raise ValueError(f"tol must be in (0, 0.1], got {tol}")
+    return tol
+
+
+# ----------------------------------------------------------------------------------------
+# Public API
+# ----------------------------------------------------------------------------------------
+def siegel_reduce(tau) -> tuple[np.ndarray, np.ndarray]:
+    """Siegel reduction of a Riemann matrix (Frauendiener, Jaber, Klein 2019).
+
+    Parameters
+    ----------
+    tau : array_like, shape (g, g)
+        Complex symmetric matrix with positive definite imaginary part.
+
+    Returns
+    -------
+    tau_red : ndarray, shape (g, g)
+        ``(A tau + B)(C tau + D)^{-1}`` with ``Im tau_red`` LLL-reduced, ``|Re tau_red| <= 1/2``
+        entrywise and ``|tau_red[0, 0]| >= 1``.
+    gamma : ndarray of int64, shape (2g, 2g)
+        ``[[A, B], [C, D]]`` in ``Sp(2g, Z)`` (``gamma^T J gamma = J``, ``J = [[0, 1], [-1, 0]]``).
+
+    Notes
+    -----
+    Callers map points and characteristics with the theta transformation formula
+    (Igusa; Mumford, Tata Lectures I, II.5): with ``z' = (C tau + D)^{-T} z`` and
+
+        alpha' = D alpha - C beta + 1/2 diag(C D^T),
+        beta'  = -B alpha + A beta + 1/2 diag(A B^T),
+
+    one has ``theta[alpha'; beta'](z' | tau_red) = kappa * sqrt(det(C tau + D))
+    * exp(pi i z.(C tau + D)^{-1} C z) * theta[alpha; beta](z | tau)`` with ``|kappa| = 1`` a
+    constant depending on gamma and the characteristic (an eighth root of unity times
+    ``exp(2 pi i phi(alpha, beta))``).  :class:`RiemannTheta` does not need kappa: it keeps the
+    elementary steps and so knows every factor exactly.
+    """
+    t = _check_tau(tau)
+    red = siegel_reduction(t)
+    return red.tau.copy(), red.gamma.copy()
+
+
+class RiemannTheta:
+    """Reusable evaluator of ``theta[alpha; beta](z | tau)`` for one ``tau``.
+
+    Validates and Siegel-reduces ``tau`` once, caches the Cholesky factor, the lattice point
+    sets and the characteristic tables, and evaluates batches of points with matrix products.
+
+    Parameters
+    ----------
+    tau : array_like, shape (g, g)
+        Riemann matrix (symmetric to 1e-12 relative, ``Im tau`` positive definite).
+    tol : float
+        Absolute truncation error of the exponent-separated value ``v`` (see module notes).
+
+    Examples
+    --------
+    >>> th = RiemannTheta([[1j, 0.5], [0.5, 2j]])
+    >>> z0, V, c = np.zeros(2), np.array([0.3, 0.1]), np.array([[0.1, 0.2j], [0.5, -0.3j]])
+    >>> t = np.linspace(0, 10, 1000)
+    >>> z = (z0 + t[:, None] * V)[:, None, :] + c[None, :, :]   # (T, S, g)
+    >>> th(z).shape, th.gradient(z).shape
+    ((1000, 2), (1000, 2, 2))
+    """
+
+    def __init__(self, tau, tol: float = 1e-14):
+        self.tau = _check_tau(tau)
+        self.tol = _check_tol(tol)
+        self.g = g = self.tau.shape[0]
+        self._X0 = self.tau.real
+        self._Y0 = self.tau.imag
+        self._T0 = np.linalg.cholesky(self._Y0).T
+        self._Y0inv = np.linalg.inv(self._Y0)
+        self.reduction = siegel_reduction(self.tau)
+        Mmp = self.reduction.mp["M"]
+        self._M_dd = (*dd_split_mp([[x.real for x in row] for row in Mmp]),
+                      *dd_split_mp([[x.imag for x in row] for row in Mmp]))
+        ctx = self.reduction.mp["ctx"]
+        Yinv_mp = ctx.matrix([[ctx.mpf(float(self._Y0[i, j])) for j in range(g)] for i in range(g)]) ** -1
+        self._Y0inv_dd = dd_split_mp([[Yinv_mp[i, j] for j in range(g)] for i in range(g)])
+        Qmp = self.reduction.mp["Q"]
+        self._Q_dd = (*dd_split_mp([[x.real for x in row] for row in Qmp]),
+                      *dd_split_mp([[x.imag for x in row] for row in Qmp]))
+        taur_mp = self.reduction.mp["tau"]
+        self.lattice = ReducedLattice(self.reduction.tau, np.array(
+            [[complex(taur_mp[i][j] - complex(self.reduction.tau[i, j])) for j in range(g)] for i in range(g)]))
+        self._tables: dict = {}
+
+    # -- characteristic tables ---------------------------------------------------------
+    def _char_table(self, alpha: np.ndarray, beta: np.ndarray) -> dict:
+        """Per characteristic: reduced characteristic and the prefactor exp(K + L.z + pi i z.Q.z)."""
+        red, g = self.reduction, self.g
+        Lam = red.lattice_map.astype(float)
+        ab = np.concatenate([alpha, beta], axis=1) @ Lam.T
+        a1 = ab[:, :g] + red.a_s
+        b1 = ab[:, g:] + red.b_s
+        p, q = np.floor(a1 + 1e-12), np.floor(b1 + 1e-12)
+        ar, br = a1 - p, b1 - q
+        ar[np.abs(ar) < 1e-12], br[np.abs(br) < 1e-12] = 0.0, 0.0
+        # K and L carry phases of size ~100 (large Q, c0 after inversions): sum them in mpmath
+        mp = red.mp
+        ctx = mp["ctx"]
+        tau0, taur, Qm, lm, Mm = mp["tau0"], mp["tau"], mp["Q"], mp["l"], mp["M"]
+        n = alpha.shape[0]
+        K = np.empty(n, dtype=complex)
+        L = np.empty((n, g), dtype=complex)
+        two_pi_i = 2j * ctx.pi
+        rg = range(g)
+        for ci in range(n):
+            al, be = [ctx.mpf(x) for x in alpha[ci]], [ctx.mpf(x) for x in beta[ci]]
+            a1c, b1c = [ctx.mpf(x) for x in a1[ci]], [ctx.mpf(x) for x in b1[ci]]
+            d0 = [ctx.fdot(tau0[i], al) + be[i] for i in rg]
+            Qd0 = [ctx.fdot(Qm[i], d0) for i in rg]
+            Ta1 = [ctx.fdot(taur[i], a1c) for i in rg]
+            Kc = (ctx.pi * 1j * ctx.fdot(al, [ctx.fdot(tau0[i], al) for i in rg])
+                  + two_pi_i * ctx.fdot(al, be) + mp["c0"] + two_pi_i * ctx.fdot(lm, d0)
+                  + ctx.pi * 1j * ctx.fdot(d0, Qd0) - ctx.pi * 1j * ctx.fdot(a1c, Ta1)
+                  - two_pi_i * ctx.fdot(a1c, b1c) + two_pi_i * ctx.fdot([ctx.mpf(x) for x in ar[ci]],
+                                                                         [ctx.mpf(x) for x in q[ci]]))
+            # Im K is a phase of size up to ~1e3: reduce it mod 2 pi before rounding to float64
+            K[ci] = complex(float(Kc.real), float(ctx.fmod(Kc.imag, 2 * ctx.pi)))
+            for j in rg:
+                L[ci, j] = complex(two_pi_i * (al[j] + lm[j] + Qd0[j] - ctx.fdot(a1c, [Mm[i][j] for i in rg])))
+        return {"alpha": alpha, "beta": beta, "ar": ar, "br": br, "K": K, "L": L}
+
+    def _table_all(self) -> dict:
+        if "all" not in self._tables:
+            alpha, beta, _ = _check_char("all", self.g)
+            tab = self._char_table(alpha, beta)
+            ia = np.rint(2 * tab["ar"]).astype(np.int64)
+            ib = np.rint(2 * tab["br"]).astype(np.int64)
+            w = 1 << np.arange(self.g - 1, -1, -1)
+            tab["red_index"] = (ia @ w) * (1 << self.g) + ib @ w
+            self._tables["all"] = tab
+        return self._tables["all"]
+
+    # -- the evaluation pass -----------------------------------------------------------
+    def _quad_phase(self, zr_re: list, zr_im: list) -> np.ndarray:
+        """``Re(zr.Q.zr) / 2`` modulo 1, in double-double (Q from the mp replay)."""
+        Qr_hi, Qr_lo, Qi_hi, Qi_lo = self._Q_dd
+        g = self.g
+        acc = DD(np.zeros_like(zr_re[0].hi))
+        for i in range(g):
+            for j in range(i, g):
+                w = 0.5 if i == j else 1.0  # symmetric Q: off-diagonal pairs counted once, doubled
+                rr = zr_re[i].mul_dd(zr_re[j]) - zr_im[i].mul_dd(zr_im[j])  # Re(z_i z_j)
+                ii = zr_re[i].mul_dd(zr_im[j]) + zr_im[i].mul_dd(zr_re[j])  # Im(z_i z_j)
+                acc = acc + rr.mul(w * Qr_hi[i, j]) + DD(rr.hi * (w * Qr_lo[i, j]))
+                acc = acc - ii.mul(w * Qi_hi[i, j]) - DD(ii.hi * (w * Qi_lo[i, j]))
+        return acc.frac()
+
+    def _reduce_points(self, z: np.ndarray):
+        """``z = zr + tau k + j`` with integer k (Babai on (Im tau)^{-1} Im z) and j; zr as DD lists."""
+        g = self.g
+        k0 = babai(z.imag @ self._Y0inv, self._T0)
+        zr_re, zr_im, j0 = [], [], np.empty_like(k0)
+        for i in range(g):
+            re, im = DD(z[:, i].real), DD(z[:, i].imag)
+            for j in range(g):
+                re = re - DD(*two_prod(np.full(len(z), self._X0[i, j]), k0[:, j]))
+                im = im - DD(*two_prod(np.full(len(z), self._Y0[i, j]), k0[:, j]))
+            j0[:, i] = np.rint(re.hi)
+            zr_re.append(re - j0[:, i])
+            zr_im.append(im)
+        return zr_re, zr_im, k0, j0
+
+    def _evaluate(self, z: np.ndarray, char, V: np.ndarray, order: int):
+        """Exponent ``e`` (P,) and subset jets (P, nchar, jet.size) of ``exp(-e) D_S theta``."""
+        g = self.g
+        alpha, beta, is_all = _check_char(char, g)
+        tab = self._table_all() if is_all else self._char_table(alpha, beta)
+        jet = jet_layout(len(V), order)
+        P = z.shape[0]
+        # 1. reduce z modulo the period lattice of the original tau (double-double: k ~ |Im z|)
+        red = self.reduction
+        zr_re, zr_im, k0, j0 = self._reduce_points(z)
+        y_r = np.stack([d.value() for d in zr_im], axis=1)
+        zr = np.stack([d.value() for d in zr_re], axis=1) + 1j * y_r
+        # e = pi y.Y^{-1}.y in double-double with Y^{-1} from mpmath: Y may have condition ~1e3
+        # and y ~ 50, and e's error is a relative error of theta
+        Yi_hi, Yi_lo = self._Y0inv_dd
+        acc = DD(np.zeros(P))
+        y = z.imag
+        for i in range(g):
+            for j in range(i, g):
+                w = 1.0 if i == j else 2.0
+                acc = acc + DD(*two_prod(y[:, i], w * y[:, j])).mul_dd(DD(Yi_hi[i, j], Yi_lo[i, j]))
+        # pi * acc in dd; e is returned rounded and its rounding residual goes into v
+        e_dd = acc.mul(math.pi) + DD(acc.hi * _PI_LO)
+        e, e_res = e_dd.hi, e_dd.lo
+        # quasi-periodicity phase / 2 pi = alpha.j - beta.k - k.X.k/2 - k.Re(zr)   (mod 1)
+        ph = DD(np.zeros((P, len(tab["alpha"]))))
+        for i in range(g):
+            ph = ph + DD(*two_prod(j0[:, i, None], tab["alpha"][None, :, i]))
+            ph = ph - DD(*two_prod(k0[:, i, None], tab["beta"][None, :, i]))
+        own = DD(np.zeros(P))
+        for i in range(g):
+            own = own + zr_re[i].mul(k0[:, i])
+            for j in range(g):
+                own = own + DD(*two_prod(np.full(P, 0.5 * self._X0[i, j]), k0[:, i] * k0[:, j]))
+        ph = ph - DD(own.hi[:, None], own.lo[:, None])
+        phi0 = 2 * math.pi * ph.frac()
+        # 2. map into the reduced frame, u = M zr (double-double)
+        Mr_hi, Mr_lo, Mi_hi, Mi_lo = self._M_dd
+        ur = dd_matvec(Mr_hi, Mr_lo, zr_re)
+        ur = [a - b for a, b in zip(ur, dd_matvec(Mi_hi, Mi_lo, zr_im))]
+        ui = dd_matvec(Mr_hi, Mr_lo, zr_im)
+        ui = [a + b for a, b in zip(ui, dd_matvec(Mi_hi, Mi_lo, zr_re))]
+        u = np.stack([a.hi for a in ur], axis=1) + 1j * np.stack([b.hi for b in ui], axis=1)
+        u_lo = np.stack([a.lo for a in ur], axis=1) + 1j * np.stack([b.lo for b in ui], axis=1)
+        # prefactor exp(K + pi i zr.Q.zr) (L = 0: the transformation law has no linear term);
+        # |Q| reaches ~100 for pinched tau, so its phase pi Re(zr.Q.zr) is taken mod 2 pi in dd
+        Qz = zr @ red.Q.T  # Q symmetric
+        quad = self._quad_phase(zr_re, zr_im)  # Re(zr.Q.zr) / 2 mod 1
+        K = tab["K"]
+        logmag = K.real  # |prefactor| exp(e'(u) - e(zr)) is constant (modular invariance)
+        phase = K.imag[None, :] + 2 * math.pi * quad[:, None] + phi0
+        pref = np.exp(logmag[None, :] + e_res[:, None] + 1j * phase)
+        # 3. reduced-frame jets
+        Vr = V @ red.M.T
+        tol_in = self.tol * math.exp(-max(float(np.max(logmag)), 0.0)) * 0.5
+        a = 1.0
+        if len(V):
+            a = float(np.max(np.linalg.norm(Vr @ self.lattice.Tinv, axis=1) / np.linalg.norm(V, axis=1)))
+        R = self.lattice.radius(tol_in, order, a)
+        lset = self.lattice.points(R)
+        if is_all:
+            bits = (np.arange(1 << g)[:, None] >> np.arange(g - 1, -1, -1)[None, :]) & 1
+            Jr = np.concatenate([group_jets(self.lattice, lset, u, ab / 2.0, np.zeros(g), bits, jet, Vr,
+                                            u_lo=u_lo) for ab in bits], axis=1)
+            Jr = Jr[:, tab["red_index"], :]
+        else:
+            Jr = group_jets(self.lattice, lset, u, tab["ar"][0], tab["br"][0], np.zeros((1, g), np.int64),
+                            jet, Vr, u_lo=u_lo)
+        # 4. Leibniz with the prefactor exp(K + pi i z.Q.z - 2 pi i k0.z)
+        if jet.size > 1:
+            ell = (TWO_PI_I * (Qz - k0) @ V.T)[:, None, :]
+            qd = TWO_PI_I * (V @ red.Q @ V.T)
+            Jr = jet.leibniz(jet.factor(ell, qd), Jr)
+        return e, Jr * pref[:, :, None], jet
+
+    # -- public methods ----------------------------------------------------------------
+    def _run(self, z, char, V, order):
+        zz = _check_z(z, self.g)
+        shape = zz.shape[:-1]
+        e, J, jet = self._evaluate(zz.reshape(-1, self.g), char, V, order)
+        return shape, e, J, jet, isinstance(char, str)
+
+    @staticmethod
+    def _finish(shape, e, val, is_all, extra, separated):
+        """Reshape (P, nchar, *extra) to shape (+ (nchar,)) + extra and apply exp(e) unless separated."""
+        out = val if is_all else val[:, 0]
+        out = out.reshape(shape + out.shape[1:])
+        ee = e.reshape(shape)
+        if separated:
+            return (ee[()] if ee.ndim == 0 else ee), (out[()] if out.ndim == 0 else out)
+        with np.errstate(over="ignore", invalid="ignore"):
+            scale = np.exp(ee).reshape(shape + (1,) * (out.ndim - len(shape)))
+            res = out * scale
+        if not np.all(np.isfinite(res)):
+            raise OverflowError(
+                f"theta overflows float64 (exponent e up to {float(np.max(ee)):.4g}); "
+                "use separated=True to get theta = exp(e) * v")
+        return res[()] if res.ndim == 0 else res
+
+    def __call__(self, z, char=None, derivs: Sequence = (), separated: bool = False):
+        """``theta[alpha; beta](z | tau)`` or its directional derivative ``D_{v_1} .. D_{v_k} theta``.
+
+        Parameters
+        ----------
+        z : array_like, shape (..., g)
+        char : None, "all" or (alpha, beta)
+        derivs : sequence of k direction vectors (length g, complex allowed)
+        separated : bool
+            Return ``(e, v)`` with ``result = exp(e) * v`` (never overflows).
+
+        Returns
+        -------
+        complex ndarray of shape ``z.shape[:-1]`` (``+ (2^(2g),)`` for char="all"); a scalar
+        for a single point.  With ``separated=True`` a pair ``(e, v)``.
+        """
+        V = _check_dirs(derivs, self.g)
+        shape, e, J, jet, is_all = self._run(z, char, V, len(V))
+        return self._finish(shape, e, J[:, :, -1] if len(V) else J[:, :, 0], is_all, (), separated)
+
+    def separated(self, z, char=None, derivs: Sequence = ()):
+        """Exponent-separated evaluation ``(e, v)``: ``theta = exp(e) v``, ``e = pi y.(Im tau)^{-1}.y``."""
+        return self(z, char, derivs, separated=True)
+
+    def jet(self, z, char=None, order: int = 1, separated: bool = False):
+        """Value, gradient (order >= 1) and Hessian (order 2) in one pass over the lattice.
+
+        Returns a tuple ``(value, gradient[, hessian])`` with shapes ``s``, ``s + (g,)``,
+        ``s + (g, g)`` where ``s = z.shape[:-1]`` (``+ (2^(2g),)`` for char="all"); with
+        ``separated=True`` the tuple is ``(e, value, gradient[, hessian])`` in units of ``exp(e)``.
+        """
+        if order not in (0, 1, 2):
+            raise ValueError(f"order must be 0, 1 or 2, got {order!r}")
+        g = self.g
+        # order 2 uses every unit direction twice, so that D_{e_i} D_{e_i} is a subset too
+        V = np.eye(g, dtype=complex) if order < 2 else np.concatenate([np.eye(g), np.eye(g)]).astype(complex)
+        shape, e, J, jet, is_all = self._run(z, char, V, order)
+        parts = [J[..., 0]]
+        if order >= 1:
+            parts.append(J[..., [jet.index[1 << i] for i in range(g)]])
+        if order >= 2:
+            idx = [[jet.index[(1 << i) | (1 << (g + j))] for j in range(g)] for i in range(g)]
+            parts.append(J[..., np.array(idx)])
+        outs = [self._finish(shape, e, p, is_all, (), True)[1] for p in parts]
+        if separated:
+            ee = e.reshape(shape)
+            return (ee[()] if ee.ndim == 0 else ee, *outs)
+        return tuple(self._finish(shape, e, p, is_all, (), False) for p in parts)
+
+    def gradient(self, z, char=None, separated: bool = False):
+        """Gradient ``d theta / d z_j``, shape ``z.shape[:-1] + (g,)`` (one pass over the lattice)."""
+        res = self.jet(z, char, 1, separated)
+        return (res[0], res[2]) if separated else res[1]
+
+    def hessian(self, z, char=None, separated: bool = False):
+        """Hessian ``d^2 theta / d z_i d z_j``, shape ``z.shape[:-1] + (g, g)``."""
+        res = self.jet(z, char, 2, separated)
+        return (res[0], res[3]) if separated else res[2]
+
+
+def riemann_theta(z, tau, char=None, derivs: Sequence = (), tol: float = 1e-14, dps: int | None = None):
+    """Riemann theta function ``theta[alpha; beta](z | tau)`` (DLMF 21.2.5) or a derivative.
+
+    Parameters
+    ----------
+    z : array_like, shape (..., g)
+        Complex points.
+    tau : array_like, shape (g, g)
+        Riemann matrix: symmetric (to 1e-12 relative; symmetrized), ``Im tau`` positive definite.
+    char : None, "all" or (alpha, beta)
+        Characteristic (real vectors of length g); "all" gives the 2^(2g) half-integer ones
+        (flint order, see module notes) along a new last axis.
+    derivs : sequence of direction vectors
+        ``(v_1, ..., v_k)``: returns ``D_{v_1} ... D_{v_k} theta`` (any order up to 8).
+    tol : float
+        Absolute error of ``theta * exp(-e)``, ``e = pi y.(Im tau)^{-1}.y`` (default 1e-14).
+    dps : int, optional
+        If given, evaluate with mpmath at ``dps`` decimal digits (object array of ``mpc``;
+        tol is then ``10**-dps``).
+
+    Returns
+    -------
+    ndarray of complex, shape ``z.shape[:-1]`` (a scalar for one point).
+
+    Raises
+    ------
+    ValueError
+        Bad input (non-symmetric tau, Im tau not positive definite, wrong shapes, NaN).
+    OverflowError
+        If ``|theta|`` overflows float64; use :func:`riemann_theta_separated`.
+    """
+    if dps is not None:
+        from ._theta_mp import theta_mp
+        return theta_mp(z, tau, char, derivs, dps, separated=False)
+    return RiemannTheta(tau, tol)(z, char, derivs)
+
+
+def riemann_theta_separated(z, tau, char=None, derivs: Sequence = (), tol: float = 1e-14,
+                            dps: int | None = None):
+    """Exponent-separated theta: ``(e, v)`` with ``theta = exp(e) * v``.
+
+    ``e = pi y.(Im tau)^{-1}.y`` (real, ``y = Im z``) and ``|v|`` is bounded by a constant
+    depending on tau only (for derivatives, by that constant times the natural derivative
+    size).  Same parameters as :func:`riemann_theta`; never overflows.
+    """
+    if dps is not None:
+        from ._theta_mp import theta_mp
+        return theta_mp(z, tau, char, derivs, dps, separated=True)
+    return RiemannTheta(tau, tol).separated(z, char, derivs)
