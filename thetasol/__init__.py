@@ -12,9 +12,11 @@ Conventions are fixed once, in docs/conventions.md.
 """
 from .equations import invariants, spectral_coefficients, torque
 from .integrate import integrate_rotation
+from .theta import RiemannTheta, riemann_theta, riemann_theta_separated, siegel_reduce
 from .rotation import RotationSolution, solve_rotation
 
 __all__ = ["integrate_rotation", "invariants", "spectral_coefficients", "torque",
+           "RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce",
            "RotationSolution", "solve_rotation"]
 # mechanics of C^k-central configurations (issue 2)
 from .bodies import Body  # noqa: E402
