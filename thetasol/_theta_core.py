@@ -144,9 +144,16 @@ class ReducedLattice:
         self._radii: dict = {}
 
     def radius(self, tol: float, order: int, a: float) -> float:
-        key = (float(tol), int(order), round(max(a, 1.0), 3))
+        """R such that the truncated tail of the order-``order`` moments is <= tol.
+
+        Derivative weights obey ``prod_i |2 pi v_i.(m + delta)| <= (2 pi)^o prod_i (1 + b_i)
+        (1 + a t)^o`` with ``t = ||T(m + f)||``, ``a >= max_i ||T^{-T} v_i|| / |v_i|`` and
+        ``b_i = |v_i.(c - alpha)|`` (the natural size of the derivative), so the bound is
+        applied to ``(1 + a t)^o exp(-pi t^2)`` with tolerance ``tol / (2 pi)^o``.
+        """
+        key = (float(tol), int(order), math.ceil(max(a, 1.0) * 100) / 100)
         if key not in self._radii:
-            self._radii[key] = radius_for(tol, self.rho, self.g, order, 2 * math.pi * key[2] if order else 1.0)
+            self._radii[key] = radius_for(tol / (2 * math.pi) ** order, self.rho, self.g, order, key[2])
         return self._radii[key]
 
     def points(self, R: float):
