@@ -229,3 +229,26 @@ def test_heyoka_quadruple_reference_many():
         err = np.maximum(np.abs(w - wr).max(-1), np.abs(Q - Qr).max((-1, -2)))
         assert err[:-1].max() <= 1e-12
         assert err[-1] <= 1e-10
+
+
+def test_closer_to_the_separatrix_than_float64_resolves():
+    """k'^2 below the float range (momentum 1e-170 off the unstable axis): the same closed form
+    is evaluated in mpmath and rounded; checked against the asymptotics and the physics."""
+    J = SEP_J
+    I = inertia(J)
+    m0 = np.array([1e-170, 1.0, 0.0])
+    Q0 = rand_Q(np.random.default_rng(1))
+    sol = solve_rotation(J, Z, Q0, omega_from_m(J, m0))
+    assert sol.method == "euler-top/elliptic"
+    t = np.array([0.0, 50.0, 2500.0])
+    w, Q = sol(t)
+    assert w.dtype == float
+    m = w @ I.T
+    # |m| and the space angular momentum are conserved, Q is a rotation
+    assert np.allclose(np.linalg.norm(m, axis=-1), 1.0, rtol=1e-15)
+    assert np.max(np.abs(np.einsum("nij,nj->ni", Q, m) - Q0 @ m0)) < 1e-14
+    assert np.max(np.abs(np.swapaxes(Q, -1, -2) @ Q - np.eye(3))) < 1e-14
+    # linearization about the unstable axis: m_0, m_2 grow like exp(lam t), lam^2 = (I_b - I_a)(I_c - I_b)/(I_a I_c) G^2/I_b^2
+    lam = np.sqrt((6.0 - 5.0) * (5.0 - 3.0) / (6.0 * 3.0)) / 5.0
+    ratio = abs(m[1, 0]) / 1e-170
+    assert 0.5 * np.exp(lam * 50.0) < ratio < 2.0 * np.exp(lam * 50.0)

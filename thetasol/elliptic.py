@@ -106,8 +106,17 @@ _SPLIT = 134217729.0  # 2**27 + 1
 
 
 def _two_prod(a, b):
-    """``a*b = p + e`` exactly (Dekker); valid for |a*b| < 1e300."""
+    """``a*b = p + e`` exactly (Dekker), for any finite a, b whose product does not overflow.
+
+    The factors are first rebalanced by a power of two (``a 2^-s``, ``b 2^s``: the product is
+    unchanged) so that Veltkamp's split cannot overflow for huge ``|a|`` or ``|b|``.
+    """
     p = a * b
+    ea = np.frexp(a)[1]
+    eb = np.frexp(b)[1]
+    sh = (ea - eb) // 2
+    a = np.ldexp(a, -sh)
+    b = np.ldexp(b, sh)
     a1 = _SPLIT * a
     ah = a1 - (a1 - a)
     al = a - ah

@@ -65,10 +65,16 @@ _TWO_PI_LO = 2.4492935982947064e-16
 
 # -- scalar arithmetic, float or mpmath --------------------------------------------------------
 
+class _OutOfRange(Exception):
+    """The distance to the separatrix is below what the current arithmetic represents."""
+
+
 class _FloatOps:
     """Scalar operations for the float64 setup."""
 
     pi = math.pi
+    exact_m = False  # the float kernels use mc, not m = 1 - mc
+    tiny = 2.2250738585072014e-308  # a subnormal mc would carry only a few bits
 
     @staticmethod
     def num(x):
@@ -76,6 +82,7 @@ class _FloatOps:
 
     sqrt = staticmethod(math.sqrt)
     hypot = staticmethod(math.hypot)
+    norm3 = staticmethod(math.hypot)  # n-argument hypot: no underflow of the squares
     asinh = staticmethod(math.asinh)
     atan = staticmethod(math.atan)
     tanh = staticmethod(math.tanh)
@@ -96,6 +103,9 @@ class _FloatOps:
 class _MpOps:
     """Scalar operations for the mpmath setup (used inside ``mpmath.workdps``)."""
 
+    exact_m = True  # mpmath.ellipfun takes m: 1 - mc must not round to 1
+    tiny = 0
+
     def __init__(self):
         import mpmath
 
@@ -110,6 +120,9 @@ class _MpOps:
     def num(self, x):
         return self.mp.mpf(x)
 
+    def norm3(self, a, b, c):
+        return self.mp.sqrt(a * a + b * b + c * c)
+
     def K(self, mc):
         return self.mp.ellipk(1 - mc)
 
@@ -121,10 +134,21 @@ class _MpOps:
 
 
 def _F_sc(X, s, c, mc, K):
-    """F(phi | 1 - mc) from sin(phi) = s, cos(phi) = c, phi in [-pi, pi] (scalar)."""
-    f = abs(s) * X.RF(c * c, c * c + mc * s * s, 1) if s != 0 else 0 * s
-    if c < 0:
-        f = 2 * K - f
+    """F(phi | 1 - mc) from sin(phi) = s, cos(phi) = c, phi in [-pi, pi] (scalar).
+
+    Near phi = +-pi/2 (where F is near K and ``c^2`` may underflow) the complementary
+    amplitude is used: ``F(phi) = K - F(phi')`` with ``tan phi' = cot(phi) / k'``.
+    """
+    if c * c >= 0.5:
+        f = abs(s) * X.RF(c * c, c * c + mc * s * s, 1)
+        if c < 0:
+            f = 2 * K - f
+    else:
+        kps = X.sqrt(mc) * abs(s)
+        h = X.hypot(abs(c), kps)
+        sp, cp = abs(c) / h, kps / h
+        v = sp * X.RF(cp * cp, cp * cp + mc * sp * sp, 1)
+        f = K - v if c >= 0 else K + v
     return -f if s < 0 else f
 
 
@@ -167,15 +191,17 @@ def _setup(Jp, mvec, X) -> _Consts:
     def dI(i, j):  # I_i - I_j
         return J[j] - J[i]
 
-    G = X.sqrt(mv[0] * mv[0] + mv[1] * mv[1] + mv[2] * mv[2])
+    G = X.norm3(mv[0], mv[1], mv[2])
     if G == 0:
         return _Consts(kind="rest")
     # steady rotation: m x omega vanishes exactly (m along a principal axis, or a sphere)
-    steady = all(mv[j] * mv[k] * dI(j, k) == 0 for j, k in ((1, 2), (2, 0), (0, 1)))
+    # (a logical test: the product m_j m_k (I_j - I_k) could underflow for tiny data)
+    steady = all(mv[j] == 0 or mv[k] == 0 or dI(j, k) == 0 for j, k in ((1, 2), (2, 0), (0, 1)))
     if steady:
         return _Consts(kind="steady", G=G)
     n = [v / G for v in mv]
-    lo, mid, hi = sorted(range(3), key=lambda i: (Ip[i], i))
+    # order by the exact second moments (I ascending = J descending), not by rounded inertias
+    lo, mid, hi = sorted(range(3), key=lambda i: (-J[i], i))
     sep = False
     if dI(mid, lo) == 0:
         c, a = hi, lo
@@ -183,32 +209,27 @@ def _setup(Jp, mvec, X) -> _Consts:
         c, a = lo, hi
     else:
         rho4 = dI(mid, lo) * Ip[hi] / (dI(hi, mid) * Ip[lo])
-        num = n[hi] * n[hi] - rho4 * n[lo] * n[lo]
+        # sign of G^2 - 2T I_mid; scaled so that tiny components do not underflow to "0"
+        sc_ = max(abs(n[hi]), abs(n[lo]))
+        num = (n[hi] / sc_) ** 2 - rho4 * (n[lo] / sc_) ** 2 if sc_ > 0 else 0 * sc_
         if num > 0:
-            c, a, numc = hi, lo, num
+            c, a = hi, lo
         elif num < 0:
-            c, a, numc = lo, hi, -num / rho4
+            c, a = lo, hi
         else:
-            c, a, numc, sep = hi, lo, 0 * num, True
+            c, a, sep = hi, lo, True
     b = mid
-    # right-handed working frame with n_c >= 0 (and n_a >= 0 on the separatrix)
-    sc = -1 if n[c] < 0 else 1
-    sa = (-1 if n[a] < 0 else 1) if sep else 1
-    P = np.zeros((3, 3))
-    P[a, 0] = P[b, 1] = P[c, 2] = 1.0
-    sb = sa * sc * int(round(np.linalg.det(P)))
-    W = P * np.array([sa, sb, sc], dtype=float)
-    na, nb, nc = sa * n[a], sb * n[b], sc * n[c]
     Ia, Ib, Ic = Ip[a], Ip[b], Ip[c]
     dcb, dca, dba = abs(dI(c, b)), abs(dI(c, a)), abs(dI(b, a))
-    sg = 1 if Ic > Ib else -1
+    sg = 1 if c == hi else -1  # sign of I_c - I_b (from J, not from rounded inertias)
     symmetric = dba == 0
     rho1 = dcb * Ia / (dca * Ib)
     rho2 = dca * Ib / (dcb * Ia)
     rho3 = dba * Ic / (Ib * dca)
-    Aa = X.hypot(na, nb * X.sqrt(rho1))
-    Ab = X.hypot(nb, na * X.sqrt(rho2))
-    Ac = X.hypot(nc, nb * X.sqrt(rho3))
+    # unit amplitudes: sums of squares (hypot: no underflow), independent of the signs
+    Aa = X.hypot(n[a], n[b] * X.sqrt(rho1))
+    Ab = X.hypot(n[b], n[a] * X.sqrt(rho2))
+    Ac = X.hypot(n[c], n[b] * X.sqrt(rho3))
     if symmetric:
         m_par, mc = 0 * Aa, 1 + 0 * Aa
     elif sep:
@@ -218,17 +239,34 @@ def _setup(Jp, mvec, X) -> _Consts:
         if m_dir < 0.5:
             m_par, mc = m_dir, 1 - m_dir
         else:
-            mc = numc / (Ac * Ac) if c == hi else numc / (Ac * Ac)
+            # mc = (n_c^2 - rho n_a^2) / A_c^2, formed from ratios
+            rho = rho4 if c == hi else 1 / rho4
+            mc = (n[c] / Ac) ** 2 - rho * (n[a] / Ac) ** 2
+            if not mc > X.tiny or (X.exact_m and 1 - mc == 1):
+                # closer to the separatrix than this arithmetic resolves: more digits needed
+                raise _OutOfRange
             m_par = 1 - mc
-    lam = sg * G * Ac * X.sqrt(dcb * dca / (Ia * Ib)) / Ic
-    # C = 2T - G^2/I_c as a sum of terms of one sign
-    C = sg * G * G * (na * na * dca / (Ia * Ic) + nb * nb * dcb / (Ib * Ic))
+    # right-handed working frame with n_c >= 0 (and n_a >= 0 on the separatrix)
+    sc = -1 if n[c] < 0 else 1
+    sa = (-1 if n[a] < 0 else 1) if sep else 1
+    P = np.zeros((3, 3))
+    P[a, 0] = P[b, 1] = P[c, 2] = 1.0
+    sb = sa * sc * int(round(np.linalg.det(P)))
+    W = P * np.array([sa, sb, sc], dtype=float)
+    na, nb, nc = sa * n[a], sb * n[b], sc * n[c]
+    # rates per unit |m| (then scaled by G: no underflow of G^2 for tiny momenta)
+    lam1 = sg * Ac * X.sqrt(dcb * dca / (Ia * Ib)) / Ic
+    if lam1 == 0:  # underflow (a momentum within 1e-300 of an axis of a symmetric body)
+        raise _OutOfRange
+    lam = G * lam1
+    # C1 = (2T - G^2/I_c) / G^2 as a sum of terms of one sign
+    C1 = sg * (na * na * dca / (Ia * Ic) + nb * nb * dcb / (Ib * Ic))
     out = _Consts(kind="separatrix" if sep else "elliptic", G=G, W=W, Iw=(Ia, Ib, Ic),
                   A=(Aa, Ab, Ac), m=m_par, mc=mc, lam=lam, symmetric=symmetric)
     if sep:
-        out.u0 = X.asinh((nb * Aa) / (na * Ab))
-        out.nu = G / Ic + C / G
-        out.kappa = C * 2 * Ac / (lam * G * Aa)
+        out.u0 = X.asinh((nb / Ab) / (na / Aa))
+        out.nu = G * (1 / Ic + C1)
+        out.kappa = C1 * 2 * Ac / (lam1 * Aa)
         out.rho = Aa / (1 + Ac)
         out.A = (Aa, 1 + 0 * Aa, Ac)  # A_b = 1 on the separatrix (m -> G e_b)
         out.period = math.inf
@@ -240,18 +278,30 @@ def _setup(Jp, mvec, X) -> _Consts:
     N = -k1 * Aa * Aa / ((1 + Ac) * (1 + Ac))  # -k1 (1 - A_c)/(1 + A_c), 1 - A_c^2 = A_a^2
     Gam = (1 + k1) * 2 * Ac * k1 / (3 * (1 + Ac) * (1 + Ac))
     RJc = X.RJ(0 * K, k1p2, 1, 1 - N) if k1 != 0 else 0 * K
-    Ibar = (1 / (1 + Ac) + Gam * RJc / K) / G
+    Ibar1 = 1 / (1 + Ac) + Gam * RJc / K  # G times the mean of 1/(G + m_c)
     s0, c0 = nb / Ab, na / Aa
     r0 = X.hypot(s0, c0)
     out.u0 = _F_sc(X, s0 / r0, c0 / r0, mc, K)
     out.K, out.kp, out.k1p2, out.N, out.RJc = K, kp, k1p2, N, RJc
-    out.nu = G / Ic + C * Ibar
-    out.kappa = C * Gam / (G * lam)
+    out.nu = G * (1 / Ic + C1 * Ibar1)
+    out.kappa = C1 * Gam / lam1
     out.period = 4 * K / abs(lam)  # cn, sn have period 4K (dn alone 2K)
     return out
 
 
 # -- float64 evaluation ------------------------------------------------------------------------
+
+def _norm(v):
+    """Euclidean norm of one 3-vector without underflow or overflow of the squares."""
+    return math.hypot(*(float(x) for x in v))
+
+
+def _unit(v):
+    """Rows of ``v`` (..., 3) normalized, scaled first so that tiny or huge vectors stay exact."""
+    s = np.max(np.abs(v), axis=-1, keepdims=True)
+    w = v / np.where(s > 0, s, 1.0)
+    return w / np.linalg.norm(w, axis=-1, keepdims=True)
+
 
 def _minimal_rotation(nv):
     """B with B n = e_3 (rotation about n x e_3), for unit n with n_3 > -1; shape (..., 3, 3)."""
@@ -379,15 +429,18 @@ class EulerTopSolution(RotationSolution):
 
     # float64 ------------------------------------------------------------------------------
     def _evaluate(self, t):
-        if self.dps is not None:
-            return self._evaluate_mp(t)
+        if self._mp is not None:
+            om, Q = self._evaluate_mp(t)
+            if self.dps is None:  # float64 API served by the mpmath path (extreme data)
+                return om.astype(float), Q.astype(float)
+            return om, Q
         c = self._c
         n = t.size
         if c.kind == "rest":
             return np.zeros((n, 3)), np.broadcast_to(self.Q0, (n, 3, 3)).copy()
         if c.kind == "steady":
             w = self.omega0
-            wn = float(np.linalg.norm(w))
+            wn = _norm(w)
             ax = w / wn
             ang = _angle_mod_2pi(wn, t, 0.0)
             K = np.array([[0, -ax[2], ax[1]], [ax[2], 0, -ax[0]], [-ax[1], ax[0], 0]])
@@ -395,7 +448,7 @@ class EulerTopSolution(RotationSolution):
                  + (1.0 - np.cos(ang))[:, None, None] * (K @ K))
             return np.broadcast_to(w, (n, 3)).copy(), self.Q0 @ R
         mw, psi = _eval_float(c, t)
-        nv = mw / np.linalg.norm(mw, axis=-1, keepdims=True)
+        nv = _unit(mw)
         B = _minimal_rotation(nv)
         cp, sp = np.cos(psi), np.sin(psi)
         R3 = np.zeros((n, 3, 3))
@@ -409,7 +462,7 @@ class EulerTopSolution(RotationSolution):
         return omega, Q
 
     def _omega(self, t):
-        if self.dps is not None or self._c.kind in ("rest", "steady"):
+        if self._mp is not None or self._c.kind in ("rest", "steady"):
             return self._evaluate(t)[0]
         mw, _ = _eval_float_momentum_only(self._c, t)
         return (mw / self._Iw) @ self._P.T
@@ -422,7 +475,7 @@ class EulerTopSolution(RotationSolution):
         n = t.size
         om = np.empty((n, 3), dtype=object)
         Qo = np.empty((n, 3, 3), dtype=object)
-        with mp.workdps(self.dps + 10):
+        with mp.workdps(self._mp["wdps"]):
             P = self._mp.get("P")
             S = self._mp.get("S")
             Q0 = self._mp["Q0"]
@@ -485,7 +538,7 @@ def _principal_frame(Jm):
 
 
 def _steady_rate(c, omega0):
-    return float(np.linalg.norm(omega0)) if c.kind == "steady" else 0.0
+    return _norm(omega0) if c.kind == "steady" else 0.0
 
 
 def _method(c) -> str:
@@ -503,7 +556,12 @@ def _solve_euler_top(Jm, am, Q0, omega0, dps=None) -> EulerTopSolution:
         return _solve_mp(Jm, am, Q0, omega0, dps, inv)
     Jp, R = _principal_frame(Jm)
     Ip = np.array([Jp[1] + Jp[2], Jp[0] + Jp[2], Jp[0] + Jp[1]])
-    c = _setup(Jp, Ip * (R.T @ omega0), _FloatOps)
+    try:
+        c = _setup(Jp, Ip * (R.T @ omega0), _FloatOps)
+    except _OutOfRange:
+        # k'^2 underflows (momentum within ~1e-160 of the unstable axis): same closed form
+        # in mpmath, results rounded to float64
+        return _solve_mp(Jm, am, Q0, omega0, 30, inv, float_output=True)
     method = _method(c)
     if c.kind in ("rest", "steady"):
         inv.update(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0)
@@ -518,34 +576,48 @@ def _solve_euler_top(Jm, am, Q0, omega0, dps=None) -> EulerTopSolution:
         sn, cn, dn = _el._sncndn_0K(x0, np.full(1, c.m), np.full(1, c.mc), c.K)
         c.extra["P0"] = float(_periodic(c, x0, sn, cn, dn)[0]) * (-1.0 if r0 < 0 else 1.0)
     mw0, _ = _eval_float(c, np.zeros(1))
-    n0 = mw0[0] / np.linalg.norm(mw0[0])
+    n0 = _unit(mw0)[0]
     S = Q0 @ P @ _minimal_rotation(n0).T
     return EulerTopSolution(Jm, am, Q0, omega0, method, inv, None, _c=c, _P=P, _S=S, _Iw=Iw)
 
 
-def _solve_mp(Jm, am, Q0, omega0, dps, inv):
+def _setup_mp(Jm, omega0, mp):
+    """Principal frame (mpmath eigensolver unless J is diagonal) and the constants, in mpmath."""
+    X = _MpOps()
+    Jmp = mp.matrix([[mp.mpf(float(v)) for v in row] for row in Jm])
+    if not np.any(Jm - np.diag(np.diag(Jm))):
+        Jp = [Jmp[i, i] for i in range(3)]
+        R = mp.eye(3)
+    else:
+        ev, R = mp.eigsy(Jmp)
+        Jp = [ev[i] for i in range(3)]
+        if mp.det(R) < 0:
+            for i in range(3):
+                R[i, 2] = -R[i, 2]
+    Ip = [Jp[1] + Jp[2], Jp[0] + Jp[2], Jp[0] + Jp[1]]
+    wp = R.T * mp.matrix([mp.mpf(float(v)) for v in omega0])
+    return _setup(Jp, [Ip[i] * wp[i] for i in range(3)], X), R
+
+
+def _solve_mp(Jm, am, Q0, omega0, dps, inv, float_output=False):
     import mpmath as mp
 
-    with mp.workdps(dps + 10):
-        X = _MpOps()
-        Jmp = mp.matrix([[mp.mpf(float(v)) for v in row] for row in Jm])
-        off = Jm - np.diag(np.diag(Jm))
-        if not np.any(off):
-            Jp = [Jmp[i, i] for i in range(3)]
-            R = mp.eye(3)
-        else:
-            ev, R = mp.eigsy(Jmp)
-            Jp = [ev[i] for i in range(3)]
-            if mp.det(R) < 0:
-                for i in range(3):
-                    R[i, 2] = -R[i, 2]
-        Ip = [Jp[1] + Jp[2], Jp[0] + Jp[2], Jp[0] + Jp[1]]
-        w0 = mp.matrix([mp.mpf(float(v)) for v in omega0])
-        wp = R.T * w0
-        mvec = [Ip[i] * wp[i] for i in range(3)]
-        c = _setup(Jp, mvec, X)
+    wdps = dps + 10
+    while True:
+        with mp.workdps(wdps):
+            try:
+                c, R = _setup_mp(Jm, omega0, mp)
+                break
+            except _OutOfRange:
+                if wdps > 20000:
+                    raise ValueError("the momentum is too close to the separatrix to resolve "
+                                     "(k'^2 below 1e-20000)") from None
+                wdps *= 2
+    with mp.workdps(wdps):
         Q0m = mp.matrix([[mp.mpf(float(v)) for v in row] for row in Q0])
-        store = {"Q0": Q0m, "w0": w0}
+        w0 = mp.matrix([mp.mpf(float(v)) for v in omega0])
+        store = {"Q0": Q0m, "w0": w0, "wdps": wdps}
+        dps = None if float_output else dps
         method = _method(c)
         if c.kind in ("rest", "steady"):
             inv.update(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0)
