@@ -32,7 +32,7 @@ import numpy as np
 
 from scipy.linalg import solve_triangular
 
-from ._theta_dd import DD, two_prod
+from ._theta_dd import DD, dd_sum, two_prod
 from ._theta_lattice import babai, radius_for, shortest_vector, union_set
 
 TWO_PI_I = 2j * math.pi
@@ -199,15 +199,12 @@ def group_jets(lat: ReducedLattice, lset: dict, u: np.ndarray, alpha: np.ndarray
     d = alpha[None, :] - k
     # Wr = u + tau d + beta, d = alpha - k, in double-double: |Y k| can be ~100 for elongated Y
     # while Im Wr = Y f is small, and the Gaussian weights need Im Wr to full relative accuracy
-    Wr_re, Wr_im = np.empty((P, g)), np.empty((P, g))
-    for i in range(g):
-        re = DD(u[:, i].real) + DD(u_lo[:, i].real + beta[i])
-        im = DD(u[:, i].imag) + DD(u_lo[:, i].imag)
-        for j in range(g):
-            re = re + DD(*two_prod(d[:, j], np.full(P, X[i, j]))) + DD(d[:, j] * lat.X_lo[i, j])
-            im = im + DD(*two_prod(d[:, j], np.full(P, Y[i, j]))) + DD(d[:, j] * lat.Y_lo[i, j])
-        Wr_re[:, i] = re.value()
-        Wr_im[:, i] = im.value()
+    # double-double work in the (g, P) layout of _theta_dd (point axis last)
+    dT = d.T
+    dX = dd_sum(DD(*two_prod(dT[:, None, :], X.T[:, :, None]))) + DD(lat.X_lo @ dT)  # [j, i, p]
+    dY = dd_sum(DD(*two_prod(dT[:, None, :], Y.T[:, :, None]))) + DD(lat.Y_lo @ dT)
+    Wr_re = (DD(u.real.T) + DD(u_lo.real.T + beta[:, None]) + dX).value().T
+    Wr_im = (DD(u.imag.T) + DD(u_lo.imag.T) + dY).value().T
     Wr_re -= np.rint(Wr_re)  # the m-sum is 1-periodic in Re Wr
     s_T = solve_triangular(T, Wr_im.T, trans="T", lower=False).T  # T f, with T^T (T f) = Im Wr
     # moments G[p, b, T] = sum_m (-1)^{m.b} prod_{i in T} (v_i . m) E[p, m]
@@ -225,12 +222,10 @@ def group_jets(lat: ReducedLattice, lset: dict, u: np.ndarray, alpha: np.ndarray
         G = jet.leibniz(jet.factor(ell[:, None, :], None), G)
     # phase of the characteristic prefactor and of the shift by tau k, combined:
     # pi d.X.d + 2 pi d.(Re u + beta) + pi d.b   (mod 2 pi, double-double)
-    acc = DD(np.zeros(P))
-    for i in range(g):
-        acc = acc + DD(*two_prod(d[:, i], u[:, i].real + beta[i])) + DD(d[:, i] * u_lo[:, i].real)
-        for j in range(g):
-            acc = acc + DD(*two_prod(d[:, i] * d[:, j], np.full(P, 0.5 * X[i, j]))) \
-                + DD(d[:, i] * d[:, j] * 0.5 * lat.X_lo[i, j])
+    ure = DD(u.real.T) + DD(u_lo.real.T + beta[:, None])  # Re u + beta, (g, P)
+    dd_ = (dT[:, None, :] * dT[None, :, :]).reshape(g * g, P)  # exact: small integers and halves
+    acc = dd_sum(ure.mul(dT)) + dd_sum(DD(*two_prod(dd_, 0.5 * X.reshape(-1, 1)))) \
+        + DD((0.5 * lat.X_lo.reshape(-1)) @ dd_)
     ph = 2 * math.pi * acc.frac()[:, None] + math.pi * (d @ bits.T.astype(float))
     return G * np.exp(1j * ph)[:, :, None]
 

@@ -56,6 +56,7 @@ class DD:
 
     def mul(self, b):
         """Product with a float array ``b`` (exact part by two-product)."""
+        b = np.asarray(b, dtype=float)
         p, e = two_prod(self.hi, b)
         e = e + self.lo * b
         return DD(*two_sum(p, e))
@@ -74,21 +75,40 @@ class DD:
         return self.hi + self.lo
 
 
+def dd_sum(x: "DD") -> "DD":
+    """Sum over axis 0 by a pairwise tree of double-double additions.
+
+    Layout convention of this module: the point axis is the LAST one (contiguous), summed
+    axes come first, so every numpy loop runs over long contiguous rows.
+    """
+    hi = x.hi
+    lo = np.broadcast_to(x.lo, hi.shape)
+    while hi.shape[0] > 1:
+        n = hi.shape[0]
+        h = n // 2
+        s, e = two_sum(hi[:h], hi[h:2 * h])
+        e = e + lo[:h] + lo[h:2 * h]
+        s, e = two_sum(s, e)
+        if n % 2:
+            s, e = np.concatenate([s, hi[-1:]]), np.concatenate([e, lo[-1:]])
+        hi, lo = s, e
+    return DD(hi[0], lo[0])
+
+
+def dd_prod(a, b) -> "DD":
+    """Exact product of two float arrays (broadcasting) as a DD."""
+    return DD(*two_prod(np.asarray(a, float), np.asarray(b, float)))
+
+
 def dd_split_mp(values) -> tuple[np.ndarray, np.ndarray]:
-    """Split mpmath reals (any nesting handled by np.vectorize) into float hi + lo."""
+    """Split mpmath reals (nested lists) into float hi + lo arrays."""
     hi = np.vectorize(lambda x: float(x))(values)
     lo = np.vectorize(lambda x, h: float(x - h))(values, hi)
     return hi.astype(float), lo.astype(float)
 
 
-def dd_matvec(A_hi, A_lo, x: list) -> list:
-    """``y_i = sum_j A_ij x_j`` with A given as hi/lo float (g, g) and x a list of DD (P,)."""
-    g = A_hi.shape[0]
-    out = []
-    for i in range(g):
-        acc = DD(np.zeros_like(x[0].hi))
-        for j in range(g):
-            term = x[j].mul(A_hi[i, j]) + DD(x[j].hi * A_lo[i, j])
-            acc = acc + term
-        out.append(acc)
-    return out
+def dd_matvec(A_hi, A_lo, x: "DD") -> "DD":
+    """``y_i = sum_j A_ij x_j`` for A = A_hi + A_lo (g, g) and x a DD of shape (g, P)."""
+    xh = DD(x.hi[:, None, :], x.lo[:, None, :])  # [j, ., p]
+    prod = xh.mul(A_hi.T[:, :, None]) + DD(x.hi[:, None, :] * A_lo.T[:, :, None])  # [j, i, p]
+    return dd_sum(prod)

@@ -47,7 +47,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ._theta_dd import DD, dd_matvec, dd_split_mp, two_prod
+from ._theta_dd import DD, dd_matvec, dd_prod, dd_split_mp, dd_sum
 from ._theta_core import TWO_PI_I, ReducedLattice, group_jets, jet_layout
 from ._theta_lattice import MAX_GENUS, babai, siegel_reduction
 from ._validate import finite_array
@@ -268,79 +268,68 @@ class RiemannTheta:
         return self._tables["all"]
 
     # -- the evaluation pass -----------------------------------------------------------
-    def _quad_phase(self, zr_re: list, zr_im: list) -> np.ndarray:
-        """``Re(zr.Q.zr) / 2`` modulo 1, in double-double (Q from the mp replay)."""
+    def _quad_phase(self, zr_re: DD, zr_im: DD) -> np.ndarray:
+        """``Re(zr.Q.zr) / 2`` modulo 1, in double-double (Q from the mp replay); zr as (g, P)."""
         Qr_hi, Qr_lo, Qi_hi, Qi_lo = self._Q_dd
-        g = self.g
-        acc = DD(np.zeros_like(zr_re[0].hi))
-        for i in range(g):
-            for j in range(i, g):
-                w = 0.5 if i == j else 1.0  # symmetric Q: off-diagonal pairs counted once, doubled
-                rr = zr_re[i].mul_dd(zr_re[j]) - zr_im[i].mul_dd(zr_im[j])  # Re(z_i z_j)
-                ii = zr_re[i].mul_dd(zr_im[j]) + zr_im[i].mul_dd(zr_re[j])  # Im(z_i z_j)
-                acc = acc + rr.mul(w * Qr_hi[i, j]) + DD(rr.hi * (w * Qr_lo[i, j]))
-                acc = acc - ii.mul(w * Qi_hi[i, j]) - DD(ii.hi * (w * Qi_lo[i, j]))
-        return acc.frac()
+        g, P = zr_re.hi.shape
+        xi = lambda d: DD(d.hi[:, None, :], d.lo[:, None, :])  # noqa: E731
+        xj = lambda d: DD(d.hi[None, :, :], d.lo[None, :, :])  # noqa: E731
+        rr = xi(zr_re).mul_dd(xj(zr_re)) - xi(zr_im).mul_dd(xj(zr_im))  # Re(z_i z_j)
+        ii = xi(zr_re).mul_dd(xj(zr_im)) + xi(zr_im).mul_dd(xj(zr_re))  # Im(z_i z_j)
+        h = lambda A: 0.5 * A[:, :, None]  # noqa: E731
+        acc = rr.mul(h(Qr_hi)) + DD(rr.hi * h(Qr_lo)) - ii.mul(h(Qi_hi)) - DD(ii.hi * h(Qi_lo))
+        return dd_sum(DD(acc.hi.reshape(g * g, P), acc.lo.reshape(g * g, P))).frac()
 
     def _reduce_points(self, z: np.ndarray):
-        """``z = zr + tau k + j`` with integer k (Babai on (Im tau)^{-1} Im z) and j; zr as DD lists."""
-        g = self.g
+        """``z = zr + tau k + j`` (k by Babai on (Im tau)^{-1} Im z); zr as DD (g, P), k, j as (P, g)."""
         k0 = babai(z.imag @ self._Y0inv, self._T0)
-        zr_re, zr_im, j0 = [], [], np.empty_like(k0)
-        for i in range(g):
-            re, im = DD(z[:, i].real), DD(z[:, i].imag)
-            for j in range(g):
-                re = re - DD(*two_prod(np.full(len(z), self._X0[i, j]), k0[:, j]))
-                im = im - DD(*two_prod(np.full(len(z), self._Y0[i, j]), k0[:, j]))
-            j0[:, i] = np.rint(re.hi)
-            zr_re.append(re - j0[:, i])
-            zr_im.append(im)
-        return zr_re, zr_im, k0, j0
+        kT = k0.T
+        re = DD(z.real.T) - dd_sum(dd_prod(self._X0.T[:, :, None], kT[:, None, :]))  # [j, i, p]
+        im = DD(z.imag.T) - dd_sum(dd_prod(self._Y0.T[:, :, None], kT[:, None, :]))
+        j0 = np.rint(re.hi)
+        return re - j0, im, k0, j0.T
 
     def _evaluate(self, z: np.ndarray, char, V: np.ndarray, order: int):
         """Exponent ``e`` (P,) and subset jets (P, nchar, jet.size) of ``exp(-e) D_S theta``."""
         g = self.g
         alpha, beta, is_all = _check_char(char, g)
-        tab = self._table_all() if is_all else self._char_table(alpha, beta)
+        if is_all:
+            tab = self._table_all()
+        else:
+            key = (alpha.tobytes(), beta.tobytes())
+            tab = self._tables.get(key)
+            if tab is None:
+                if len(self._tables) > 256:  # bounded cache of general characteristics
+                    self._tables = {k: v for k, v in self._tables.items() if k == "all"}
+                tab = self._tables[key] = self._char_table(alpha, beta)
         jet = jet_layout(len(V), order)
         P = z.shape[0]
         # 1. reduce z modulo the period lattice of the original tau (double-double: k ~ |Im z|)
         red = self.reduction
         zr_re, zr_im, k0, j0 = self._reduce_points(z)
-        y_r = np.stack([d.value() for d in zr_im], axis=1)
-        zr = np.stack([d.value() for d in zr_re], axis=1) + 1j * y_r
+        zr = (zr_re.value() + 1j * zr_im.value()).T
         # e = pi y.Y^{-1}.y in double-double with Y^{-1} from mpmath: Y may have condition ~1e3
         # and y ~ 50, and e's error is a relative error of theta
         Yi_hi, Yi_lo = self._Y0inv_dd
-        acc = DD(np.zeros(P))
-        y = z.imag
-        for i in range(g):
-            for j in range(i, g):
-                w = 1.0 if i == j else 2.0
-                acc = acc + DD(*two_prod(y[:, i], w * y[:, j])).mul_dd(DD(Yi_hi[i, j], Yi_lo[i, j]))
+        yT = z.imag.T
+        yy = dd_prod(yT[:, None, :], yT[None, :, :]).mul_dd(DD(Yi_hi[:, :, None], Yi_lo[:, :, None]))
+        acc = dd_sum(DD(yy.hi.reshape(g * g, P), yy.lo.reshape(g * g, P)))
         # pi * acc in dd; e is returned rounded and its rounding residual goes into v
         e_dd = acc.mul(math.pi) + DD(acc.hi * _PI_LO)
         e, e_res = e_dd.hi, e_dd.lo
         # quasi-periodicity phase / 2 pi = alpha.j - beta.k - k.X.k/2 - k.Re(zr)   (mod 1)
-        ph = DD(np.zeros((P, len(tab["alpha"]))))
-        for i in range(g):
-            ph = ph + DD(*two_prod(j0[:, i, None], tab["alpha"][None, :, i]))
-            ph = ph - DD(*two_prod(k0[:, i, None], tab["beta"][None, :, i]))
-        own = DD(np.zeros(P))
-        for i in range(g):
-            own = own + zr_re[i].mul(k0[:, i])
-            for j in range(g):
-                own = own + DD(*two_prod(np.full(P, 0.5 * self._X0[i, j]), k0[:, i] * k0[:, j]))
-        ph = ph - DD(own.hi[:, None], own.lo[:, None])
-        phi0 = 2 * math.pi * ph.frac()
+        aT, bT = tab["alpha"].T[:, :, None], tab["beta"].T[:, :, None]  # [i, c, 1]
+        ph = dd_sum(dd_prod(aT, j0.T[:, None, :])) - dd_sum(dd_prod(bT, k0.T[:, None, :]))  # (nchar, P)
+        kk = (k0.T[:, None, :] * k0.T[None, :, :]).reshape(g * g, P)
+        own = dd_sum(zr_re.mul(k0.T)) + dd_sum(dd_prod(kk, 0.5 * self._X0.reshape(-1, 1)))
+        ph = ph - DD(own.hi[None, :], own.lo[None, :])
+        phi0 = 2 * math.pi * ph.frac().T  # (P, nchar)
         # 2. map into the reduced frame, u = M zr (double-double)
         Mr_hi, Mr_lo, Mi_hi, Mi_lo = self._M_dd
-        ur = dd_matvec(Mr_hi, Mr_lo, zr_re)
-        ur = [a - b for a, b in zip(ur, dd_matvec(Mi_hi, Mi_lo, zr_im))]
-        ui = dd_matvec(Mr_hi, Mr_lo, zr_im)
-        ui = [a + b for a, b in zip(ui, dd_matvec(Mi_hi, Mi_lo, zr_re))]
-        u = np.stack([a.hi for a in ur], axis=1) + 1j * np.stack([b.hi for b in ui], axis=1)
-        u_lo = np.stack([a.lo for a in ur], axis=1) + 1j * np.stack([b.lo for b in ui], axis=1)
+        ur = dd_matvec(Mr_hi, Mr_lo, zr_re) - dd_matvec(Mi_hi, Mi_lo, zr_im)
+        ui = dd_matvec(Mr_hi, Mr_lo, zr_im) + dd_matvec(Mi_hi, Mi_lo, zr_re)
+        u = (ur.hi + 1j * ui.hi).T
+        u_lo = (ur.lo + 1j * ui.lo).T
         # prefactor exp(K + pi i zr.Q.zr) (L = 0: the transformation law has no linear term);
         # |Q| reaches ~100 for pinched tau, so its phase pi Re(zr.Q.zr) is taken mod 2 pi in dd
         Qz = zr @ red.Q.T  # Q symmetric
