@@ -101,6 +101,8 @@ def _check_char(char, g: int):
     if isinstance(char, str):
         if char != "all":
             raise ValueError(f"char must be None, 'all' or a pair (alpha, beta), got {char!r}")
+        if g > 6:
+            raise ValueError(f"char='all' is limited to g <= 6 (4^g characteristics), got g = {g}")
         idx = np.arange(4 ** g)
         bits = (idx[:, None] >> np.arange(2 * g - 1, -1, -1)[None, :]) & 1
         return bits[:, :g] / 2.0, bits[:, g:] / 2.0, True
@@ -221,40 +223,48 @@ class RiemannTheta:
 
     # -- characteristic tables ---------------------------------------------------------
     def _char_table(self, alpha: np.ndarray, beta: np.ndarray) -> dict:
-        """Per characteristic: reduced characteristic and the prefactor exp(K + L.z + pi i z.Q.z)."""
+        """Per characteristic: reduced characteristic and the constant K of the prefactor
+        exp(K + pi i z.Q.z) (the transformation law has no linear term; checked on the first one)."""
         red, g = self.reduction, self.g
-        Lam = red.lattice_map.astype(float)
-        ab = np.concatenate([alpha, beta], axis=1) @ Lam.T
-        a1 = ab[:, :g] + red.a_s
-        b1 = ab[:, g:] + red.b_s
-        p, q = np.floor(a1 + 1e-12), np.floor(b1 + 1e-12)
-        ar, br = a1 - p, b1 - q
-        ar[np.abs(ar) < 1e-12], br[np.abs(br) < 1e-12] = 0.0, 0.0
-        # K and L carry phases of size ~100 (large Q, c0 after inversions): sum them in mpmath
         mp = red.mp
         ctx = mp["ctx"]
+        # (alpha', beta') = gamma^{-T} (alpha, beta) + (a_s, b_s): exact in mpmath (integer map;
+        # general characteristics are not multiples of 1/2), then split into [0, 1) + integers
+        Lam = red.lattice_map
+        shift = np.concatenate([red.a_s, red.b_s])
+        a1 = np.empty_like(alpha, dtype=object)
+        b1 = np.empty_like(beta, dtype=object)
+        for ci in range(alpha.shape[0]):
+            ab = [ctx.mpf(float(x)) for x in np.concatenate([alpha[ci], beta[ci]])]
+            img = [ctx.fsum(int(Lam[i, j]) * ab[j] for j in range(2 * g)) + ctx.mpf(shift[i]) for i in range(2 * g)]
+            a1[ci], b1[ci] = img[:g], img[g:]
+        p = np.vectorize(lambda x: ctx.floor(x + ctx.mpf(1e-12)))(a1)
+        q = np.vectorize(lambda x: ctx.floor(x + ctx.mpf(1e-12)))(b1)
+        ar = np.vectorize(lambda x: max(float(x), 0.0) if abs(x) > 1e-12 else 0.0)(a1 - p).astype(float)
+        br = np.vectorize(lambda x: max(float(x), 0.0) if abs(x) > 1e-12 else 0.0)(b1 - q).astype(float)
+        # K carries phases of size ~1e3 (large Q, c0 after inversions): sum it in mpmath
         tau0, taur, Qm, lm, Mm = mp["tau0"], mp["tau"], mp["Q"], mp["l"], mp["M"]
         n = alpha.shape[0]
         K = np.empty(n, dtype=complex)
-        L = np.empty((n, g), dtype=complex)
         two_pi_i = 2j * ctx.pi
         rg = range(g)
         for ci in range(n):
             al, be = [ctx.mpf(x) for x in alpha[ci]], [ctx.mpf(x) for x in beta[ci]]
-            a1c, b1c = [ctx.mpf(x) for x in a1[ci]], [ctx.mpf(x) for x in b1[ci]]
+            a1c, b1c = list(a1[ci]), list(b1[ci])
             d0 = [ctx.fdot(tau0[i], al) + be[i] for i in rg]
             Qd0 = [ctx.fdot(Qm[i], d0) for i in rg]
             Ta1 = [ctx.fdot(taur[i], a1c) for i in rg]
             Kc = (ctx.pi * 1j * ctx.fdot(al, [ctx.fdot(tau0[i], al) for i in rg])
                   + two_pi_i * ctx.fdot(al, be) + mp["c0"] + two_pi_i * ctx.fdot(lm, d0)
                   + ctx.pi * 1j * ctx.fdot(d0, Qd0) - ctx.pi * 1j * ctx.fdot(a1c, Ta1)
-                  - two_pi_i * ctx.fdot(a1c, b1c) + two_pi_i * ctx.fdot([ctx.mpf(x) for x in ar[ci]],
-                                                                         [ctx.mpf(x) for x in q[ci]]))
+                  - two_pi_i * ctx.fdot(a1c, b1c) + two_pi_i * ctx.fdot(list(a1[ci] - p[ci]), list(q[ci])))
             # Im K is a phase of size up to ~1e3: reduce it mod 2 pi before rounding to float64
             K[ci] = complex(float(Kc.real), float(ctx.fmod(Kc.imag, 2 * ctx.pi)))
-            for j in rg:
-                L[ci, j] = complex(two_pi_i * (al[j] + lm[j] + Qd0[j] - ctx.fdot(a1c, [Mm[i][j] for i in rg])))
-        return {"alpha": alpha, "beta": beta, "ar": ar, "br": br, "K": K, "L": L}
+            if ci == 0:  # linear coefficient of log(prefactor) in z: zero by the modular law
+                L = [abs(al[j] + lm[j] + Qd0[j] - ctx.fdot(a1c, [Mm[i][j] for i in rg])) for j in rg]
+                if max(L) > 1e-20:  # pragma: no cover - would mean a broken reduction
+                    raise RuntimeError(f"internal error: theta transformation has a linear term {L}")
+        return {"alpha": alpha, "beta": beta, "ar": ar, "br": br, "K": K}
 
     def _table_all(self) -> dict:
         if "all" not in self._tables:
