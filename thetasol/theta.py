@@ -381,7 +381,17 @@ class RiemannTheta:
     def _run(self, z, char, V, order):
         zz = _check_z(z, self.g)
         shape = zz.shape[:-1]
-        e, J, jet = self._evaluate(zz.reshape(-1, self.g), char, V, order)
+        flat = zz.reshape(-1, self.g)
+        nchar = 4 ** self.g if isinstance(char, str) else 1
+        # chunks of points keep the work arrays (~8 x P x nchar x jet size) near 100 MB
+        step = max(64, (1 << 21) // (nchar * jet_layout(len(V), order).size))
+        if len(flat) <= step:
+            e, J, jet = self._evaluate(flat, char, V, order)
+        else:
+            parts = [self._evaluate(flat[s:s + step], char, V, order) for s in range(0, len(flat), step)]
+            e = np.concatenate([p[0] for p in parts])
+            J = np.concatenate([p[1] for p in parts])
+            jet = parts[0][2]
         return shape, e, J, jet, isinstance(char, str)
 
     @staticmethod
