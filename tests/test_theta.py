@@ -215,6 +215,14 @@ def test_directional_derivatives_orders_0_to_3_against_mpmath():
         close(val, complex(ref), 1e-12, scale=max(abs(complex(ref)), 1.0))
 
 
+def test_zero_direction_gives_zero_derivative():
+    th = RiemannTheta(np.array([[1j, 0.2], [0.2, 1.5j]]))
+    z = np.array([0.1 + 0.2j, -0.3])
+    assert th(z, derivs=[np.zeros(2)]) == 0
+    assert th(z, derivs=[np.array([1.0, 0.0]), np.zeros(2)]) == 0
+    assert complex(riemann_theta(z, th.tau, derivs=[np.zeros(2)], dps=20)) == 0
+
+
 def test_gradient_hessian_consistent_with_directional_derivatives():
     g = 3
     rng = np.random.default_rng(42)

@@ -49,7 +49,9 @@ def theta_mp(z, tau, char, derivs, dps: int, separated: bool):
     rho = shortest_vector(T)
     a = 1.0
     if len(V_f):
-        a = float(np.max(np.linalg.norm(V_f @ np.linalg.inv(T), axis=1) / np.linalg.norm(V_f, axis=1)))
+        nv = np.linalg.norm(V_f, axis=1)
+        nz = nv > 0
+        a = float(np.max(np.linalg.norm(V_f[nz] @ np.linalg.inv(T), axis=1) / nv[nz], initial=1.0))
     R = radius_for(10.0 ** -(dps + 3), rho, g, len(V_f), 2 * math.pi * max(a, 1.0) if len(V_f) else 1.0) + 0.05
     mset = union_set(T, R)
     # the alpha groups: "all" sums over alpha in {0,1/2}^g with the beta signs applied per term

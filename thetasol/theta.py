@@ -359,7 +359,9 @@ class RiemannTheta:
         tol_in = self.tol * math.exp(-max(float(np.max(logmag)), 0.0)) * 0.5
         a = 1.0
         if len(V):
-            a = float(np.max(np.linalg.norm(Vr @ self.lattice.Tinv, axis=1) / np.linalg.norm(V, axis=1)))
+            nv = np.linalg.norm(V, axis=1)
+            nz = nv > 0  # a zero direction gives a zero derivative, whatever R
+            a = float(np.max(np.linalg.norm(Vr[nz] @ self.lattice.Tinv, axis=1) / nv[nz], initial=1.0))
         R = self.lattice.radius(tol_in, order, a)
         lset = self.lattice.points(R)
         if is_all:
