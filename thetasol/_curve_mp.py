@@ -68,12 +68,16 @@ class ExactEvaluator:
             a, da = self.ycoeffs(xm, dps, deriv=True)
             if a[-1] == 0:
                 raise ValueError(f"leading coefficient vanishes at x = {x}")
+            # scale y so that the roots are O(1) (Fujiwara's bound), which Durand-Kerner needs
+            n = len(a) - 1
+            sig = max(abs(a[j] / a[n]) ** (mpmath.mpf(1) / (n - j)) for j in range(n)) if n else 1
+            sig = sig if sig > 0 else mpmath.mpf(1)
+            sc = [a[j] * sig**j for j in range(n + 1)]
             try:
-                roots = mpmath.polyroots(a[::-1], maxsteps=400, extraprec=2 * dps)
+                roots = [r * sig for r in mpmath.polyroots(sc[::-1], maxsteps=400, extraprec=2 * dps)]
             except mpmath.libmp.NoConvergence as exc:
                 raise ValueError(f"the curve is numerically singular near x = {x:.6g}: roots do not separate "
                                  f"at {dps} digits") from exc
-            roots = list(roots) if isinstance(roots, (list, tuple)) else [roots]
             R, FY, FX = [], [], []
             for r in roots:
                 p, dp = self.horner(a, r)
@@ -149,6 +153,54 @@ def numerators_mp(numer_exact, dps):
     return out
 
 
+def interval_mp(pc, lo, hi, N, seeds, ev, nums, dps):
+    """mp Gauss-Legendre sum over [lo, hi] of one piece for every track.
+
+    seeds: (m, N) float approximations of the roots at the (float) nodes, one row per track.
+    Returns a list (per track) of lists (per numerator) of mpc.
+    """
+    m = seeds.shape[0]
+    wdps = dps + 10
+    tol = mpmath.mpf(10) ** (-(dps + 2))
+    ts, ws = gauss_legendre_mp(N, dps)
+    lo_m, hi_m = mpmath.mpf(lo), mpmath.mpf(hi)
+    half = (hi_m - lo_m) / 2
+    mid = (hi_m + lo_m) / 2
+    acc = [[mpmath.mpc(0) for _ in nums] for _ in range(m)]
+    for q, (t, w) in enumerate(zip(ts, ws)):
+        tau = mid + half * t
+        x, dxdt = piece_x_mp(pc, tau)
+        a = ev.ycoeffs(x, wdps)
+        xp = [mpmath.mpc(1)]
+        for s in range(m):
+            y0 = complex(seeds[s, q])
+            y = mpmath.mpc(y0)
+            prev = None
+            for _ in range(60):
+                f, fy = ev.horner(a, y)
+                step = f / fy
+                y -= step
+                st = abs(step)
+                if st <= tol * abs(y) or st == 0:
+                    break
+                if prev is not None and st >= prev and st <= 1e-6 * tol ** 0.5 * abs(y):
+                    break  # stagnated at the rounding level of the working precision
+                prev = st
+            else:
+                raise ValueError("Newton's method did not converge in the multiprecision quadrature")
+            f, fy = ev.horner(a, y)
+            if abs(complex(y) - y0) > 1e-4 * (abs(y0) + 1e-300) + 1e-300 and abs(complex(y) - y0) > 1e-6:
+                raise ValueError("multiprecision quadrature: a root moved away from its sheet "
+                                 "(numerically singular curve)")
+            fac = w * half * dxdt / fy
+            for d, terms in enumerate(nums):
+                g = mpmath.mpc(0)
+                for i, j, c in terms:
+                    g += c * x**i * y**j
+                acc[s][d] += g * fac
+    return acc
+
+
 def integrate_mp(tracked, ev, numer_exact, dps):
     """mp integrals along every track of a :class:`Tracked` (its pieces planned for this precision).
 
@@ -158,47 +210,22 @@ def integrate_mp(tracked, ev, numer_exact, dps):
     wdps = dps + 10
     out = []
     with mpmath.workdps(wdps):
-        tol = mpmath.mpf(10) ** (-(wdps - 4))
         nums = numerators_mp(numer_exact, wdps)
         pos = 0
         for p, pc in enumerate(tracked.pieces):
             m = len(pc.y0)
-            plan = nodes.plans[p]
             L = nodes.offsets[p + 1] - nodes.offsets[p]
             ch = tracked.choice[pos:pos + m, :L]
             Rp = tracked.R[nodes.offsets[p]:nodes.offsets[p + 1]]
             acc = [[mpmath.mpc(0) for _ in nums] for _ in range(m)]
             k = 1  # node 0 is the start (weight 0)
-            for lo, hi, N in plan:
-                ts, ws = gauss_legendre_mp(N, dps)
-                lo_m, hi_m = mpmath.mpf(lo), mpmath.mpf(hi)
-                half = (hi_m - lo_m) / 2
-                mid = (hi_m + lo_m) / 2
-                for t, w in zip(ts, ws):
-                    tau = mid + half * t
-                    x, dxdt = piece_x_mp(pc, tau)
-                    a = ev.ycoeffs(x, wdps)
-                    for s in range(m):
-                        y = mpmath.mpc(Rp[k, ch[s, k]])
-                        for _ in range(30):
-                            f, fy = ev.horner(a, y)
-                            step = f / fy
-                            y -= step
-                            if abs(step) <= tol * (abs(y) + 1):
-                                break
-                        else:
-                            raise ValueError("Newton's method did not converge in the dps path")
-                        f, fy = ev.horner(a, y)
-                        if abs(y - Rp[k, ch[s, k]]) > 1e-6 * (abs(y) + 1):
-                            raise ValueError("the dps path moved a root away from its sheet (internal error)")
-                        xp = [mpmath.mpc(1)]
-                        fac = w * half * dxdt / fy
-                        for d, terms in enumerate(nums):
-                            g = mpmath.mpc(0)
-                            for i, j, c in terms:
-                                g += c * x**i * y**j
-                            acc[s][d] += g * fac
-                    k += 1
+            for lo, hi, N in nodes.plans[p]:
+                seeds = Rp[np.arange(k, k + N)[None, :], ch[:, k:k + N]]
+                part = interval_mp(pc, lo, hi, N, seeds, ev, nums, dps)
+                for s in range(m):
+                    for d in range(len(nums)):
+                        acc[s][d] += part[s][d]
+                k += N
             out.append(acc)
             pos += m
     return out

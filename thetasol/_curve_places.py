@@ -111,10 +111,42 @@ def local_data(curve):
             raise ValueError("sheet continuation around a critical value failed (numerically singular curve)")
         ld = LocalData(kind, k, b, ref, x1, xs[:M], ys[:, :M], perm)
         ld.index = p
+        rel = tr2.rel[tr2.nodes.offsets[p]:tr2.nodes.offsets[p] + M] if tr2.rel is not None else None
+        ld.ys, ld.fys = _accurate_samples(curve, ld.xs, ld.ys, rel)
         out.append(ld)
     curve._cache["local"] = out
     curve._cache["local_lines"] = tr1
     return out
+
+
+def _accurate_samples(curve, xs, ys, rel):
+    """Sample values and f_y at them; polished in mpmath where float64 roots lose digits."""
+    poly = curve._poly
+    A = poly.coeff_polys(xs)
+    _, fy = poly.horner_y(A, ys.T)
+    fys = fy.T
+    if rel is None or np.max(rel) <= 1e-13:
+        return ys, fys
+    import mpmath
+    ev = curve._exact
+    ys = ys.copy()
+    fys = fys.copy()
+    with mpmath.workdps(40):
+        tol = mpmath.mpf(10) ** -32
+        for q in np.nonzero(rel > 1e-13)[0]:
+            a = ev.ycoeffs(mpmath.mpc(complex(xs[q])), 40)
+            for s in range(ys.shape[0]):
+                y = mpmath.mpc(complex(ys[s, q]))
+                for _ in range(50):
+                    f, d = ev.horner(a, y)
+                    step = f / d
+                    y -= step
+                    if abs(step) <= tol * abs(y):
+                        break
+                f, d = ev.horner(a, y)
+                ys[s, q] = complex(y)
+                fys[s, q] = complex(d)
+    return ys, fys
 
 
 def place_series(curve, ld, cycle, P):
@@ -170,9 +202,7 @@ def differential_samples(curve, ld, cycle, P):
     """h(t) samples of g/f_y dx/dt for numerator arrays P (nd, I, J): shape (nd, e*M)."""
     t, x, y = ld.place_samples(cycle)
     e = len(cycle)
-    A = curve._poly.coeff_polys(x)
-    _, fy = curve._poly.horner_y(A, y[:, None])
-    fy = fy[:, 0]
+    fy = np.concatenate([ld.fys[c] for c in cycle])
     Xp = x[:, None] ** np.arange(P.shape[1])[None, :]
     Yp = y[:, None] ** np.arange(P.shape[2])[None, :]
     g = np.einsum("ki,kj,dij->dk", Xp, Yp, P)
