@@ -14,10 +14,11 @@ from .equations import invariants, spectral_coefficients, torque
 from .integrate import integrate_rotation
 from .theta import RiemannTheta, riemann_theta, riemann_theta_separated, siegel_reduce
 from .rotation import RotationSolution, solve_rotation
+from .gyrostat import solve_gyrostat
 
 __all__ = ["integrate_rotation", "invariants", "spectral_coefficients", "torque",
            "RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce",
-           "RotationSolution", "solve_rotation"]
+           "RotationSolution", "solve_rotation", "solve_gyrostat"]
 # mechanics of C^k-central configurations (issue 2)
 from .bodies import Body  # noqa: E402
 from .configuration import Configuration, Joint, Trajectories  # noqa: E402

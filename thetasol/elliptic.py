@@ -112,11 +112,12 @@ def _two_prod(a, b):
     unchanged) so that Veltkamp's split cannot overflow for huge ``|a|`` or ``|b|``.
     """
     p = a * b
-    ea = np.frexp(a)[1]
-    eb = np.frexp(b)[1]
-    sh = (ea - eb) // 2
-    a = np.ldexp(a, -sh)
-    b = np.ldexp(b, sh)
+    if np.max(np.abs(a), initial=0.0) > 1e150 or np.max(np.abs(b), initial=0.0) > 1e150:
+        ea = np.frexp(a)[1]
+        eb = np.frexp(b)[1]
+        sh = (ea - eb) // 2
+        a = np.ldexp(a, -sh)
+        b = np.ldexp(b, sh)
     a1 = _SPLIT * a
     ah = a1 - (a1 - a)
     al = a - ah
@@ -360,8 +361,50 @@ def _sncndn_half(x, m, mc):
     return (np.where(done, np.sqrt(s2), s), np.where(done, cc, c), np.where(done, np.sqrt(d2), d))
 
 
+def _sncndn_half_scalar(x, m, mc):
+    """The algorithm of :func:`_sncndn_half` for one Python float (no array overhead)."""
+    nd = 0 if x <= _SERIES_MAX else int(math.ceil(math.log2(x / _SERIES_MAX)))
+    v = math.ldexp(x, -nd)
+    v2 = v * v
+    s = b = d = 0.0
+    for i in range(len(_SN) - 1, -1, -1):
+        s = s * v2 + _poly_m(_SN[i], m) / _FACT[2 * i + 1]
+        d = d * v2 + _poly_m(_DN[i], m) / _FACT[2 * i]
+        if i:
+            b = b * v2 - _poly_m(_CN[i], m) / _FACT[2 * i]
+    s = s * v
+    b = b * v2
+    if nd == 0:
+        return s, 1.0 - b, d
+    y, isc = b, False
+    for _ in range(nd):
+        cc = y if isc else 1.0 - y
+        s2 = (1.0 - y) * (1.0 + y) if isc else y * (2.0 - y)
+        d2 = mc + m * cc * cc
+        D = cc * cc + s2 * d2
+        c_new = (cc * cc * cc * cc - mc * s2 * s2) / D
+        if c_new < 0.5:
+            y, isc = c_new, True
+        else:
+            y = 2.0 * s2 * d2 / D
+    cc = y if isc else 1.0 - y
+    s2 = (1.0 - y) * (1.0 + y) if isc else y * (2.0 - y)
+    return math.sqrt(s2), cc, math.sqrt(mc + m * cc * cc)
+
+
 def _sncndn_0K(x, m, mc, K):
     """sn, cn, dn for 0 <= x <= K (arrays broadcast together); finite K required."""
+    if np.size(x) <= 8 and np.ndim(m) == 0 and np.ndim(mc) == 0 and np.ndim(K) == 0:
+        # few points (single queries, setup): the same algorithm in scalar arithmetic
+        m, mc, K = float(m), float(mc), float(K)
+        kp = math.sqrt(mc)
+        xs = np.asarray(x, dtype=float)
+        out = np.empty((3,) + xs.shape)
+        for idx, xv in np.ndenumerate(xs):
+            up = xv > 0.5 * K
+            s, c, d = _sncndn_half_scalar(max(K - xv, 0.0) if up else xv, m, mc)
+            out[(slice(None),) + idx] = (c / d, kp * s / d, kp / d) if up else (s, c, d)
+        return out[0], out[1], out[2]
     kp = np.sqrt(mc)
     upper = x > 0.5 * K
     v = np.where(upper, K - x, x)

@@ -54,7 +54,6 @@ import numpy as np
 from scipy import special as _sp
 
 from . import elliptic as _el
-from .equations import invariants as _invariants
 from .rotation import RotationSolution
 
 __all__ = ["EulerTopSolution"]
@@ -350,9 +349,7 @@ def _eval_float(c: _Consts, t):
     r, nper = _el._reduce(hi, e + e2, K2)
     r = np.clip(r, -c.K, c.K)
     x = np.abs(r)
-    mp_ = np.full_like(x, c.m)
-    mcp = np.full_like(x, c.mc)
-    sn, cn, dn = _el._sncndn_0K(x, mp_, mcp, c.K)
+    sn, cn, dn = _el._sncndn_0K(x, c.m, c.mc, c.K)
     sgn = np.where(r < 0, -1.0, 1.0)
     par = np.where(np.fmod(np.abs(nper), 2.0) == 1.0, -1.0, 1.0)
     mw = G * np.stack([Aa * par * cn, Ab * par * sgn * sn, Ac * dn], -1)
@@ -520,7 +517,7 @@ def _eval_float_momentum_only(c, t):
     r, nper = _el._reduce(hi, e + e2, 2.0 * c.K)
     r = np.clip(r, -c.K, c.K)
     x = np.abs(r)
-    sn, cn, dn = _el._sncndn_0K(x, np.full_like(x, c.m), np.full_like(x, c.mc), c.K)
+    sn, cn, dn = _el._sncndn_0K(x, c.m, c.mc, c.K)
     sgn = np.where(r < 0, -1.0, 1.0)
     par = np.where(np.fmod(np.abs(nper), 2.0) == 1.0, -1.0, 1.0)
     return G * np.stack([Aa * par * cn, Ab * par * sgn * sn, Ac * dn], -1), None
@@ -537,6 +534,14 @@ def _principal_frame(Jm):
     return Jp, R
 
 
+def _basic_invariants(Jm, am, omega0) -> dict:
+    """energy = T + V (V = c tr(J)/2 is constant for a = c 1), H = -2 energy (4.9), m2 = |m|^2."""
+    I = np.trace(Jm) * np.eye(3) - Jm
+    m = I @ omega0
+    energy = 0.5 * float(omega0 @ m) + 0.5 * float(np.trace(am) / 3.0 * np.trace(Jm))
+    return {"energy": energy, "H": -2.0 * energy, "m2": _norm(m) ** 2}
+
+
 def _steady_rate(c, omega0):
     return _norm(omega0) if c.kind == "steady" else 0.0
 
@@ -551,7 +556,7 @@ def _method(c) -> str:
 
 def _solve_euler_top(Jm, am, Q0, omega0, dps=None) -> EulerTopSolution:
     """Build the Euler-top solution from validated data (``a`` isotropic or zero)."""
-    inv = {k: (float(v) if k != "curve" else v) for k, v in _invariants(Jm, am, Q0, omega0).items()}
+    inv = _basic_invariants(Jm, am, omega0)
     if dps is not None:
         return _solve_mp(Jm, am, Q0, omega0, dps, inv)
     Jp, R = _principal_frame(Jm)
@@ -573,7 +578,7 @@ def _solve_euler_top(Jm, am, Q0, omega0, dps=None) -> EulerTopSolution:
     if c.kind == "elliptic":
         r0 = float(_el._reduce(np.array([c.u0]), np.zeros(1), 2 * c.K)[0][0])
         x0 = np.array([min(abs(r0), c.K)])
-        sn, cn, dn = _el._sncndn_0K(x0, np.full(1, c.m), np.full(1, c.mc), c.K)
+        sn, cn, dn = _el._sncndn_0K(x0, c.m, c.mc, c.K)
         c.extra["P0"] = float(_periodic(c, x0, sn, cn, dn)[0]) * (-1.0 if r0 < 0 else 1.0)
     mw0, _ = _eval_float(c, np.zeros(1))
     n0 = _unit(mw0)[0]
