@@ -88,11 +88,15 @@ def local_data(curve):
     # infinity: out along the ray from the box centre through the base vertex
     vb = G.V[G.base]
     c = G.center
-    Rfar = 2.0 * (max(np.abs(allsites).max() if len(allsites) else 0.0, abs(c)) + 2 * G.H)
-    lam = 1.0
-    while abs(c + lam * (vb - c)) < Rfar:
-        lam *= 2.0
-    x1 = c + lam * (vb - c)
+    # the circle |x| = |x1| encloses every critical value with a margin of 2 (the Laurent series in
+    # t = x^(-1/e) converges for |x| > max |site|): coefficients lose at most ~2^k in accuracy
+    Rfar = 2.0 * (np.abs(allsites).max() if len(allsites) else max(abs(c), 1.0))
+    d = vb - c
+    # smallest lam >= 1 with |c + lam d| >= Rfar (the ray beyond the base corner stays outside the box)
+    qa, qb, qc = abs(d) ** 2, 2 * (np.conj(c) * d).real, abs(c) ** 2 - Rfar**2
+    disc = max(qb * qb - 4 * qa * qc, 0.0)
+    lam = max(1.0, (-qb + np.sqrt(disc)) / (2 * qa))
+    x1 = c + lam * d
     pieces1.append(Piece("line", vb, x1, curve._vroots[G.base]))
     meta.append(("infinity", -1, 0j, G.base, x1, M_INF, -1))
     tr1 = curve._tracker.track(pieces1)
@@ -125,7 +129,7 @@ def _accurate_samples(curve, xs, ys, rel):
     A = poly.coeff_polys(xs)
     _, fy = poly.horner_y(A, ys.T)
     fys = fy.T
-    if rel is None or np.max(rel) <= 1e-13:
+    if rel is None or np.max(rel) <= 1e-11:
         return ys, fys
     import mpmath
     ev = curve._exact
@@ -133,7 +137,7 @@ def _accurate_samples(curve, xs, ys, rel):
     fys = fys.copy()
     with mpmath.workdps(40):
         tol = mpmath.mpf(10) ** -32
-        for q in np.nonzero(rel > 1e-13)[0]:
+        for q in np.nonzero(rel > 1e-11)[0]:
             a = ev.ycoeffs(mpmath.mpc(complex(xs[q])), 40)
             for s in range(ys.shape[0]):
                 y = mpmath.mpc(complex(ys[s, q]))
@@ -287,3 +291,69 @@ def _nice_basis(N, candidates, x, y):
             expr += (parts[0] + sp.I * parts[1]) * sp.sympify(cand)
         out.append(sp.expand(expr))
     return out
+
+
+def regular_samples(curve, x0, y0, M=M_SITE):
+    """(t, x, y, f_y) on a circle t = x - x0 around a regular point, on the sheet through y0."""
+    sites = curve._graph.allsites
+    d = np.abs(sites - x0).min() if len(sites) else 1.0
+    r = 0.5 * d
+    x1 = x0 + r
+    tr1 = curve._tracker.track([Piece("line", x0, x1, [y0])])
+    tr2 = curve._tracker.track([Piece("circle", x1, x0, tr1.ends[0], e=1, taus=np.arange(M) / M)])
+    xs, ys = tr2.values(0)
+    rel = tr2.rel
+    ys2, fys = _accurate_samples(curve, xs, ys, rel)
+    t = xs - x0
+    return t, xs, ys2[0], fys[0]
+
+
+def expansion(curve, place, numer, order, mode):
+    """Laurent-Puiseux coefficients at a place in its local parameter t.
+
+    mode 'y': y(t);  'function': g(x, y) for the single numerator array numer (1, I, J);
+    'differential': h(t) with g dx / f_y = h(t) dt.
+    Returns (k, c): exponents from the lowest significant one to ``order`` and coefficients.
+    """
+    if place.kind == "regular":
+        key = ("regsamples", place.x, place.y)
+        if key not in curve._cache:
+            curve._cache[key] = regular_samples(curve, place.x, place.y)
+        t, x, y, fy = curve._cache[key]
+        e = 1
+    else:
+        lds = local_data(curve)
+        ld = lds[place._site] if place.kind == "critical" else lds[-1]
+        t, x, y = ld.place_samples(place._cycle)
+        fy = np.concatenate([ld.fys[c] for c in place._cycle])
+        e = place.e
+    if mode == "y":
+        h = y
+    else:
+        P = np.asarray(numer)
+        Xp = x[:, None] ** np.arange(P.shape[1])[None, :]
+        Yp = y[:, None] ** np.arange(P.shape[2])[None, :]
+        h = np.einsum("ki,kj,ij->k", Xp, Yp, P[0])
+        if mode == "differential":
+            if place.kind == "infinity":
+                dxdt = -e * t ** (-e - 1)
+            else:
+                dxdt = e * t ** (e - 1)
+            h = h / fy * dxdt
+    N = len(t)
+    F = np.fft.fft(h) / N
+    k = np.fft.fftfreq(N, 1.0 / N).astype(int)
+    order_idx = np.argsort(k)
+    k, F = k[order_idx], F[order_idx]
+    scale = np.max(np.abs(F)) + 1e-300
+    sig = (np.abs(F) > 1e-9 * scale) & (k > -N // 4)
+    kmin = int(k[sig].min()) if np.any(sig) else 0
+    kmin = min(kmin, 0) if np.any(sig & (k < 0)) else max(kmin, 0) if mode != "y" else kmin
+    if not np.any(sig & (k < 0)):
+        kmin = 0 if not np.any(sig) else max(0, min(kmin, int(k[sig].min())))
+    if order >= N // 2 - 1:
+        raise ValueError(f"order {order} too high for the {N} samples of this place")
+    keep = (k >= kmin) & (k <= order)
+    t0 = t[0]
+    c = F[keep] / t0 ** k[keep]
+    return k[keep], c

@@ -454,6 +454,8 @@ class Tracked:
         if exact is None:
             exact = getattr(numerators, "exact", None)
         P = np.asarray(numerators, dtype=complex).view(np.ndarray)
+        if P.shape[0] == 0:
+            return [np.zeros((len(pc.y0), 0), complex) for pc in self.pieces]
         nodes = self.nodes
         R = self.R
         Xp = nodes.x[:, None] ** np.arange(P.shape[1])[None, :]

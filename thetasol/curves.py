@@ -60,6 +60,12 @@ def _cycles(perm):
     return out
 
 
+class _Numerators(np.ndarray):
+    """Complex coefficient array (nd, I, J) of differential numerators carrying their exact form."""
+
+    exact = None
+
+
 class Place:
     """A place of the curve: a point of its normalization (compact Riemann surface).
 
@@ -113,6 +119,27 @@ class Place:
         ys = "?" if self._y is None else ("oo" if np.isinf(abs(self._y)) else f"{self._y:.6g}")
         return f"Place(x={xs}, y={ys}, e={self.e}, kind={self.kind!r})"
 
+    def series(self, order: int = 8):
+        """Laurent-Puiseux expansion of y at this place in the local parameter t.
+
+        Returns (k, c): integer exponents (from the lowest significant one, negative at a pole of y)
+        up to ``order``, and the coefficients, y = sum c_k t^k.  Computed by FFT from samples of the
+        sheets on a circle (see docs/curves.md); coefficient k is accurate to about 1e-16 * 2^k
+        relative to the largest term.
+        """
+        from ._curve_places import expansion
+        return expansion(self.curve, self, None, int(order), "y")
+
+    def expand(self, numerator, order: int = 8, differential: bool = True):
+        """Expansion of g(x, y) dx / f_y (differential=True) or of the function g(x, y) at this place.
+
+        Returns (k, c) with g dx / f_y = sum c_k t^k dt (or g = sum c_k t^k) in the local parameter
+        t of :meth:`local_parameter`; see :meth:`series`.
+        """
+        from ._curve_places import expansion
+        P = self.curve._numerators([numerator])
+        return expansion(self.curve, self, P, int(order), "differential" if differential else "function")
+
     def local_parameter(self) -> str:
         """The local parameter t, as text."""
         if self.kind == "infinity":
@@ -151,7 +178,8 @@ class PlaneCurve:
         self._graph = CellGraph(self._sites, _extra_sites)
         from ._curve_mp import ExactEvaluator
         self._exact = ExactEvaluator(self._poly)
-        self._tracker = Tracker(self._poly, self._graph.allsites, tol=_tol, mp_fallback=self._exact.fallback)
+        self._tracker = Tracker(self._poly, self._graph.allsites, tol=_tol, mp_fallback=self._exact.fallback,
+                                exact=self._exact)
         self._setup_sheets()
         self._cache = {}
 
@@ -276,10 +304,17 @@ class PlaneCurve:
             polys.append(sp.Poly(g, x, y))
         I = max([p.degree(x) for p in polys] + [0]) + 1
         J = max([p.degree(y) for p in polys] + [0]) + 1
+        from ._curve_poly import _to_fraction_pair
         P = np.zeros((len(polys), I, J), dtype=complex)
+        exact = []
         for d, p in enumerate(polys):
+            ex = {}
             for (i, j), c in p.terms():
                 P[d, i, j] = complex(c)
+                ex[(int(i), int(j))] = _to_fraction_pair(c)
+            exact.append(ex)
+        P = P.view(_Numerators)
+        P.exact = exact
         return P
 
     def holomorphic_differentials(self) -> list:
