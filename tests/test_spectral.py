@@ -140,3 +140,68 @@ def test_bad_input():
         spectral_curve(J, M, u + np.triu(np.ones((3, 3)), 1))
     with pytest.raises(ValueError, match="reducible"):
         spectral_curve(J, np.zeros((3, 3)), np.diag([0.1, 0.5, 0.9]))
+
+
+# ---------------------------------------------------------------------- nearly degenerate data
+from thetasol.curves import PlaneCurve  # noqa: E402
+
+
+def _near_rank_one(eps, seed=3):
+    J, M, _, Q = generic_data(seed)
+    gam = np.array([0.3, -1.2, 0.8])
+    a = 2.0 * np.outer(gam, gam) + eps * np.diag([1.0, 2.0, 3.0])
+    return J, M, -Q.T @ a @ Q
+
+
+def _same_basis_close(P1, P2, tol):
+    return np.max(np.abs(P1 - P2)) / np.max(np.abs(P2)) <= tol
+
+
+@pytest.mark.parametrize("eps", [1e-6, 1e-8])
+def test_near_rank_one_above_tolerance_against_multiprecision(eps):
+    """Branch points ~eps apart: float64 result equals the mpmath quadrature (20 digits at every node,
+    same cycles) and a different path graph gives the same lattice."""
+    J, M, u = _near_rank_one(eps)
+    C = spectral_curve(J, M, u, tol=1e-12)
+    assert C.genus == 4 and C.node is None
+    b = C.branch_points
+    D = np.abs(b[:, None] - b[None, :]) + np.eye(len(b))
+    assert D.min() < 10 * eps
+    P = C.period_matrix()
+    Pm = np.array(C.period_matrix(dps=20).tolist(), dtype=complex)
+    assert _same_basis_close(P, Pm, 1e-12)
+    C2 = PlaneCurve(C._poly.sympy_expr(), C.x, C.y, _extra_sites=[0.05 + 0.031j, -0.2 + 0.11j])
+    assert_same_lattice(C2.period_matrix(), P, tol=1e-12)
+    tau = C.riemann_matrix()
+    assert np.min(np.linalg.eigvalsh(tau.imag)) > 0
+
+
+@pytest.mark.slow
+def test_nearly_symmetric_body_path_independent():
+    """J2/J1 = 1 + 1e-4: two branch points near E ~ 4e3, sheets nearly equal at large E."""
+    J, M, u, _ = generic_data()
+    C = spectral_curve([1.0, 1.0 + 1e-4, 2.9], M, u, tol=1e-12)
+    assert C.genus == 4 and not C.symmetric_body
+    assert np.abs(C.branch_points).max() > 1e3
+    P = C.period_matrix()
+    C2 = PlaneCurve(C._poly.sympy_expr(), C.x, C.y, _extra_sites=[0.05 + 0.031j, 30.0 - 20.0j])
+    assert_same_lattice(C2.period_matrix(), P, tol=1e-12)
+    K = C.riemann_constant()
+    assert K.shape == (4,)
+
+
+@pytest.mark.slow
+def test_nearly_reducible_data_are_handled_or_refused():
+    """M ~ 1e-7, u diagonal in the J frame: the curve is irreducible but within 1e-7 of reducible."""
+    J = np.array([1.0, 1.7, 2.9])
+    M = 1e-7 * hat([1.0, 2.0, 3.0])
+    u = np.diag([0.1, 0.5, 0.9])
+    C = spectral_curve(J, M, u, tol=1e-12)
+    assert C.genus == 4
+    P = C.period_matrix()
+    tau = C.riemann_matrix()
+    assert np.min(np.linalg.eigvalsh(tau.imag)) > 0
+    C2 = PlaneCurve(C._poly.sympy_expr(), C.x, C.y, _extra_sites=[0.05 + 0.031j, -0.2 + 0.11j])
+    assert_same_lattice(C2.period_matrix(), P, tol=1e-11)
+    with pytest.raises(ValueError, match="reducible"):
+        spectral_curve(J, 1e-11 * hat([1.0, 2.0, 3.0]), u)  # within the tolerance: refused as reducible

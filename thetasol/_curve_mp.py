@@ -62,22 +62,30 @@ class ExactEvaluator:
         return p, dp
 
     def roots_at(self, x, dps=40):
-        """All roots in y, f_y and f_x at one float x (complex128 results, computed in mpmath)."""
+        """All roots in y, f_y and f_x at one float x (complex128 results, computed in mpmath).
+
+        Float roots of the mp-evaluated polynomial seed the search; each cluster of nearly equal roots
+        is resolved by re-expanding the polynomial (in mpmath) around the cluster centre, where its
+        float roots are accurate relative to the cluster size; every root is then polished by
+        Newton's method in mpmath.  mpmath.polyroots is the last resort.
+        """
+        n = self.poly.n
         with mpmath.workdps(dps):
             xm = mpmath.mpc(x)
             a, da = self.ycoeffs(xm, dps, deriv=True)
             if a[-1] == 0:
                 raise ValueError(f"leading coefficient vanishes at x = {x}")
-            # scale y so that the roots are O(1) (Fujiwara's bound), which Durand-Kerner needs
-            n = len(a) - 1
-            sig = max(abs(a[j] / a[n]) ** (mpmath.mpf(1) / (n - j)) for j in range(n)) if n else 1
-            sig = sig if sig > 0 else mpmath.mpf(1)
-            sc = [a[j] * sig**j for j in range(n + 1)]
-            try:
-                roots = [r * sig for r in mpmath.polyroots(sc[::-1], maxsteps=400, extraprec=2 * dps)]
-            except mpmath.libmp.NoConvergence as exc:
-                raise ValueError(f"the curve is numerically singular near x = {x:.6g}: roots do not separate "
-                                 f"at {dps} digits") from exc
+            roots = self._cluster_roots(a, dps)
+            if roots is None:
+                nn = len(a) - 1
+                sig = max(abs(a[j] / a[nn]) ** (mpmath.mpf(1) / (nn - j)) for j in range(nn)) if nn else 1
+                sig = sig if sig > 0 else mpmath.mpf(1)
+                sc = [a[j] * sig**j for j in range(nn + 1)]
+                try:
+                    roots = [r * sig for r in mpmath.polyroots(sc[::-1], maxsteps=400, extraprec=2 * dps)]
+                except mpmath.libmp.NoConvergence as exc:
+                    raise ValueError(f"the curve is numerically singular near x = {x:.6g}: roots do not "
+                                     f"separate at {dps} digits") from exc
             R, FY, FX = [], [], []
             for r in roots:
                 p, dp = self.horner(a, r)
@@ -87,13 +95,70 @@ class ExactEvaluator:
                 FX.append(complex(px))
         return np.array(R), np.array(FY), np.array(FX)
 
+    def _cluster_roots(self, a, dps):
+        n = len(a) - 1
+        ca = np.array([complex(c) for c in a])
+        if not np.all(np.isfinite(ca)) or ca[-1] == 0:
+            return None
+        r = np.roots(ca[::-1])
+        if len(r) != n:
+            return None
+        scale = np.max(np.abs(r)) + 1e-300
+        # groups of roots closer than 1e-4 of the root scale
+        groups = []
+        used = np.zeros(n, bool)
+        for i in range(n):
+            if used[i]:
+                continue
+            g = [i]
+            used[i] = True
+            for j in range(n):
+                if not used[j] and np.min(np.abs(r[j] - r[g])) < 1e-4 * scale:
+                    g.append(j)
+                    used[j] = True
+            groups.append(g)
+        out = []
+        tol = mpmath.mpf(10) ** (-(dps - 6))
+        for g in groups:
+            if len(g) == 1:
+                seeds = [mpmath.mpc(r[g[0]])]
+            else:
+                c = mpmath.mpc(complex(np.mean(r[g])))
+                # Taylor shift p(c + eta) in mpmath (Horner scheme on the coefficient list)
+                b = list(a)
+                for k in range(n):
+                    for j in range(n - 1, k - 1, -1):
+                        b[j] = b[j] + c * b[j + 1]
+                cb = np.array([complex(v) for v in b])
+                eta = np.roots(cb[::-1])
+                eta = eta[np.argsort(np.abs(eta))][:len(g)]
+                seeds = [c + mpmath.mpc(complex(e)) for e in eta]
+            for y in seeds:
+                for _ in range(60):
+                    f, d = self.horner(a, y)
+                    if d == 0:
+                        return None
+                    step = f / d
+                    y -= step
+                    if abs(step) <= tol * (abs(y) + 1e-300) or step == 0:
+                        break
+                else:
+                    return None
+                out.append(y)
+        # distinct roots?
+        for i in range(n):
+            for j in range(i):
+                if abs(out[i] - out[j]) <= 1e3 * tol * (abs(out[i]) + 1e-300):
+                    return None
+        return out
+
     def fallback(self, xs, R_float):
         """Replacement (R, f_y, f_x) rows for the flagged nodes xs (float)."""
         R = np.empty((len(xs), self.poly.n), complex)
         FY = np.empty_like(R)
         FX = np.empty_like(R)
         for i, x in enumerate(xs):
-            for dps in (40, 80):
+            for dps in (30, 60):
                 r, fy, fx = self.roots_at(complex(x), dps)
                 sep = np.min(np.abs(r[:, None] - r[None, :]) + np.diag(np.full(len(r), np.inf))) \
                     if len(r) > 1 else np.inf

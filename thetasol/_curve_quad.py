@@ -491,7 +491,7 @@ class Tracked:
         from ._curve_mp import interval_mp, numerators_mp
         nodes = self.nodes
         ev = self.tracker.exact
-        dps = 25
+        dps = 20
         with mpmath.workdps(dps + 10):
             nums = numerators_mp(exact, dps + 10)
             tstart = {}

@@ -106,11 +106,12 @@ def _check_reducible(J, M, u, Vu, tol):
     if np.linalg.norm(m) > 0:
         cands.append(m / np.linalg.norm(m))
     sJ, su = np.abs(J).max(), max(np.abs(u).max(), np.finfo(float).tiny)
-    sm = max(np.linalg.norm(m), np.finfo(float).tiny)
+    # M v = 0 is judged against the size of the whole Lax matrix (M small against J^2 and u counts)
+    sm = max(np.linalg.norm(m), sJ**2, su)
     for v in cands:
         rJ = np.linalg.norm(J @ v - (v @ J @ v) * v) / sJ
         ru = np.linalg.norm(u @ v - (v @ u @ v) * v) / su
-        rm = np.linalg.norm(np.cross(m, v)) / sm if np.linalg.norm(m) > 0 else 0.0
+        rm = np.linalg.norm(np.cross(m, v)) / sm
         if max(rJ, ru, rm) <= max(tol, 1e-13):
             raise ValueError(
                 "the spectral curve is reducible: J, u and M have a common invariant line "
