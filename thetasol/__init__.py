@@ -27,4 +27,8 @@ from .multibody import integrate_multibody  # noqa: E402
 from .scene import Scene, load_scene, run, solve_configuration  # noqa: E402
 __all__ += ["Body", "Configuration", "Joint", "Trajectories", "MassCenterMotion", "mass_center",
             "integrate_multibody", "Scene", "load_scene", "run", "solve_configuration"]
+# algebraic curves: periods, Abel map, Riemann constant, spectral curve (4.12) (issue 4)
+from .curves import Place, PlaneCurve  # noqa: E402
+from .spectral import SpectralCurve, spectral_curve  # noqa: E402
+__all__ += ["PlaneCurve", "Place", "SpectralCurve", "spectral_curve"]
 __version__ = "0.1.0"
