@@ -46,6 +46,7 @@ def test_generic_curve_structure():
     assert len(b) == 12
     assert np.allclose(np.sort_complex(-b), b, atol=1e-12)
     assert [str(g) for g in C.holomorphic_differentials()] == ["1", "E", "E**2", "w"]
+    assert [str(g) for g in C.prym_differentials()] == ["1", "E**2", "w"]
     lims = [P._limit_w_over_E2 for P in C.places_at_infinity()]
     assert np.allclose(lims, J**2, atol=1e-12)
     assert all(P.e == 1 for P in C.places_at_infinity())
@@ -98,6 +99,9 @@ def test_rank_one_potential_is_nodal_and_matches_sage():
     assert any("rank-one" in s for s in C.degeneracy)
     P = C.period_matrix([g.subs({sp.Symbol("x"): E, sp.Symbol("y"): w}) for g in diffs])
     assert_same_lattice(P, Pref, tol=1e-12)
+    prym = C.prym_differentials()
+    assert len(prym) == 2
+    assert all(abs(complex(g.subs({E: 0, w: C.node[1]}))) < 1e-12 for g in prym)  # adjoint at the node
     b1, b2 = C.node_branches()
     assert C.involution(b1) == b2 and C.involution(b2) == b1
     assert b1 != b2 and b1.e == b2.e == 1

@@ -253,6 +253,18 @@ class SpectralCurve(PlaneCurve):
         best.sort(key=lambda r: r[0])
         return best[0][1]
 
+    def prym_differentials(self) -> list:
+        """The holomorphic differentials g dE / f_w that sigma maps to their negatives (g even in E).
+
+        They span the differentials of the Prym variety, on which the flow of (4.8) is linear:
+        {1, E^2, w} for generic data, {E^2, w - lam} for a rank-one potential (node at w = lam).
+        """
+        out = []
+        for g in self.holomorphic_differentials():
+            if sp.expand(g.subs(E_SYM, -E_SYM) - g) == 0:
+                out.append(g)
+        return out
+
     # ------------------------------------------------------------------ special places
     def places_at_infinity(self) -> list:
         """The places over E = infinity, ordered by j with w / E^2 -> J2[j] (generic data).
