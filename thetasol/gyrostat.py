@@ -56,7 +56,6 @@ equilibrium raise :class:`NotImplementedError`.  There is no ``dps=`` path.
 """
 from __future__ import annotations
 
-import math
 import warnings
 from dataclasses import dataclass, field
 
