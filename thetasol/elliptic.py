@@ -214,7 +214,7 @@ def ellippi(n, m, mc=None, *, dps: int | None = None):
 # -- incomplete integrals ----------------------------------------------------------------------
 
 def _amplitude_split(phi):
-    """phi = j pi + r with r in [-pi/2, pi/2]: returns (j, sin r, cos r >= 0, sign)."""
+    """phi = j pi + r with r in [-pi/2, pi/2]: returns (j, r)."""
     j = np.rint(phi / np.pi)
     r = phi - j * np.pi  # exact enough: pi*j rounding is below the data's own resolution
     return j, r
@@ -238,17 +238,6 @@ def ellipf(phi, m, mc=None, *, dps: int | None = None):
         base = s * _sp.elliprf(c * c, c * c + mc * s * s, 1.0)
         out = np.where(j != 0, 2.0 * j * _K(mc), 0.0) + base
     return _out(out)
-
-
-def _F_sc(s, c, m, mc):
-    """F(phi|m) from sin(phi) = s and cos(phi) = c, phi in [-pi, pi] (no angle rounding)."""
-    K = _K(mc)
-    d2 = c * c + mc * s * s
-    with np.errstate(invalid="ignore", divide="ignore"):
-        f = np.abs(s) * _sp.elliprf(c * c, d2, 1.0)
-    f = np.where(c < 0, 2.0 * K - f, f)
-    sgn = np.where(s < 0, -1.0, 1.0)
-    return sgn * f
 
 
 def ellipeinc(phi, m, mc=None, *, dps: int | None = None):
@@ -414,11 +403,6 @@ def _sncndn_0K(x, m, mc, K):
     cn = np.where(upper, kp * s / d, c)
     dn = np.where(upper, kp / d, d)
     return sn, cn, dn
-
-
-def _am_0K(x, sn, cn, m, mc, K):
-    """am(x) for 0 <= x <= K from sn, cn computed there."""
-    return np.arctan2(sn, cn)
 
 
 def _ellipj_reduced(hi, lo, m, mc):

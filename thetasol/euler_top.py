@@ -35,15 +35,18 @@ Attitude
     cancels catastrophically near steady rotation (both terms grow like ``1/A_a^2``).  Here the
     Gauss (descending Landen) transformation ``k1 = (1 - k')/(1 + k')``,
     ``dn(tau, k) = (1 - k1 s^2)/(1 + k1 s^2)``, ``s = sn(tau/(1 + k1), k1) = (1 + k') sn/(1 + dn)``
-    turns it into ``int (1 + k1 s^2)/(1 - N s^2)``, whose non-linear part is
-    ``(N/3) s^3 R_J(c^2, 1 - k1^2 s^2, 1, 1 - N s^2)`` with ``N = -k1 (G - A)/(G + A) <= 0``:
-    every term is positive and nothing cancels, from steady rotation to the separatrix.  The
+    turns it into ``int dv (1 + k1 s^2)/(1 - N s^2) = v + ((k1 + N)/3) s^3 R_J(c^2, 1 - k1^2 s^2,
+    1, 1 - N s^2)`` (``c^2 = cos^2 am(v, k1)``, formed from ``cn``) with
+    ``N = -k1 (G - A)/(G + A) <= 0`` and ``k1 + N = 2 A k1/(G + A) >= 0``: every term is
+    positive and nothing cancels, from steady rotation to the separatrix.  The
     angle is split into a secular part ``nu t`` (``nu`` the mean precession rate) and a
     periodic part evaluated on the argument reduced modulo ``2K``; ``lam t``, ``nu t`` are
     formed as exact products and reduced with compensated arithmetic, so a far time costs and
     loses nothing more than a near one.
 
-Precision: ``dps=`` evaluates the same closed form with mpmath at ``dps`` digits.
+Precision: ``dps=`` evaluates the same closed form with mpmath at ``dps`` digits.  Data whose
+``k'^2`` underflows float64 (a momentum within ~1e-160 of the unstable axis) are served by that
+path too (rounded to float64; slow but exact).  See docs/euler_top.md.
 """
 from __future__ import annotations
 
