@@ -418,14 +418,14 @@ class Tracked:
         |weight * integrand|): the rounding of the node positions (relative jitter eps |x| / length,
         large for intervals shorter than ~1e-3 |x| next to close critical values) and the rounding
         error of the roots (err / gap, large where two sheets nearly coincide).  An interval is summed
-        in mpmath when the estimate (a bound, typically ~50x pessimistic) exceeds 1e-13 of the
+        in mpmath when the estimate (a bound, typically ~50x pessimistic) exceeds 1e-12 of the
         largest piece mass.
         """
         out = []
         eps = np.finfo(float).eps
         offs = self.nodes.offsets
         total = max(float(mass[offs[p]:offs[p + 1]].sum()) for p in range(len(self.pieces))) if self.pieces else 0.0
-        thr = 1e-13 * total
+        thr = 1e-12 * total
         for p, pc in enumerate(self.pieces):
             k = offs[p] + 1
             for lo, hi, N in self.nodes.plans[p]:
