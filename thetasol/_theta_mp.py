@@ -68,6 +68,8 @@ def theta_mp(z, tau, char, derivs, dps: int, separated: bool):
         zm = (_to_mp_array(z_in, z_in) if z_in.dtype == object else _to_mp_array(z_f, z_f)).reshape(-1, g)
         Vm = [[mpmath.mpmathify(complex(x)) if not isinstance(x, (mpmath.mpf, mpmath.mpc)) else x for x in v]
               for v in (list(derivs) if len(V_f) else [])]
+        upper = [(i, j) for i in range(g) for j in range(i, g)]
+        tu = [tm[i][j] if i == j else 2 * tm[i][j] for i, j in upper]
         Ym = mpmath.matrix([[tm[i][j].imag for j in range(g)] for i in range(g)])
         Yinv = Ym ** -1
         pi, two_pi_i = mpmath.pi, 2j * mpmath.pi
@@ -76,6 +78,7 @@ def theta_mp(z, tau, char, derivs, dps: int, separated: bool):
         evals = np.empty(len(zf), dtype=object)
         for p in range(len(zf)):
             zp = zm[p]
+            zl = [zp[i] for i in range(g)]
             y = [zp[i].imag for i in range(g)]
             e = pi * mpmath.fsum(y[i] * Yinv[i, j] * y[j] for i in range(g) for j in range(g))
             evals[p] = e
@@ -93,8 +96,10 @@ def theta_mp(z, tau, char, derivs, dps: int, separated: bool):
                 twob = np.rint(2 * beta[mem]).astype(np.int64)
                 for n in ns:
                     na = [int(n[i]) + alm[i] for i in range(g)]
-                    quad = mpmath.fsum(na[i] * tm[i][j] * na[j] for i in range(g) for j in range(g))
-                    term = mpmath.exp(1j * pi * quad + two_pi_i * mpmath.fsum(na[i] * zp[i] for i in range(g)))
+                    # (n+alpha).tau.(n+alpha) over the upper triangle (tau symmetric); the
+                    # coefficients are exact products of the mpf entries
+                    quad = mpmath.fdot([na[i] * na[j] for i, j in upper], tu)
+                    term = mpmath.exp(1j * pi * quad + two_pi_i * mpmath.fdot(na, zl))
                     for v in Vm:
                         term *= two_pi_i * mpmath.fsum(v[i] * na[i] for i in range(g))
                     if half:
