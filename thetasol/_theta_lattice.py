@@ -108,17 +108,27 @@ def siegel_reduction(tau0: np.ndarray, max_iter: int = 500, dps: int = 40) -> Re
     transformation constants (``c0``, ``Q``, ``l``) carry phases of size ~100 that would otherwise
     cost ~1e-13 of accuracy.  The float fields are the correctly rounded mp results; the mp
     values are kept in ``mp`` for the characteristic tables.
+
+    Ties (``Re tau_ij = +-1/2``, LLL coefficients ``+-1/2``, ``|tau_11| = 1``) are common for
+    bases adapted to a real structure; either choice is valid provided every step is exactly
+    symplectic: the float ``tau`` is kept exactly symmetric and ``B`` is symmetric by
+    construction, and ``gamma`` is checked (``gamma^T J gamma = J``) after the replay.
     """
     g = tau0.shape[0]
+    tau0 = 0.5 * (tau0 + tau0.T)  # exact no-op for symmetric input
     tau = tau0.copy()
     I = np.eye(g, dtype=np.int64)
     steps: list = []
     for _ in range(max_iter):
         U = lll_gram(tau.imag)
         if not np.array_equal(U, I):
+            # U tau U^T is symmetric only up to rounding: keep tau exactly symmetric, or the
+            # rounding of Re tau_ij = +-1/2 (a tie, common for real-structure bases) differs
+            # between (i, j) and (j, i) and B below is not symmetric (gamma not symplectic)
             tau = U @ tau @ U.T
+            tau = 0.5 * (tau + tau.T)
             steps.append(("U", U))
-        B = -np.rint(tau.real).astype(np.int64)
+        B = _symmetric_shift(tau.real)
         if np.any(B):
             tau = tau + B
             steps.append(("B", B))
@@ -135,6 +145,30 @@ def siegel_reduction(tau0: np.ndarray, max_iter: int = 500, dps: int = 40) -> Re
     else:  # pragma: no cover - det Im tau grows at every inversion, so this needs absurd input
         raise ValueError(f"Siegel reduction of tau did not converge in {max_iter} steps")
     return _replay(tau0, steps, dps)
+
+
+def _symmetric_shift(X: np.ndarray) -> np.ndarray:
+    """Symmetric integer ``B`` with ``|X + B|_ij <= 1/2``, rounded from the upper triangle only.
+
+    ``tau -> tau + B`` is symplectic only for symmetric ``B``; rounding both triangles of a
+    matrix that is symmetric up to an ulp breaks that at the ties ``X_ij = +-1/2``.
+    """
+    R = np.triu(-np.rint(X)).astype(np.int64)
+    return R + np.triu(R, 1).T
+
+
+def _check_steps(steps: list, gamma: np.ndarray) -> None:
+    """Every elementary step and their composition must be exactly symplectic (integer check)."""
+    g = gamma.shape[0] // 2
+    for kind, data in steps:
+        if kind == "B" and not np.array_equal(data, data.T):  # pragma: no cover - guarded above
+            raise RuntimeError(f"internal error: Siegel reduction shift B is not symmetric:\n{data}")
+        if kind == "U" and abs(round(np.linalg.det(data))) != 1:  # pragma: no cover
+            raise RuntimeError(f"internal error: Siegel reduction step U is not unimodular:\n{data}")
+    J = np.block([[np.zeros((g, g), np.int64), np.eye(g, dtype=np.int64)],
+                  [-np.eye(g, dtype=np.int64), np.zeros((g, g), np.int64)]])
+    if not np.array_equal(gamma.T @ J @ gamma, J):  # pragma: no cover - would be a broken step
+        raise RuntimeError(f"internal error: Siegel reduction gamma is not symplectic:\n{gamma}")
 
 
 def _replay(tau0: np.ndarray, steps: list, dps: int) -> Reduction:
@@ -161,8 +195,11 @@ def _replay(tau0: np.ndarray, steps: list, dps: int) -> Reduction:
         if kind == "U":
             U = data
             Uinv_T = np.rint(np.linalg.inv(U)).astype(np.int64).T
+            if not np.array_equal(U @ Uinv_T.T, I):  # pragma: no cover - huge U entries only
+                raise RuntimeError(f"internal error: inverse of the LLL step is not exact:\n{U}")
             Ul = U.tolist()
             tau = matmul(Ul, [list(r) for r in zip(*matmul(Ul, [list(r) for r in zip(*tau)]))])
+            tau = [[(tau[i][j] + tau[j][i]) / 2 for j in range(g)] for i in range(g)]
             M = matmul(Ul, M)
             a_s, b_s = Uinv_T @ a_s, U @ b_s
             gamma = np.block([[U, Z], [Z, Uinv_T]]) @ gamma
@@ -196,6 +233,7 @@ def _replay(tau0: np.ndarray, steps: list, dps: int) -> Reduction:
             Id = I - E
             a_s, b_s = Id @ a_s - E @ b_s, E @ a_s + Id @ b_s
             gamma = np.block([[Id, -E], [E, Id]]) @ gamma
+    _check_steps(steps, gamma)
     tofl = lambda A: np.array([[complex(x) for x in row] for row in A])
     taur = tofl(tau)
     red = Reduction(tau0=tau0, tau=0.5 * (taur + taur.T), gamma=gamma, M=tofl(M), Q=tofl(Q),

@@ -160,7 +160,9 @@ def siegel_reduce(tau) -> tuple[np.ndarray, np.ndarray]:
         ``(A tau + B)(C tau + D)^{-1}`` with ``Im tau_red`` LLL-reduced, ``|Re tau_red| <= 1/2``
         entrywise and ``|tau_red[0, 0]| >= 1``.
     gamma : ndarray of int64, shape (2g, 2g)
-        ``[[A, B], [C, D]]`` in ``Sp(2g, Z)`` (``gamma^T J gamma = J``, ``J = [[0, 1], [-1, 0]]``).
+        ``[[A, B], [C, D]]`` in ``Sp(2g, Z)`` (``gamma^T J gamma = J``, ``J = [[0, 1], [-1, 0]]``,
+        checked exactly; rounding ties such as ``Re tau_ij = +-1/2`` are resolved by exactly
+        symplectic steps, see docs/theta.md).
 
     Notes
     -----
@@ -244,10 +246,13 @@ class RiemannTheta:
             ab = [ctx.mpf(float(x)) for x in np.concatenate([alpha[ci], beta[ci]])]
             img = [ctx.fsum(int(Lam[i, j]) * ab[j] for j in range(2 * g)) + ctx.mpf(shift[i]) for i in range(2 * g)]
             a1[ci], b1[ci] = img[:g], img[g:]
-        p = np.vectorize(lambda x: ctx.floor(x + ctx.mpf(1e-12)))(a1)
-        q = np.vectorize(lambda x: ctx.floor(x + ctx.mpf(1e-12)))(b1)
-        ar = np.vectorize(lambda x: max(float(x), 0.0) if abs(x) > 1e-12 else 0.0)(a1 - p).astype(float)
-        br = np.vectorize(lambda x: max(float(x), 0.0) if abs(x) > 1e-12 else 0.0)(b1 - q).astype(float)
+        # exact floor, no snapping: a characteristic 1e-13 off an integer is a different
+        # characteristic (theta changes by ~2 pi |z| 1e-13), and the constant K below uses
+        # the exact a1 - p; half-integer images are exact, so ar, br in {0, 1/2} for "all"
+        p = np.vectorize(ctx.floor)(a1)
+        q = np.vectorize(ctx.floor)(b1)
+        ar = np.vectorize(float)(a1 - p).astype(float)
+        br = np.vectorize(float)(b1 - q).astype(float)
         # K carries phases of size ~1e3 (large Q, c0 after inversions): sum it in mpmath
         tau0, taur, Qm, lm, Mm = mp["tau0"], mp["tau"], mp["Q"], mp["l"], mp["M"]
         n = alpha.shape[0]
