@@ -18,13 +18,15 @@ def test_dispatch_free_and_isotropic():
     assert isinstance(solve_rotation(J, Z, np.eye(3), W0), RotationSolution)
 
 
-def test_potential_with_torque_is_issue_6():
-    a = np.diag([1.0, 2.0, 3.0])
-    with pytest.raises(NotImplementedError, match="issue 6"):
-        solve_rotation(J, a, np.eye(3), W0)
-    # an anisotropy far below the data's resolution is not silently dropped either
-    with pytest.raises(NotImplementedError):
-        solve_rotation(J, np.eye(3) + 1e-9 * np.diag([1.0, 0.0, 0.0]), np.eye(3), W0)
+def test_potential_with_torque_uses_theta_functions():
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(3, 3))
+    sol = solve_rotation(J, a + a.T, np.eye(3), W0)
+    assert sol.method == "theta/genus-4"
+    # a repeated eigenvalue of a (gravity gradient): the nodal curve of genus 3
+    g = np.array([0.3, -0.5, 0.81])
+    sol = solve_rotation(J, -3.0 * np.outer(g, g) / (g @ g), np.eye(3), W0)
+    assert sol.method == "theta/nodal-genus-3"
 
 
 def test_shapes_and_protocol():

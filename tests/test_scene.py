@@ -83,9 +83,10 @@ def test_load_solve_and_initial_state(tmp_path):
     assert isinstance(traj, Trajectories)
     assert traj.position.shape == (3, 41, 3) and traj.attitude.shape == (3, 41, 3, 3)
     x, v, Q, w = initial_state(sc.config, sc.q0, sc.v0, sc.Q0, sc.omega0)
-    assert np.allclose(traj.position[:, 0], x, atol=1e-14)
-    assert np.allclose(traj.velocity[:, 0], v, atol=1e-14)
-    assert np.allclose(traj.attitude[:, 0], Q, atol=1e-14)
+    # closed-form rotations (theta functions) reproduce the initial state to 1e-13 (issue 6)
+    assert np.allclose(traj.position[:, 0], x, rtol=0, atol=1e-13)
+    assert np.allclose(traj.velocity[:, 0], v, rtol=0, atol=1e-13)
+    assert np.allclose(traj.attitude[:, 0], Q, rtol=0, atol=1e-13)
     assert np.allclose(traj.mass_center[0], sc.q0)
     models = traj.info["models"]
     assert [k for _, k in models["mass_center"]] == ["hyperbolic", "trigonometric", "trigonometric"]

@@ -13,12 +13,12 @@ Conventions are fixed once, in docs/conventions.md.
 from .equations import invariants, spectral_coefficients, torque
 from .integrate import integrate_rotation
 from .theta import RiemannTheta, riemann_theta, riemann_theta_separated, siegel_reduce
-from .rotation import RotationSolution, solve_rotation
+from .rotation import ClosedFormUnavailable, RotationSolution, solve_rotation
 from .gyrostat import solve_gyrostat
 
 __all__ = ["integrate_rotation", "invariants", "spectral_coefficients", "torque",
            "RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce",
-           "RotationSolution", "solve_rotation", "solve_gyrostat"]
+           "RotationSolution", "solve_rotation", "solve_gyrostat", "ClosedFormUnavailable"]
 # mechanics of C^k-central configurations (issue 2)
 from .bodies import Body  # noqa: E402
 from .configuration import Configuration, Joint, Trajectories  # noqa: E402

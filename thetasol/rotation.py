@@ -10,8 +10,12 @@ Dispatch (one small function per branch, tried in order, see ``_BRANCHES``):
 
 * ``a = c 1`` (zero or isotropic: no torque, Section 4 I): the Euler top of
   :mod:`thetasol.euler_top` in Jacobi elliptic functions;
-* any other ``a`` (Section 4 II, the theta-function solution) raises
-  :class:`NotImplementedError` until issue 6 adds its branch.
+* angular velocity along a principal axis that is also an eigenvector of ``Q0^T a Q0``: the
+  body keeps turning about that axis, a planar pendulum in elliptic functions
+  (:mod:`thetasol.pendulum`; the spectral curve is reducible), uniform rotation or rest included;
+* any other ``a`` (Section 4 II): the Baker-Akhiezer theta-function solution of
+  :mod:`thetasol.theta_rotation` (genus 4, or genus 3 for a potential with a repeated
+  eigenvalue); symmetric bodies raise :class:`NotImplementedError`.
 
 The free gyrostat (8.39)-(8.40) has its own entry point, :func:`thetasol.solve_gyrostat`,
 and returns an object with the same protocol.
@@ -27,7 +31,16 @@ from . import _validate as V
 from ._so3 import hat
 from .equations import inertia_from_moments
 
-__all__ = ["RotationSolution", "solve_rotation"]
+__all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]
+
+
+class ClosedFormUnavailable(NotImplementedError):
+    """No closed form could be built for these (valid) data; the message says why.
+
+    Raised for the cases a closed form does not cover (a symmetric body in a potential) and where
+    the curve computations cannot reach the accuracy the solution promises (for example data
+    within rounding of a degeneration).  :func:`thetasol.integrate_rotation` always applies.
+    """
 
 
 @dataclass(frozen=True, eq=False)
@@ -121,15 +134,20 @@ def _free_branch(J, a, Q0, omega0, dps):
     return _solve_euler_top(J, a, Q0, omega0, dps=dps)
 
 
+def _pendulum_branch(J, a, Q0, omega0, dps):
+    from .pendulum import _solve_pendulum
+
+    return _solve_pendulum(J, a, Q0, omega0, dps)
+
+
 def _potential_branch(J, a, Q0, omega0, dps):
-    raise NotImplementedError(
-        "solve_rotation: a non-isotropic potential (Section 4 II, theta functions) is issue 6 "
-        "and not implemented yet; use thetasol.integrate_rotation meanwhile"
-    )
+    from .theta_rotation import _solve_theta_rotation
+
+    return _solve_theta_rotation(J, a, Q0, omega0, dps=dps)
 
 
 #: Tried in order; each returns a RotationSolution or None (not its case).
-_BRANCHES: list[Callable] = [_free_branch, _potential_branch]
+_BRANCHES: list[Callable] = [_free_branch, _pendulum_branch, _potential_branch]
 
 
 def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolution:
@@ -143,7 +161,7 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
         mapped back).  Inertia ``I = tr(J) 1 - J``.
     a : array_like, shape (3, 3)
         Symmetric potential matrix.  ``a = 0`` or ``a = c 1`` (no torque) gives the Euler
-        top; other ``a`` are not implemented yet (issue 6).
+        top; any other ``a`` the theta-function solution (4.8)-(4.12).
     Q0 : array_like, shape (3, 3)
         Initial attitude, body to space (``x = Q r``).
     omega0 : array_like, shape (3,)
@@ -163,7 +181,8 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     ValueError
         Non-finite, wrongly shaped or unphysical data.
     NotImplementedError
-        A potential with torque (issue 6).
+        A potential with torque on a symmetric body (two equal principal moments), or ``dps``
+        with a potential.
 
     Examples
     --------

@@ -1,0 +1,73 @@
+"""Regenerate the long high-accuracy reference trajectories used by the rotation tests.
+
+Each case is integrated with heyoka's Taylor method in extended precision (80-bit long
+double, tolerance 1e-19); the sample times are those of issue 6.  Agreement with the
+quadruple-precision integrator (dtype="f128") is checked at t <= 102 and stored as
+``ref_error``.  Run:  python tests/data/rotation/make_refs.py   (needs thetasol[bench]).
+"""
+import json
+import pathlib
+
+import numpy as np
+
+from thetasol import integrate_rotation
+from thetasol._so3 import rodrigues
+
+TIMES = [0.7, 3.1, 17.3, 102.0, 997.0, 4002.0]
+
+
+def _frame(seed):
+    rng = np.random.default_rng(seed)
+    R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    return R * np.linalg.det(R)
+
+
+def cases():
+    J = [0.6, 1.0, 1.7]
+    rng = np.random.default_rng(7)
+    a_gen = rng.normal(size=(3, 3))
+    a_gen = 0.5 * (a_gen + a_gen.T)
+    R = _frame(3)
+    Q0 = rodrigues(np.array([0.4, -0.7, 0.3]))
+    w0 = np.array([0.5, -0.8, 0.6])
+    gamma = np.array([0.3, -0.5, 0.81])
+    gamma /= np.linalg.norm(gamma)
+    out = {
+        "generic": (J, a_gen, Q0, w0),
+        "saddle": (J, R @ np.diag([-1.0, 0.4, 1.5]) @ R.T, Q0, w0),
+        "fast_spin": (J, a_gen, Q0, 12.0 * w0 / np.linalg.norm(w0)),
+        "slow_spin": (J, a_gen, Q0, 0.02 * w0 / np.linalg.norm(w0)),
+        "nearly_symmetric": ([1.0, 1.0 + 1e-6, 1.7], a_gen, Q0, w0),
+        "rank_one": (J, -3.0 * np.outer(gamma, gamma), Q0, w0),
+        "rank_one_plus_isotropic": (J, 0.7 * np.eye(3) - 3.0 * np.outer(gamma, gamma), Q0, w0),
+    }
+    # Relative equilibria: principal axes along eigenvectors of a.  V = 1/2 sum J_i e_i^T Q^T a Q e_i
+    # is least when the largest J_i meets the smallest eigenvalue of a (stable), largest when it
+    # meets the largest eigenvalue (unstable for the rotation about a fixed point).
+    lam, U = np.linalg.eigh(R @ np.diag([-1.0, 0.4, 1.5]) @ R.T)
+    a_eq = U @ np.diag(lam) @ U.T
+    Q_stable = U[:, ::-1] * np.linalg.det(U[:, ::-1])    # body axis 3 (largest J) -> smallest lambda
+    Q_unstable = U * np.linalg.det(U)                     # body axis 3 -> largest lambda
+    kick = rodrigues(np.array([1e-3, -2e-3, 1.5e-3]))
+    out["near_stable_equilibrium"] = (J, a_eq, Q_stable @ kick, np.array([1e-3, 2e-3, -1e-3]))
+    out["near_unstable_equilibrium"] = (J, a_eq, Q_unstable @ kick, np.array([1e-3, 2e-3, -1e-3]))
+    return out
+
+
+def main():
+    data = {}
+    t = np.array(TIMES)
+    for name, (J, a, Q0, w0) in cases().items():
+        w, Q = integrate_rotation(J, a, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19)
+        wq, Qq = integrate_rotation(J, a, Q0, w0, t[:4], method="heyoka", dtype="f128", rtol=1e-28)
+        err = max(np.abs(Qq - Q[:4]).max(), np.abs(wq - w[:4]).max())
+        data[name] = {"J": list(map(float, J)), "a": np.asarray(a).tolist(), "Q0": np.asarray(Q0).tolist(),
+                      "omega0": np.asarray(w0).tolist(), "t": TIMES, "omega": w.tolist(), "Q": Q.tolist(),
+                      "ref_error": float(err)}
+        print(f"{name:28s} ldbl vs f128 (t <= 102): {err:.2e}", flush=True)
+    path = pathlib.Path(__file__).with_name("refs.json")
+    path.write_text(json.dumps(data, indent=1))
+
+
+if __name__ == "__main__":
+    main()

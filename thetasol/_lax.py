@@ -1,0 +1,102 @@
+"""Algebra of the Lax matrix L(E) = J^2 E^2 + M E + u of (4.11) at t = 0.
+
+Everything the Baker-Akhiezer reconstruction needs that does not involve periods:
+eigenvectors at places, the pole divisor of the normalized eigenvector, and Taylor
+expansions at the places over E = infinity.  J is diagonal (principal frame).
+
+The pole divisor.  With psi(P) the eigenvector of L(E) at P = (E, w) normalized by
+<alpha, psi> = 1, its poles are the points where alpha^T v(P) = 0 for the right eigenvector
+v.  With B2 an orthonormal basis of alpha^perp, v = B2 y and the conditions
+(B2^T L B2 - w) y = 0, alpha^T L B2 y = 0 say that y is orthogonal to
+r(E) = B2^T L(E)^T alpha and is an eigenvector of L22(E) = B2^T L(E) B2.  In two dimensions
+y = rot90(r), so the E-coordinates are the roots of the degree-6 polynomial
+det[L22(E) y(E), y(E)]; w is the eigenvalue of L22 on y.  This avoids resultants of the
+degree-24 system and gives each point once.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = []
+
+
+def lax_matrix(J: np.ndarray, M: np.ndarray, u: np.ndarray, E) -> np.ndarray:
+    """L(E) = J^2 E^2 + M E + u (4.11) for J the principal values; shape ``E.shape + (3, 3)``."""
+    E = np.asarray(E)[..., None, None]
+    return np.diag(J * J) * E**2 + M * E + u
+
+
+def right_eigenvector(L: np.ndarray, w) -> np.ndarray:
+    """Unit null vector of ``L - w`` (batched): the right eigenvector at a smooth point.
+
+    Taken from a row pair's cross product (the largest one), exact where ``w`` is a simple
+    eigenvalue; shape ``L.shape[:-1]``.
+    """
+    X = L - np.asarray(w)[..., None, None] * np.eye(3)
+    rows = [X[..., i, :] for i in range(3)]
+    cands = np.stack([np.cross(rows[1], rows[2]), np.cross(rows[2], rows[0]), np.cross(rows[0], rows[1])], -2)
+    norms = np.linalg.norm(cands, axis=-1)
+    best = np.argmax(norms, axis=-1)
+    v = np.take_along_axis(cands, best[..., None, None], axis=-2)[..., 0, :]
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _polymatmul(A: list, B: list) -> list:
+    out = [None] * (len(A) + len(B) - 1)
+    for i, x in enumerate(A):
+        for j, y in enumerate(B):
+            out[i + j] = x @ y if out[i + j] is None else out[i + j] + x @ y
+    return out
+
+
+def eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.ndarray, left: bool = False):
+    """Points (E, w) where alpha^T v = 0, v the right (``left=True``: left) eigenvector.
+
+    Returns ``(E, w)`` arrays of length 6 (with multiplicity).  Points are polished by Newton's
+    method on ``(det(L - w), alpha^T adj(L - w) alpha)`` is not needed: the polynomial is small
+    and well conditioned for generic alpha.
+    """
+    alpha = np.asarray(alpha, float)
+    alpha = alpha / np.linalg.norm(alpha)
+    Qb = np.linalg.qr(np.column_stack([alpha, np.eye(3)]))[0][:, :3]
+    B2 = Qb[:, 1:]
+    Lc = [u, M, np.diag(J * J)]
+    if left:
+        Lc = [X.T for X in Lc]
+    L22 = [B2.T @ X @ B2 for X in Lc]
+    y = [np.array([-r[1], r[0]]) for r in (B2.T @ X.T @ alpha for X in Lc)]
+    Ly = _polymatmul(L22, [v[:, None] for v in y])
+    p = np.zeros(7, dtype=np.result_type(M, u, float))
+    for i, A in enumerate(Ly):
+        for j, v in enumerate(y):
+            p[i + j] += A[0, 0] * v[1] - A[1, 0] * v[0]
+    E = np.roots(p[::-1])
+    yy = sum(c * E[:, None] ** k for k, c in enumerate(y))
+    Lyy = sum(c[:, 0] * E[:, None] ** k for k, c in enumerate(Ly))
+    w = np.einsum("ni,ni->n", yy.conj(), Lyy) / np.einsum("ni,ni->n", yy.conj(), yy)
+    return E, w
+
+
+def branch_series_at_infinity(J: np.ndarray, M: np.ndarray, u: np.ndarray, order: int = 12,
+                              radius: float | None = None):
+    """Taylor coefficients in s = 1/E of w_j(E) / E^2 on the sheet w/E^2 -> J_j^2.
+
+    Computed as Cauchy integrals of the eigenvalues of J^2 + s M + s^2 u over a circle in s
+    (the trapezoidal rule converges geometrically).  Returns ``(coef, radius)`` with ``coef``
+    of shape ``(3, order)``: ``w_j / E^2 = sum_n coef[j, n] s^n``.
+    """
+    J2 = J * J
+    gap = min(abs(J2[i] - J2[j]) for i in range(3) for j in range(i))
+    scale = np.linalg.norm(M, 2) + np.sqrt(np.linalg.norm(u, 2) * 1.0)
+    if radius is None:
+        radius = 0.25 * gap / max(scale, 1e-300)
+        radius = min(radius, 0.25 * np.sqrt(gap / max(np.linalg.norm(u, 2), 1e-300)))
+    N = max(2 * order, 32)
+    s = radius * np.exp(2j * np.pi * np.arange(N) / N)
+    lam = np.linalg.eigvals(np.diag(J2) + s[:, None, None] * M + (s * s)[:, None, None] * u)
+    # Follow each sheet by nearest J_j^2 (the circle is small enough to keep them apart).
+    idx = np.argmin(np.abs(lam[:, :, None] - J2[None, None, :]), axis=1)
+    vals = np.take_along_axis(lam, idx, axis=1)  # (N, 3)
+    coef = np.fft.fft(vals, axis=0) / N
+    coef = coef[:order].T / radius ** np.arange(order)
+    return coef, radius

@@ -1,0 +1,84 @@
+"""Riemann theta along a real linear flow: theta(s_j + t u | tau) for fixed shifts s_j.
+
+In a homology basis adapted to the real Liouville torus (:mod:`thetasol._adapted_basis`) the
+velocity ``u`` is real and vanishes outside the first r coordinates, so ``Im`` of the argument is
+constant and, as a function of t, theta is the Fourier series in r phases::
+
+    theta(s + t u) = exp(e_s) sum_{m' in Z^r} D_s(m') exp(2 pi i m'.phi(t)),  phi(t) = t u mod 1,
+    D_s(m') = sum_{m''} exp(pi i m.tau.m + 2 pi i m.s - e_s),   m = (m', m''),
+
+with ``e_s = pi y.(Im tau)^-1.y``, ``y = Im s``.  The coefficients D_s are summed once (all m in
+the ellipsoid pi (m + c).Y.(m + c) <= R^2, c = Y^-1 y, outside which the terms are below ``tol``);
+per time only the phases ``exp(2 pi i m'.phi)`` (products of one-dimensional power tables) and one
+complex matrix product remain.  Integer shifts of ``phi`` leave theta unchanged, so far times cost
+what t = 1 costs and need no quasi-periodicity factors.
+"""
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+
+__all__ = []
+
+
+class FlowTheta:
+    """Values and u-derivatives of theta(s_j + t u) for shifts s_j (S, g) and real u (r,)."""
+
+    def __init__(self, tau: np.ndarray, u: np.ndarray, shifts: np.ndarray, tol: float = 1e-16):
+        tau = 0.5 * (tau + tau.T)
+        g = tau.shape[0]
+        u = np.asarray(u, float)
+        r = u.size
+        Y = tau.imag
+        Yinv = np.linalg.inv(Y)
+        S = shifts.shape[0]
+        R2 = math.log(1.0 / tol) + 2.0 * math.log(10.0)
+        self.e = np.empty(S)
+        groups = []
+        for j, s in enumerate(shifts):
+            y = s.imag
+            c = Yinv @ y
+            self.e[j] = math.pi * y @ Yinv @ y
+            half = np.sqrt(R2 / math.pi * np.diag(Yinv))
+            ranges = [np.arange(math.floor(-c[i] - half[i]), math.ceil(-c[i] + half[i]) + 1) for i in range(g)]
+            m = np.array(list(itertools.product(*ranges)), dtype=float)
+            d = m + c
+            keep = math.pi * np.einsum("ni,ij,nj->n", d, Y, d) <= R2
+            m = m[keep]
+            expo = 1j * math.pi * np.einsum("ni,ij,nj->n", m, tau, m) + 2j * math.pi * m @ s - self.e[j]
+            terms = np.exp(expo)
+            key = [tuple(int(v) for v in row[:r]) for row in m]
+            acc: dict = {}
+            for k, v in zip(key, terms):
+                acc[k] = acc.get(k, 0.0) + v
+            groups.append(acc)
+        modes = sorted(set().union(*groups))
+        index = {k: i for i, k in enumerate(modes)}
+        D = np.zeros((S, len(modes)), complex)
+        for j, acc in enumerate(groups):
+            for k, v in acc.items():
+                D[j, index[k]] = v
+        self.modes = np.array(modes, dtype=np.int64).reshape(len(modes), r)
+        self.lo = self.modes.min(axis=0)
+        self.span = self.modes.max(axis=0) - self.lo + 1
+        self.D = D
+        self.Dd = D * (2j * math.pi * (self.modes @ u))[None, :]
+        self.u = u
+        self.r = r
+
+    def __call__(self, t: np.ndarray, derivative: bool = True):
+        """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv."""
+        t = np.asarray(t, float)
+        phi = np.multiply.outer(t, self.u)
+        phi -= np.round(phi)
+        X = None
+        for i in range(self.r):
+            k = np.arange(self.span[i]) + self.lo[i]
+            tab = np.exp(2j * math.pi * np.multiply.outer(phi[:, i], k))     # (n, span_i)
+            col = tab[:, self.modes[:, i] - self.lo[i]]
+            X = col if X is None else X * col
+        v = X @ self.D.T
+        dv = X @ self.Dd.T if derivative else None
+        return self.e, v, dv

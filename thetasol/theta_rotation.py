@@ -1,0 +1,520 @@
+"""Rotation of a rigid body in a quadratic potential in Riemann theta functions (Section 4 II).
+
+The method (derivation and checks in docs/theta_rotation.md)
+------------------------------------------------------------
+The Lax pair (4.11) ``L(E) = J^2 E^2 + M E + u``, ``A(E) = J E + omega``, ``Ldot = [L, A]``
+is solved by the fundamental matrix ``Phi(E, t)`` of ``Phidot = -A(E, t) Phi``: then
+``L(E, t) = Phi L(E, 0) Phi^{-1}`` and, at ``E = 0``, ``Phi(0, t) = Q(t)^T Q0``: the attitude
+itself.  For a point ``P = (E, w)`` of the spectral curve (4.12) let ``psi(P)`` be the eigenvector
+of ``L(E, 0)`` normalized by ``<alpha, psi> = 1``.  The vector Baker-Akhiezer function
+``Psi(P, t) = Phi(E, t) psi(P)`` has the poles of ``psi`` (a divisor ``D0`` of degree g + 2),
+the essential singularity ``exp(-J_j E t)`` at the place ``inf_j`` over ``E = infinity`` and
+``Psi_k exp(J_j E t) -> delta_kj / alpha_j`` there.  Its components are theta quotients::
+
+    Psi_k(P, t) = rho_k(P) exp(c_k(P) t) theta(A(P) + t V - e_k) theta(A(inf_k) - e_k)
+                                        / theta(A(inf_k) + t V - e_k)
+    e_k = A(D0) - sum_{j != k} A(inf_j) + K,     V = sum_j J_j omega(inf_j) / ds  (s = 1/E),
+
+with ``rho_k = psi_k / theta(A(P) - e_k)`` and ``c_k`` fixed at t = 0.  Evaluating at the three
+places over ``E = 0`` gives ``Phi(0, t)``, hence ``Q(t)`` and ``omega = vee(-Phidot Phi^T)``;
+``M = hat(I omega)`` and ``u = -Q^T a Q``.  Both constants are Cauchy means over a small circle
+around the place, so they stay exact where a component of the initial eigenvector vanishes
+(``rho_k`` then has a removable 0/0).  The exponents satisfy ``c_k(P_s) = F_s - G_k`` exactly
+(``Omega(P_s) - Omega(inf_k)``); they are fitted in that form by weighted least squares, each entry
+weighted by its conditioning, with auxiliary points near the branch points where eigenvectors mix.
+
+Everything is computed in a homology basis adapted to the real Liouville torus
+(:mod:`thetasol._adapted_basis`): there ``V`` is real and has only as many non-zero coordinates as
+the torus has dimensions (3, the Prym variety; 2 for a rank-one potential), so theta along the
+trajectory is a Fourier series in those phases (:mod:`thetasol._theta_flow`) and a far time costs
+what t = 1 costs.
+
+Degenerate data (only what the scene needs)
+-------------------------------------------
+* ``a`` with a repeated eigenvalue (the gravity gradient of Section 7): the curve has a node at
+  ``E = 0`` and the same construction runs on its genus-3 normalization, the node's two branches
+  taking the place of two of the points over ``E = 0``.
+* ``a`` isotropic or zero: no torque; :func:`thetasol.solve_rotation` uses the Euler top instead.
+* a symmetric body (two equal ``J_i``): not handled here (NotImplementedError).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import sympy as sp
+
+from ._adapted_basis import real_flow_basis
+from ._lax import eigenvector_poles, lax_matrix, right_eigenvector
+from ._theta_flow import FlowTheta
+from ._so3 import hat, polar_orthonormalize, vee
+from .equations import inertia_from_moments, invariants as _invariants
+from .rotation import ClosedFormUnavailable, RotationSolution
+from .spectral import spectral_curve
+from .theta import RiemannTheta
+
+__all__ = ["ThetaRotation"]
+
+#: Relative size below which a near-degeneracy of the data is snapped to an exact one.  At 1e-12
+#: the change of the data moves the trajectory by less than the float64 conditioning at t ~ 1e3.
+SNAP_TOL = 1e-12
+#: Points on the circles of the Cauchy means, and Gauss-Legendre nodes on their radii.
+N_CIRCLE = 32
+N_RAY = 16
+
+
+def _principal_frame(J: np.ndarray):
+    """Right-handed principal frame with ascending principal values: J = P diag(Jp) P^T."""
+    Jp, P = np.linalg.eigh(J)
+    P[:, 2] *= np.sign(np.linalg.det(P))
+    return Jp, P
+
+
+def _choose_alpha(X: np.ndarray) -> np.ndarray:
+    """A normalization vector far from orthogonal to the columns of X and to the axes."""
+    best, score = None, -1.0
+    rng = np.random.default_rng(20240601)
+    cands = [np.array([1.0, 2 ** 0.5, 3 ** 0.5])] + [rng.normal(size=3) for _ in range(40)]
+    Xn = X / np.linalg.norm(X, axis=0, keepdims=True)
+    for c in cands:
+        c = c / np.linalg.norm(c)
+        sc = min(np.min(np.abs(c)), np.min(np.abs(c @ Xn)))
+        if sc > score:
+            best, score = c, sc
+    return best
+
+
+def _lattice_coords(z: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """Real coordinates (x1, x2) with z = x1 + tau x2 (z of shape (..., g))."""
+    Y = tau.imag
+    x2 = np.linalg.solve(Y, z.imag.T).T if z.ndim > 1 else np.linalg.solve(Y, z.imag)
+    x1 = z.real - x2 @ tau.real.T
+    return x1, x2
+
+
+def _reduce(z: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """A representative of z modulo Z^g + tau Z^g with lattice coordinates in [-1/2, 1/2)."""
+    x1, x2 = _lattice_coords(z, tau)
+    return z - np.round(x1) - np.round(x2) @ tau.T
+
+
+@dataclass(frozen=True, eq=False)
+class ThetaRotation(RotationSolution):
+    """Exact rotation in a quadratic potential in Riemann theta functions (Section 4 II).
+
+    Built by :func:`thetasol.solve_rotation`; evaluates at any times in any order.  Besides the
+    protocol of :class:`thetasol.RotationSolution` (``omega``, ``Q``, ``M``, ``u``, ``method``,
+    ``invariants``) it exposes the spectral data of the initial state.
+
+    Attributes
+    ----------
+    curve : thetasol.spectral.SpectralCurve
+        The spectral curve (4.12) of the initial data (principal frame, ascending ``J``).
+    riemann_matrix : ndarray, shape (g, g)
+        ``tau`` of the curve's normalization (g = 4 generic, 3 for a rank-one potential).
+    U : ndarray, shape (g,)
+        Velocity of the linear flow on the Jacobian: the Abel image of the eigenvector divisor
+        moves as ``A(D(t)) = A(D(0)) - t U`` (normalized coordinates, docs/curves.md).
+    abel_divisor : ndarray, shape (g,)
+        Abel image ``A(D0)`` of the pole divisor of the initial eigenvector (normalized by
+        ``<alpha, psi> = 1``), from the curve's base point along its documented paths.
+    alpha : ndarray, shape (3,)
+        The normalization vector (principal frame).
+    """
+
+    curve: object = field(default=None, repr=False)
+    riemann_matrix: np.ndarray = field(default=None, repr=False)
+    U: np.ndarray = field(default=None, repr=False)
+    abel_divisor: np.ndarray = field(default=None, repr=False)
+    alpha: np.ndarray = field(default=None, repr=False)
+    _c: dict = field(default=None, repr=False)
+
+    # -- evaluation ---------------------------------------------------------------------------
+    def _phi0(self, t: np.ndarray, derivative: bool):
+        """Phi(0, t) (n, 3, 3) = Q'(t)^T Q'0 in the principal frame and, if asked, its derivative."""
+        c = self._c
+        _, v, dv = c["flow"](t, derivative)
+        vb, vd = v[:, :9].reshape(-1, 3, 3), v[:, 9:]          # [n, s, k], [n, k]
+        phase = np.exp(1j * np.multiply.outer(t, c["nu"]))      # [n, s, k]
+        Psi = c["amp"][None] * phase * vb / vd[:, None, :]      # Psi_k(P_s, t)
+        Phi = np.einsum("nsk,si->nki", Psi, c["X0inv"])        # Phi X0 = [Psi(P_s)]
+        if not derivative:
+            return Phi, None
+        rate = 1j * c["nu"][None] + dv[:, :9].reshape(-1, 3, 3) / vb - (dv[:, 9:] / vd)[:, None, :]
+        return Phi, np.einsum("nsk,si->nki", Psi * rate, c["X0inv"])
+
+    def _evaluate(self, t: np.ndarray):
+        Phi, Phidot = self._phi0(t, derivative=True)
+        Phi_r = Phi.real
+        Qp = polar_orthonormalize(self._c["Q0p"] @ np.swapaxes(Phi_r, -1, -2))
+        wp = vee(-Phidot.real @ np.swapaxes(Phi_r, -1, -2))
+        P = self._c["P"]
+        return wp @ P.T, Qp @ P.T
+
+    def imaginary_residual(self, t) -> np.ndarray:
+        """max |Im Phi(0, t)|: the theta quotients are complex, their combination is real; the
+        imaginary part left over measures the float64 error of the evaluation (shape ``t.shape``)."""
+        tt, flat = self._times(t)
+        Phi, _ = self._phi0(flat, derivative=False)
+        return np.abs(Phi.imag).max(axis=(-1, -2)).reshape(tt.shape)
+
+
+# -- set-up --------------------------------------------------------------------------------------
+
+def _kappa(curve, nums, Jp) -> np.ndarray:
+    """omega_i / ds at inf_j (s = 1/E) for the numerators g_i of omega_i = g_i dE / f_w.
+
+    f = lc prod (w - w_l), w_l = J_l^2 E^2 + O(E): f_w(inf_j) ~ lc E^4 prod_{l != j}(J_j^2 - J_l^2),
+    dE = -ds / s^2, so only the weight-2 part (E^2, w) of g_i survives at s = 0.
+    """
+    E, w = curve.x, curve.y
+    lc = float(sp.Poly(curve._poly.sympy_expr(), w).LC())
+    J2 = Jp * Jp
+    out = np.zeros((len(nums), 3))
+    for i, gnum in enumerate(nums):
+        pol = sp.Poly(sp.sympify(gnum), E, w)
+        for j in range(3):
+            lead = sum(float(cf) * J2[j] ** mw for (me, mw), cf in pol.terms() if me + 2 * mw == 2)
+            den = np.prod([J2[j] - J2[l] for l in range(3) if l != j])
+            out[i, j] = -lead / (lc * den)
+    return out
+
+
+def _local_branch(curve, place, Es: np.ndarray) -> np.ndarray:
+    """w on the branch of ``place`` (over E = 0) at the small values Es (same shape)."""
+    Lc = curve
+    W = np.linalg.eigvals(lax_matrix(np.sqrt(Lc.J2), Lc.M, Lc.u, Es))
+    w0 = place.y
+    slope = getattr(place, "_slope", None)
+    target = w0 + (0.0 if slope is None else slope) * np.asarray(Es)
+    idx = np.argmin(np.abs(W - target[..., None]), axis=-1)
+    return np.take_along_axis(W, idx[..., None], axis=-1)[..., 0]
+
+
+def _node_slopes(curve):
+    """dw/dE on the node's two branches: the eigenvalues of M compressed to the 2D eigenspace of u."""
+    lam, V = np.linalg.eigh(curve.u)
+    lb = curve.node[1]
+    idx = np.argsort(np.abs(lam - lb))[:2]
+    W2 = V[:, idx]
+    mu = np.linalg.eigvals(W2.T @ curve.M @ W2)
+    return mu
+
+
+def _circle_data(curve, place, radius, Jp, nums_arr):
+    """Points on a circle |E| = radius around ``place`` (over E = 0), their w, and the local
+    Abel integrals from the place along the radii (Gauss-Legendre)."""
+    phis = 2 * np.pi * np.arange(N_CIRCLE) / N_CIRCLE
+    Ec = radius * np.exp(1j * phis)
+    xg, wg = np.polynomial.legendre.leggauss(N_RAY)
+    sg = 0.5 * (xg + 1)
+    Eq = Ec[:, None] * sg[None, :]                                   # (N, n) nodes on the radii
+    wq = _local_branch(curve, place, Eq)
+    num = np.zeros(nums_arr.shape[:1] + Eq.shape, complex)
+    for i in range(nums_arr.shape[1]):
+        for j in range(nums_arr.shape[2]):
+            if np.any(nums_arr[:, i, j]):
+                num += nums_arr[:, i, j][:, None, None] * (Eq ** i * wq ** j)[None]
+    fy, _ = curve._poly.fy_fx(Eq.ravel(), wq.ravel()[:, None])
+    fy = fy.reshape(Eq.shape)
+    local = 0.5 * np.einsum("dnq,q->nd", num / fy[None] * Ec[None, :, None], wg)   # (N, g_raw)
+    wc = _local_branch(curve, place, Ec)
+    return Ec, wc, local
+
+
+def _radius(curve, E_poles: np.ndarray, E_zeros: np.ndarray) -> float:
+    """Radius of the Cauchy circles around E = 0.
+
+    The poles of rho_k (the divisor D0) and the branch points must lie outside, with margin 3
+    (trapezoidal error ~ 3^-N); the zeros of the eigenvector components, whose poles cancel only to
+    rounding between the two terms of the mean, must not lie near the circle.  Among radii
+    r_max 2^-j the one farthest (in log scale) from those zeros is taken.
+    """
+    bp = np.abs(np.asarray(curve.branch_points))
+    far = np.concatenate([bp[bp > 0], np.abs(E_poles[np.abs(E_poles) > 0])])
+    r_max = float(far.min()) / 3.0
+    zeros = np.abs(E_zeros[np.isfinite(E_zeros)])
+    zeros = zeros[zeros > 0]
+    best, margin = r_max, -np.inf
+    for j in range(8):
+        r = r_max * 2.0 ** -j
+        m = np.min(np.abs(np.log(zeros / r))) if zeros.size else np.inf
+        if m > margin + 0.3:           # prefer larger radii unless clearly better placed
+            best, margin = r, m
+    return best
+
+
+def _parities(curve, nums) -> np.ndarray:
+    """Parity of each differential g dE / f_w under sigma: E^i w^j -> (-1)^(i+1)."""
+    out = []
+    for gn in nums:
+        pol = sp.Poly(sp.sympify(gn), curve.x, curve.y)
+        ps = {(-1) ** (i + 1) for (i, _), _c in pol.terms()}
+        if len(ps) != 1:
+            raise RuntimeError(f"differential numerator {gn} has no definite parity under E -> -E")
+        out.append(ps.pop())
+    return np.array(out, float)
+
+
+def _fit_exponents(nu, nub, X0, nu_aux, h_aux):
+    """Weighted least-squares fit of nu_sk = F_s - G_k (imaginary parts).
+
+    The error model of an entry grows like (|psi| / |psi_k|)^2: where a component is small the
+    directly computed exponent depends on the Abel images through two nearly cancelling poles.
+    Returns (fitted nu (3, 3), max residual in units of the error model).
+    """
+    hs = np.abs(X0) / np.linalg.norm(X0, axis=0, keepdims=True)       # [k, s]
+    err = np.abs(nu - nub) + 1e-15 * (1 + np.abs(nu)) / hs.T ** 2
+    err_aux = 1e-15 * (1 + np.abs(nu_aux)) / h_aux ** 2
+    rows = [(s_, k, nu[s_, k].imag, err[s_, k]) for s_ in range(3) for k in range(3)]
+    rows += [(3 + i, k, nu_aux[i, k].imag, err_aux[i, k])
+             for i in range(nu_aux.shape[0]) for k in range(3)]
+    nF = 3 + nu_aux.shape[0]
+    A = np.zeros((len(rows) + 1, nF + 3))
+    rhs = np.zeros(len(rows) + 1)
+    for i, (s_, k, val, er) in enumerate(rows):
+        A[i, s_], A[i, nF + k], rhs[i] = 1.0 / er, -1.0 / er, val / er
+    A[-1, nF] = 1.0 / min(r[3] for r in rows)                          # gauge G_0 = 0
+    x, *_ = np.linalg.lstsq(A, rhs, rcond=None)
+    resid = max(abs(x[s_] - x[nF + k] - val) / er for s_, k, val, er in rows)
+    return x[:3][:, None] - x[nF:][None, :], float(resid)
+
+
+def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
+    Jp, P = _principal_frame(Jm)
+    Q0p = Q0 @ P
+    w0p = P.T @ omega0
+    Ip = inertia_from_moments(np.diag(Jp))
+    if np.min(np.diff(Jp)) <= SNAP_TOL * Jp[-1]:
+        raise ClosedFormUnavailable(
+            f"symmetric body (principal second moments {Jp}): the places of the spectral curve over "
+            "E = infinity are singular and the theta-function solution for two equal J_i is not "
+            "implemented; use thetasol.integrate_rotation")
+    curve = spectral_curve(np.diag(Jp), hat(Ip @ w0p), -(Q0p.T @ a @ Q0p), tol=SNAP_TOL)
+    M, u = curve.M, curve.u
+    W0 = hat(w0p)
+    g = curve.genus
+    nums = curve.holomorphic_differentials()
+    nums_arr = curve._numerators(nums)
+    # homology basis adapted to the real torus: V real, non-zero in the first r coordinates only
+    Pm = curve.period_matrix()
+    G, rdim = real_flow_basis(Pm, _parities(curve, nums))
+    Pn = Pm @ G
+    Ainv = np.linalg.inv(Pn[:, :g])
+    tau = Ainv @ Pn[:, g:]
+    tau = 0.5 * (tau + tau.T)
+
+    def abel(points):
+        return curve.abel_map(points, normalized=False) @ Ainv.T
+
+    U = Ainv @ _kappa(curve, nums, Jp) @ Jp
+    scaleU = np.abs(U).max()
+    if np.abs(U.imag).max() > 1e-10 * scaleU or np.abs(U[rdim:]).max() > 1e-10 * scaleU:
+        raise RuntimeError("the flow velocity is not real in the adapted basis: inaccurate periods")
+    U = np.concatenate([U[:rdim].real, np.zeros(g - rdim)])
+    th = RiemannTheta(tau)
+    # places over E = 0 (for a node: its two branches on the normalization) and at infinity
+    P0 = list(curve.places_over_zero())
+    if len(P0) != 3:
+        raise RuntimeError(f"expected three places over E = 0, found {len(P0)}")
+    if curve.node is not None:
+        # label the node's two branches among these very Place objects by their slopes
+        lb = curve.node[1]
+        branches = [Pl for Pl in P0 if abs(Pl.y - lb) <= 1e-6 * (1 + abs(lb))]
+        if len(branches) != 2:
+            raise RuntimeError(f"expected two branches over the node, found {len(branches)}")
+        mu = _node_slopes(curve)
+        for Pl, m in zip(_match_branches(curve, branches, mu), mu):
+            Pl._slope = m
+    Pinf = [curve.place_at_infinity(j) for j in range(3)]
+    P0_reg = [Pl for Pl in P0 if getattr(Pl, "_slope", None) is None]
+    K = _riemann_constant(abel, th, P0_reg, Pinf, Jp, M, u, curve)
+    Xtmp = np.column_stack([right_eigenvector(u, Pl.y) if getattr(Pl, "_slope", None) is None
+                            else np.ones(3) for Pl in P0])
+    alpha = _choose_alpha(Xtmp)
+    Ed, wd = eigenvector_poles(Jp, M, u, alpha)
+    if curve.node is not None:
+        drop = int(np.argmin(np.abs(Ed)))
+        if abs(Ed[drop]) > 1e-8 * (1 + np.abs(Ed).max()):
+            raise RuntimeError("expected the eigenvector divisor to pass through the node")
+        Ed, wd = np.delete(Ed, drop), np.delete(wd, drop)
+    if len(Ed) != g + 2:
+        raise RuntimeError(f"eigenvector divisor of degree {len(Ed)}, expected g + 2 = {g + 2}")
+    AD0 = abel([(complex(x), complex(y)) for x, y in zip(Ed, wd)]).sum(axis=0)
+    Ainf = np.array([_reduce(v, tau) for v in abel(Pinf)])
+    AP0 = np.array([_reduce(v, tau) for v in abel(P0)])
+    e = np.array([_reduce(AD0 - Ainf.sum(axis=0) + Ainf[k] + K, tau) for k in range(3)])
+    d = Ainf - e                                             # (3, g)
+    ed_, vd_, gd_ = th.jet(d, order=1, separated=True)
+    dlog_d = (gd_ @ U) / vd_
+    zeros = np.concatenate([eigenvector_poles(Jp, M, u, np.eye(3)[k])[0] for k in range(3)])
+    r = _radius(curve, Ed, zeros)
+
+    def constants(radius):
+        X0 = np.zeros((3, 3), complex)
+        rho = np.zeros((3, 3), complex)                      # rho_k(P_s) theta(d_k), [s, k]
+        cst = np.zeros((3, 3), complex)
+        for s_, Pl in enumerate(P0):
+            Ec, wc, local = _circle_data(curve, Pl, radius, Jp, nums_arr)
+            A_loc = AP0[s_][None, :] + local @ Ainv.T         # (N, g)
+            v = right_eigenvector(lax_matrix(Jp, M, u, Ec), wc)
+            psi = v / (v @ alpha)[:, None]
+            dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * Ec[:, None, None] + W0[None], psi)
+            X0[:, s_] = psi.mean(axis=0)
+            eb, vb, gb = th.jet(A_loc[:, None, :] - e[None, :, :], order=1, separated=True)
+            rho[s_] = (psi / vb * np.exp(ed_[None, :] - eb)).mean(axis=0) * vd_
+            cst[s_] = (dpsi / psi - (gb @ U) / vb).mean(axis=0) + dlog_d
+        return X0, rho, cst
+
+    X0, rho, nu = constants(r)
+    X0b, rhob, nub = constants(0.5 * r)
+    nu_aux, h_aux = _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d)
+    nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux)
+    scale_nu = 1 + np.abs(nu).max()
+    if np.abs(nu.real).max() > 1e-6 * scale_nu:
+        raise RuntimeError(f"exponents are not imaginary (max |Re| {np.abs(nu.real).max():.2g}): "
+                           "the spectral data are inconsistent")
+    b = (AP0[:, None, :] - e[None, :, :]).reshape(9, g)
+    # The shifts b_sk are known to ~1e-14 (sums of Abel images); where psi_k(P_s) is small or zero
+    # that error shows directly in Psi.  Move each b_sk by the least amount that makes the theta
+    # quotient reproduce psi_k(P_s) and its derivative -(omega0 x psi)_k at t = 0 exactly (two linear
+    # conditions on the gradient and the Hessian): the shift lands on the theta divisor where the
+    # component vanishes, and t = 0 returns the initial data.
+    eb_, vb_, gb_, hb_ = th.jet(b, order=2, separated=True)
+    scale_b = np.exp(eb_)
+    rho_k = (rho / (np.exp(ed_) * vd_)[None, :]).ravel()               # rho_k(P_s), [s*3+k]
+    h = X0.T.ravel()                                                     # psi_k(P_s)
+    hdot = (-(W0 @ X0)).T.ravel()                                        # d/dt Psi_k(P_s) at t = 0
+    dlogd = np.tile(dlog_d, 3)
+    nu_rows = 1j * nu_fit.ravel()
+    theta_b = scale_b * vb_
+    val_target = h / rho_k
+    der_target = hdot / rho_k - nu_rows * val_target + val_target * dlogd
+    A = np.stack([scale_b[:, None] * gb_, scale_b[:, None] * (hb_ @ U)], axis=1)   # (9, 2, g)
+    rhs = np.stack([val_target - theta_b, der_target - scale_b * (gb_ @ U)], axis=1)
+    AAH = np.einsum("nig,njg->nij", A, A.conj())
+    db = np.einsum("nig,ni->ng", A.conj(), np.linalg.solve(AAH, rhs[..., None])[..., 0])
+    shift_correction = float(np.abs(db).max())
+    if shift_correction > 1e-6:
+        raise RuntimeError(f"theta quotients inconsistent with the initial eigenvectors (shift correction "
+                           f"{shift_correction:.2g}): inaccurate Abel images")
+    b = b + db
+    flow = FlowTheta(tau, U[:rdim], np.concatenate([b, d]))
+    eb = flow.e[:9].reshape(3, 3)
+    amp = rho * np.exp(eb - flow.e[9:][None, :])             # rho theta(d) exp(e_b - e_d)
+    consts = {"flow": flow, "nu": nu_fit, "amp": amp, "X0inv": np.linalg.inv(X0), "Q0p": Q0p, "P": P}
+    diag = {
+        "nu_real_part": float(np.abs(nu.real).max()),
+        "nu_fit_residual": resid,
+        "rho_two_radii": float(np.max(np.abs(rho - rhob) / np.maximum(np.abs(rho), 1e-300))),
+        "X0_two_radii": float(np.max(np.abs(X0 - X0b))),
+        "circle_radius": r,
+        "shift_correction": shift_correction,
+        "torus_dimension": rdim,
+        "fourier_modes": int(flow.modes.shape[0]),
+    }
+    return curve, tau, U, AD0, alpha, consts, diag
+
+
+def _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d):
+    """Exponent constants nu(P, k) at points P where eigenvectors mix (near branch points).
+
+    Returns (nu (n, 3), relative component sizes |psi_k| / |psi| (n, 3)).
+    """
+    bp = np.asarray(curve.branch_points)
+    R = float(np.abs(bp).min())
+    trial = [0.35 * R * np.exp(1j * ang) for ang in (0.3, 1.1, 1.9, 2.7)]
+    for b in bp:
+        sep = np.abs(bp - b)
+        sep = min(sep[sep > 0].min(), abs(b))
+        trial += [b + 0.25 * sep * np.exp(1j * ang) for ang in (0.4, 2.5, 4.6)]
+    cands = {}
+    for E in trial:
+        for w in np.linalg.eigvals(lax_matrix(Jp, M, u, E)):
+            v = right_eigenvector(lax_matrix(Jp, M, u, E), w)
+            h = np.abs(v) / np.linalg.norm(v)
+            order = np.argsort(h)
+            pair = tuple(sorted(order[1:]))
+            if h[order[1]] > cands.get(pair, (0.0,))[0]:
+                cands[pair] = (h[order[1]], E, w)
+    pts = sorted(cands.values(), key=lambda c: -c[0])
+    E = np.array([c[1] for c in pts])
+    w = np.array([c[2] for c in pts])
+    A = abel([(complex(a_), complex(b_)) for a_, b_ in zip(E, w)])
+    v = right_eigenvector(lax_matrix(Jp, M, u, E), w)
+    psi = v / (v @ alpha)[:, None]
+    dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * E[:, None, None] + W0[None], psi)
+    _, vb, gb = th.jet(A[:, None, :] - e[None, :, :], order=1, separated=True)
+    nu = dpsi / psi - (gb @ U) / vb + dlog_d[None, :]
+    return nu, np.abs(psi) / np.linalg.norm(psi, axis=1, keepdims=True)
+
+
+def _riemann_constant(abel, th, P0_reg, Pinf, Jp, M, u, curve) -> np.ndarray:
+    """Vector of Riemann constants in the curve's normalized coordinates and base point.
+
+    2K = -A(C) for the canonical divisor C of the holomorphic differential E dE / f_w, whose
+    zeros are the regular places over E = 0 and the three places at infinity (on a nodal curve
+    E / f_w stays finite at the node's branches).  Of the 4^g candidates the one with
+    theta(K + A(D')) = 0 for effective D' of degree g - 1 is taken (Riemann's vanishing theorem).
+    Only regular places are involved, so clustered branch points do not matter.
+    """
+    g = th.g
+    tau = th.tau
+    AC = abel(list(P0_reg) + list(Pinf)).sum(axis=0)
+    bits = (np.arange(2 ** g)[:, None] >> np.arange(g)[None, :]) & 1
+    a_, b_ = np.repeat(bits, 2 ** g, axis=0), np.tile(bits, (2 ** g, 1))
+    cands = -0.5 * AC + 0.5 * a_ + 0.5 * (b_ @ tau.T)
+    rng = np.random.default_rng(7)
+    scale = float(np.abs(np.asarray(curve.branch_points)).max())
+    score = np.zeros(len(cands))
+    for _ in range(3):
+        pts = []
+        for _ in range(g - 1):
+            E = scale * (0.3 + 0.5 * rng.random()) * np.exp(2j * np.pi * rng.random())
+            pts.append((E, rng.choice(np.linalg.eigvals(lax_matrix(Jp, M, u, E)))))
+        AD = abel(pts).sum(axis=0)
+        _, v = th(cands + AD[None, :], separated=True)
+        score = np.maximum(score, np.abs(v))
+    order = np.argsort(score)
+    if not (score[order[0]] < 1e-8 and score[order[0]] < 1e-4 * score[order[1]]):
+        raise RuntimeError(f"Riemann constant: no half-period candidate makes theta vanish "
+                           f"(best {score[order[0]]:.2g}, next {score[order[1]]:.2g})")
+    return cands[order[0]]
+
+
+def _match_branches(curve, branches, mu):
+    """Order the node's branches like the slopes ``mu`` (w = lambda + mu E + ...)."""
+    lb = curve.node[1]
+    out = []
+    for m in mu:
+        best = None
+        for Pl in branches:
+            if Pl in out:
+                continue
+            # a branch's y at the place is lambda; its first-order term distinguishes it
+            ser = curve._place_data(Pl, None, None)
+            k, t0, Fy, _ = ser
+            c1 = Fy[k == 1][0] / t0 if np.any(k == 1) else 0.0
+            dist = abs(c1 - m)
+            if best is None or dist < best[0]:
+                best = (dist, Pl)
+        out.append(best[1])
+    return out
+
+
+def _solve_theta_rotation(J, a, Q0, omega0, dps=None) -> ThetaRotation:
+    """Build the theta-function solution (called by :func:`thetasol.solve_rotation`)."""
+    if dps is not None:
+        raise ClosedFormUnavailable("dps= is not available for the theta-function solution")
+    try:
+        curve, tau, U, AD0, alpha, consts, diag = _setup(J, a, Q0, omega0)
+    except (ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
+        # the data were validated by solve_rotation: a failure here is the curve's, not the input's
+        raise ClosedFormUnavailable(f"theta-function solution unavailable for these data: {exc}") from exc
+    inv = _invariants(J, a, Q0, omega0)
+    inv = {k: (float(v) if np.ndim(v) == 0 else v) for k, v in inv.items()}
+    inv.update(diag)
+    inv["genus"] = curve.genus
+    method = "theta/genus-4" if curve.node is None else "theta/nodal-genus-3"
+    return ThetaRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=method, invariants=inv,
+                         curve=curve, riemann_matrix=tau, U=U, abel_divisor=AD0, alpha=alpha, _c=consts)
