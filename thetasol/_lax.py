@@ -52,9 +52,8 @@ def _polymatmul(A: list, B: list) -> list:
 def eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.ndarray, left: bool = False):
     """Points (E, w) where alpha^T v = 0, v the right (``left=True``: left) eigenvector.
 
-    Returns ``(E, w)`` arrays of length 6 (with multiplicity).  Points are polished by Newton's
-    method on ``(det(L - w), alpha^T adj(L - w) alpha)`` is not needed: the polynomial is small
-    and well conditioned for generic alpha.
+    Returns ``(E, w)`` arrays of the finite points (6 for generic alpha, with multiplicity; fewer
+    when alpha is orthogonal to an eigenvector of J^2, whose place at infinity then takes the rest).
     """
     alpha = np.asarray(alpha, float)
     alpha = alpha / np.linalg.norm(alpha)
@@ -70,7 +69,13 @@ def eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.nda
     for i, A in enumerate(Ly):
         for j, v in enumerate(y):
             p[i + j] += A[0, 0] * v[1] - A[1, 0] * v[0]
-    E = np.roots(p[::-1])
+    # With alpha along an axis the degree drops (those zeros sit at the places over E = infinity):
+    # leading coefficients that vanish to rounding are dropped, not turned into huge roots.
+    scale = np.abs(p).max()
+    deg = 6
+    while deg > 0 and abs(p[deg]) <= 1e-13 * scale:
+        deg -= 1
+    E = np.roots(p[: deg + 1][::-1])
     yy = sum(c * E[:, None] ** k for k, c in enumerate(y))
     Lyy = sum(c[:, 0] * E[:, None] ** k for k, c in enumerate(Ly))
     w = np.einsum("ni,ni->n", yy.conj(), Lyy) / np.einsum("ni,ni->n", yy.conj(), yy)

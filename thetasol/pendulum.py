@@ -52,7 +52,7 @@ def _pendulum_angle(c, t):
     kind = c["kind"]
     if kind == "uniform":
         return c["phi0"] + c["w0"] * t, np.full_like(t, c["w0"])
-    nu, m, mc, u0, sgn = c["nu"], c["m"], c["mc"], c["u0"], c["sign"]
+    nu, m, mc, u0, sgn = c["nu"], c.get("m"), c.get("mc"), c["u0"], c["sign"]
     if kind == "libration":
         sn, cn, dn, _ = ellipj(nu * t + u0, m, mc)
         k = np.sqrt(m)

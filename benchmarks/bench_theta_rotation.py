@@ -1,0 +1,143 @@
+"""Speed against error: the theta-function rotation (issue 6) against numerical integrators.
+
+Everything is measured in one run on this machine:
+
+* dense output on [0, 1000] (2001 times) and single far-time queries (t = 1e3, 1e4);
+* thetasol.solve_rotation (set-up and evaluation timed separately), scipy's DOP853 at several
+  tolerances (integrate_rotation), the symplectic splitting integrator, heyoka float64 (if
+  installed; its JIT compilation is timed separately);
+* errors against heyoka in 80-bit extended precision (tol 1e-19).
+
+Run:  OPENBLAS_NUM_THREADS=1 python benchmarks/bench_theta_rotation.py [--quick] [--plot PNG]
+Writes a markdown table to stdout (docs/bench_theta_rotation.md holds a recorded run).
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import pathlib
+import platform
+import sys
+import time
+
+import numpy as np
+
+from thetasol import integrate_rotation, solve_rotation
+
+REFS = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "rotation" / "refs.json"
+
+
+def machine():
+    cpu = "unknown"
+    try:
+        for line in open("/proc/cpuinfo"):
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    import os
+
+    import scipy
+    return (f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, numpy {np.__version__}, "
+            f"scipy {scipy.__version__}")
+
+
+def have_heyoka():
+    try:
+        import heyoka  # noqa: F401
+        return True
+    except ImportError:
+        return False
+
+
+def err(w, Q, ref):
+    wr, Qr = ref
+    return float(max(np.abs(w - wr).max(), np.abs(Q - Qr).max()))
+
+
+def timed(f, repeat=1):
+    best, out = np.inf, None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = f()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def bench_case(name, data, quick):
+    J, a, Q0, w0 = (np.diag(data["J"]), np.array(data["a"]), np.array(data["Q0"]), np.array(data["omega0"]))
+    rows = []
+    t_dense = np.linspace(0.0, 1000.0, 2001)
+    ref_dense = integrate_rotation(J, a, Q0, w0, t_dense, method="heyoka", dtype="ldbl", rtol=1e-19)
+    # theta functions
+    ts, sol = timed(lambda: solve_rotation(J, a, Q0, w0))
+    te, (w, Q) = timed(lambda: sol(t_dense), repeat=3)
+    rows.append(("dense", f"theta ({sol.method})", ts, te, err(w, Q, ref_dense)))
+    for rtol in ((1e-10, 1e-13) if quick else (1e-8, 1e-10, 1e-12, 1e-13)):
+        tt, (w, Q) = timed(lambda r=rtol: integrate_rotation(J, a, Q0, w0, t_dense, rtol=r))
+        rows.append(("dense", f"DOP853 rtol {rtol:g}", 0.0, tt, err(w, Q, ref_dense)))
+    if not quick:
+        tt, (w, Q) = timed(lambda: integrate_rotation(J, a, Q0, w0, t_dense, method="splitting", step=1e-2))
+        rows.append(("dense", "splitting (order 6, h = 0.01)", 0.0, tt, err(w, Q, ref_dense)))
+    if have_heyoka():
+        tc, _ = timed(lambda: integrate_rotation(J, a, Q0, w0, t_dense[:2], method="heyoka", rtol=1e-16))
+        tt, (w, Q) = timed(lambda: integrate_rotation(J, a, Q0, w0, t_dense, method="heyoka", rtol=1e-16))
+        rows.append(("dense", "heyoka float64 tol 1e-16", tc, tt, err(w, Q, ref_dense)))
+    # single far-time queries
+    for tf in (1e3, 1e4):
+        tq = np.array([tf])
+        ref = integrate_rotation(J, a, Q0, w0, tq, method="heyoka", dtype="ldbl", rtol=1e-19)
+        te, (w, Q) = timed(lambda: sol(tq), repeat=5)
+        rows.append((f"t = {tf:g}", f"theta ({sol.method})", ts, te, err(w, Q, ref)))
+        tt, (w, Q) = timed(lambda: integrate_rotation(J, a, Q0, w0, tq, rtol=1e-13))
+        rows.append((f"t = {tf:g}", "DOP853 rtol 1e-13", 0.0, tt, err(w, Q, ref)))
+        if have_heyoka():
+            tt, (w, Q) = timed(lambda: integrate_rotation(J, a, Q0, w0, tq, method="heyoka", rtol=1e-16))
+            rows.append((f"t = {tf:g}", "heyoka float64 tol 1e-16", 0.0, tt, err(w, Q, ref)))
+    tq = np.array([1e6])
+    te, (w, Q) = timed(lambda: sol(tq), repeat=5)
+    rows.append(("t = 1e6", f"theta ({sol.method})", ts, te, float("nan")))
+    return rows
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true", help="fewer tolerances, no splitting")
+    ap.add_argument("--cases", default="generic,saddle,rank_one,near_stable_equilibrium")
+    ap.add_argument("--plot", default=None, help="write an error-against-cost plot (needs matplotlib)")
+    args = ap.parse_args(argv)
+    refs = json.loads(REFS.read_text())
+    print(f"machine: {machine()}")
+    print("errors: max over omega and Q against heyoka 80-bit (tol 1e-19); time in seconds (best of runs)\n")
+    print("| case | query | method | set-up (s) | run (s) | per time (us) | max error |")
+    print("|---|---|---|---|---|---|---|")
+    allrows = []
+    for name in args.cases.split(","):
+        rows = bench_case(name, refs[name], args.quick)
+        for q, m, ts, tr, e in rows:
+            n = 2001 if q == "dense" else 1
+            print(f"| {name} | {q} | {m} | {ts:.3g} | {tr:.3g} | {tr / n * 1e6:.3g} | {e:.1e} |")
+            allrows.append((name, q, m, ts, tr, e))
+        sys.stdout.flush()
+    if args.plot:
+        import matplotlib
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+        fig, ax = plt.subplots(figsize=(7, 4.5))
+        for name in args.cases.split(","):
+            pts = [(ts + tr, e, m) for (nm, q, m, ts, tr, e) in allrows if nm == name and q == "dense"]
+            for x, y, m in pts:
+                marker = "o" if m.startswith("theta") else ("s" if "DOP853" in m else "^")
+                ax.loglog(x, max(y, 1e-16), marker, label=f"{name}: {m}")
+        ax.set_xlabel("total time for 2001 outputs on [0, 1000] (s)")
+        ax.set_ylabel("max error in omega and Q")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=6, ncol=2)
+        fig.tight_layout()
+        fig.savefig(args.plot, dpi=130)
+        print(f"\nplot written to {args.plot}")
+
+
+if __name__ == "__main__":
+    main()
