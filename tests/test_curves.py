@@ -413,3 +413,15 @@ def test_genus_zero_and_one():
     # y^2 = x^3 - x has j = 1728: tau equivalent to i
     from mpmath import kleinj
     assert abs(complex(kleinj(tau)) - 1.0) < 1e-10
+
+
+def test_poles_of_y_against_a_birational_model():
+    """(x^2 - 1) y^2 = x^3 + 2 (Sage's RiemannSurface fails on it) is birational to
+    w^2 = (x^3 + 2)(x^2 - 1) via w = (x^2 - 1) y, and g dx / f_y = g dx / F_w: same lattice."""
+    C1 = PlaneCurve((x**2 - 1) * y**2 - x**3 - 2, x, y)
+    C2 = PlaneCurve(y**2 - (x**3 + 2) * (x**2 - 1), x, y)
+    assert C1.genus == C2.genus == 2
+    assert_same_lattice(C1.period_matrix([1, x]), C2.period_matrix([1, x]), tol=1e-13)
+    # the places over the poles x = +-1 are at y = infinity
+    for b in (1, -1):
+        assert all(np.isinf(abs(P.y)) for P in C1.places_over(b))

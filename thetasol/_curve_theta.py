@@ -54,6 +54,38 @@ def lll_gram(Y, delta=0.75):
     return U
 
 
+def ellipsoid_points(Y, center, R2):
+    """Integer points n with (n + center)^T Y (n + center) <= R2 (Fincke-Pohst, breadth first).
+
+    Y symmetric positive definite (g x g); returns an int array (K, g).
+    """
+    g = Y.shape[0]
+    L = np.linalg.cholesky(Y)  # Y = L L^T; use the upper factor U = L^T
+    U = L.T
+    c = np.asarray(center, dtype=float)
+    # work from the last coordinate: q = sum_i (U_ii (n_i + c_i) + sum_{j>i} U_ij (n_j + c_j))^2
+    pts = np.zeros((1, 0), dtype=np.int64)
+    rem = np.array([R2])
+    acc = np.zeros((1, g))  # partial sums sum_{j>i} U_ij (n_j + c_j) for each row i
+    for i in range(g - 1, -1, -1):
+        uii = U[i, i]
+        shift = acc[:, i] / uii + c[i]  # (n_i + shift) * uii squared is the new term
+        half = np.sqrt(np.maximum(rem, 0.0)) / uii
+        lo = np.ceil(-half - shift).astype(np.int64)
+        hi = np.floor(half - shift).astype(np.int64)
+        cnt = np.maximum(hi - lo + 1, 0)
+        if cnt.sum() == 0:
+            return np.zeros((0, g), dtype=np.int64)
+        rep = np.repeat(np.arange(len(cnt)), cnt)
+        offs = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        ni = lo[rep] + offs
+        term = (uii * (ni + shift[rep])) ** 2
+        rem = rem[rep] - term
+        acc = acc[rep] + np.outer(ni + c[i], U[:, i])
+        pts = np.concatenate([ni[:, None], pts[rep]], axis=1)
+    return pts
+
+
 def theta_uv(z, tau, tol=1e-14):
     """Riemann theta in the form theta(z) = exp(u) * v for z of shape (N, g).
 
@@ -81,15 +113,8 @@ def theta_uv(z, tau, tol=1e-14):
     cr = yr @ Yinv
     xr = zr.real
     R2 = np.log(1.0 / tol) + 2.0 + g
-    Lc = np.linalg.cholesky(Y)  # Y = Lc Lc^T
-    # bound |n_i + c_i| <= sqrt(R2 / pi * (Y^-1)_ii)
-    rad = np.sqrt(R2 / np.pi * np.diag(Yinv)) + 0.5
-    ranges = [np.arange(-int(np.ceil(r)), int(np.ceil(r)) + 1) for r in rad]
-    pts = np.array(list(itertools.product(*ranges)), dtype=float)
-    # keep points inside the union of ellipsoids centred at -c, |c_i| <= 1/2
-    q = np.sqrt(np.einsum("ki,ij,kj->k", pts, Y, pts) * np.pi)
-    cmax = 0.5 * np.sqrt(np.pi * np.abs(Y).sum())
-    pts = pts[q <= np.sqrt(R2) + cmax]
+    cmax = 0.5 * np.sqrt(np.abs(Y).sum())  # max sqrt(c^T Y c) over the unit cube |c_i| <= 1/2
+    pts = ellipsoid_points(Y, np.zeros(g), (np.sqrt(R2 / np.pi) + cmax) ** 2).astype(float)
     pY = pts @ Y
     quad = (pY * pts).sum(axis=1)  # (K,)
     Q = quad[None, :] + 2.0 * (cr @ pY.T) + ((cr @ Y) * cr).sum(axis=1)[:, None]
@@ -141,23 +166,20 @@ def half_period_scan(z0, tau, tol=1e-9):
     c = Yinv @ zp.imag
     x0 = zp.real
     R2 = np.log(1.0 / tol) + 2.0 + g
-    rad = np.sqrt(R2 / np.pi * np.diag(Yinv)) + 1.5
-    ranges = [np.arange(-int(np.ceil(r)), int(np.ceil(r)) + 1) for r in rad]
-    pts = np.array(list(itertools.product(*ranges)), dtype=float)
     bits = np.array([[(i >> k) & 1 for k in range(g)] for i in range(2 ** g)], dtype=np.int64)
-    par = np.mod(pts.astype(np.int64), 2) @ (1 << np.arange(g))  # class of n mod 2
     sign = 1 - 2 * (np.mod(bits @ bits.T, 2))  # (-1)^{class . a}, indexed [class, a]
     vals = np.zeros((2 ** g, 2 ** g))  # [b, a]
     for ib, b in enumerate(bits):
-        mm = pts + 0.5 * b  # m_n = n + b/2
-        w = mm + c
-        q = ((w @ Y) * w).sum(axis=1)
-        sel = q <= R2 / np.pi
-        mm, ww, qq = mm[sel], w[sel], q[sel]
-        phase = np.pi * ((mm @ X) * mm).sum(axis=1) + 2 * np.pi * (pts[sel] @ x0)
+        n = ellipsoid_points(Y, 0.5 * b + c, R2 / np.pi)
+        par = np.mod(n, 2) @ (1 << np.arange(g))  # class of n mod 2
+        nf = n.astype(float)
+        mm = nf + 0.5 * b  # m_n = n + b/2
+        ww = mm + c
+        qq = ((ww @ Y) * ww).sum(axis=1)
+        phase = np.pi * ((mm @ X) * mm).sum(axis=1) + 2 * np.pi * (nf @ x0)
         T = np.exp(1j * phase - np.pi * qq)
-        S = np.bincount(par[sel], weights=T.real, minlength=2 ** g) + 1j * np.bincount(
-            par[sel], weights=T.imag, minlength=2 ** g)
+        S = np.bincount(par, weights=T.real, minlength=2 ** g) + 1j * np.bincount(
+            par, weights=T.imag, minlength=2 ** g)
         vals[ib] = np.abs(S @ sign)
     # back to the original (a, b): a = U^-T a' (mod 2), b = U b' (mod 2)
     A_out, B_out, V_out = [], [], []
