@@ -78,7 +78,13 @@ def eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.nda
     E = np.roots(p[: deg + 1][::-1])
     yy = sum(c * E[:, None] ** k for k, c in enumerate(y))
     Lyy = sum(c[:, 0] * E[:, None] ** k for k, c in enumerate(Ly))
-    w = np.einsum("ni,ni->n", yy.conj(), Lyy) / np.einsum("ni,ni->n", yy.conj(), yy)
+    num = np.einsum("ni,ni->n", yy.conj(), Lyy)
+    den = np.einsum("ni,ni->n", yy.conj(), yy)
+    # y = 0 where r(E) vanishes (alpha orthogonal to two eigenvectors there): E is a genuine zero,
+    # but its w is not given by the reduction; it is left NaN (callers needing w avoid such alpha).
+    w = np.full(E.shape, np.nan, dtype=complex)
+    ok = np.abs(den) > 0
+    w[ok] = num[ok] / den[ok]
     return E, w
 
 
