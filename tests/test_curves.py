@@ -235,7 +235,6 @@ def test_dps_path_30_digits(name):
     assert np.min(np.linalg.eigvalsh(tf.imag)) > 0
 
 
-@pytest.mark.slow
 def test_dps_path_spectral_30_digits():
     f, diffs, Pref = _mp_ref("spectral_g4")
     C = PlaneCurve(f, x, y)

@@ -180,7 +180,6 @@ def test_near_rank_one_above_tolerance_against_multiprecision(eps):
     assert np.min(np.linalg.eigvalsh(tau.imag)) > 0
 
 
-@pytest.mark.slow
 def test_nearly_symmetric_body_path_independent():
     """J2/J1 = 1 + 1e-4: two branch points near E ~ 4e3, sheets nearly equal at large E."""
     J, M, u, _ = generic_data()
@@ -194,7 +193,6 @@ def test_nearly_symmetric_body_path_independent():
     assert K.shape == (4,)
 
 
-@pytest.mark.slow
 def test_nearly_reducible_data_are_handled_or_refused():
     """M ~ 1e-7, u diagonal in the J frame: the curve is irreducible but within 1e-7 of reducible."""
     J = np.array([1.0, 1.7, 2.9])

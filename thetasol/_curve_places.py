@@ -126,9 +126,9 @@ def local_data(curve):
 def _accurate_samples(curve, xs, ys, rel):
     """Sample values and f_y at them; polished in mpmath where float64 roots lose digits."""
     poly = curve._poly
-    A = poly.coeff_polys(xs)
-    _, fy = poly.horner_y(A, ys.T)
-    fys = fy.T
+    Ahi, Alo = poly.coeff_polys_dd(xs)
+    Y, fy = poly.polish_dd(Ahi, Alo, ys.T.copy())
+    ys, fys = Y.T.copy(), fy.T.copy()
     if rel is None or np.max(rel) <= 1e-11:
         return ys, fys
     import mpmath

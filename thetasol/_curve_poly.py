@@ -344,3 +344,107 @@ def _mp_polyroots(coef, deg):
                 continue
             return np.array([complex(z) for z in roots])
     raise ValueError("could not isolate the critical values of the curve (roots of the discriminant)")
+
+
+# ---------------------------------------------------------------------- compensated arithmetic
+# Error-free transformations (Dekker, Knuth) vectorized over numpy arrays, for compensated Horner
+# schemes (Graillat, Langlois, Louvet 2005): a polynomial value computed as if in twice the working
+# precision.  Used to polish the roots in y and to evaluate f_y where the sheets nearly coincide
+# (close branch points, nearly symmetric bodies at large |E|), which plain float64 loses to
+# cancellation; this avoids most multiprecision work.
+_SPLIT = 134217729.0  # 2^27 + 1
+
+
+def _two_sum(a, b):
+    s = a + b
+    z = s - a
+    return s, (a - (s - z)) + (b - z)
+
+
+def _split(a):
+    c = _SPLIT * a
+    h = c - (c - a)
+    return h, a - h
+
+
+def _two_prod(a, b):
+    p = a * b
+    ah, al = _split(a)
+    bh, bl = _split(b)
+    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+
+
+def _cmul_eft(a, b):
+    """a * b = p + e with p = fl(a * b) (complex) and e its rounding error to first order."""
+    p1, e1 = _two_prod(a.real, b.real)
+    p2, e2 = _two_prod(a.imag, b.imag)
+    pr, e3 = _two_sum(p1, -p2)
+    p3, e4 = _two_prod(a.real, b.imag)
+    p4, e5 = _two_prod(a.imag, b.real)
+    pi, e6 = _two_sum(p3, p4)
+    return pr + 1j * pi, (e1 - e2 + e3) + 1j * (e4 + e5 + e6)
+
+
+def _cadd_eft(a, b):
+    sr, er = _two_sum(a.real, b.real)
+    si, ei = _two_sum(a.imag, b.imag)
+    return sr + 1j * si, er + 1j * ei
+
+
+def comp_horner(chi, clo, z):
+    """Compensated Horner: sum_j (chi_j + clo_j) z^j as (hi, lo), coefficients along the last axis.
+
+    chi, clo broadcast against z[..., None]; returns hi, lo with hi + lo accurate to about
+    eps |value| + eps^2 sum |c_j| |z|^j.
+    """
+    n = chi.shape[-1] - 1
+    s = np.broadcast_to(chi[..., n], z.shape).astype(complex)
+    comp = np.broadcast_to(clo[..., n], z.shape).astype(complex)
+    for j in range(n - 1, -1, -1):
+        p, pe = _cmul_eft(s, z)
+        s, se = _cadd_eft(p, np.broadcast_to(chi[..., j], z.shape))
+        comp = comp * z + (pe + se + clo[..., j])
+    hi, lo = _cadd_eft(s, comp)
+    return hi, lo + 0.0 * lo
+
+
+def _coeff_polys_dd(self, x):
+    """a_j(x) in double-double: (hi, lo) arrays (K, n + 1), x exact floats."""
+    x = np.asarray(x, dtype=complex)
+    C = self.C  # (dx + 1, n + 1): coefficient of x^i y^j
+    chi = np.broadcast_to(C.T[None, :, :], (len(x),) + C.T.shape)  # (K, n+1, dx+1)
+    zeros = np.zeros_like(chi)
+    hi, lo = comp_horner(chi, zeros, np.broadcast_to(x[:, None], (len(x), self.n + 1)))
+    return hi, lo
+
+
+def _polish_dd(self, Ahi, Alo, Y, iters=4):
+    """Newton steps on the roots Y (K, m) with compensated residuals; returns (Y, f_y)."""
+    n = self.n
+    jj = np.arange(1, n + 1)
+    # derivative coefficients (j a_j) in double-double
+    dhi, dlo = _two_prod_c(Ahi[:, 1:], jj)
+    dlo = dlo + Alo[:, 1:] * jj
+    for _ in range(iters):
+        rh, rl = comp_horner(Ahi[:, None, :], Alo[:, None, :], Y)
+        fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
+        fy = fh + fl
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = (rh + rl) / fy
+        ok = np.isfinite(step) & (np.abs(step) < 0.1 * (np.abs(Y) + 1e-300) + 1e-300)
+        Y = np.where(ok, Y - step, Y)
+        if not np.any(ok & (np.abs(step) > 1e-17 * np.abs(Y))):
+            break
+    fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
+    return Y, fh + fl
+
+
+def _two_prod_c(a, k):
+    """Complex array a times small integers k (exact in a double-double pair)."""
+    pr, er = _two_prod(a.real, k * 1.0)
+    pi, ei = _two_prod(a.imag, k * 1.0)
+    return pr + 1j * pi, er + 1j * ei
+
+
+CurvePoly.coeff_polys_dd = _coeff_polys_dd
+CurvePoly.polish_dd = _polish_dd

@@ -24,6 +24,7 @@ from functools import lru_cache
 import mpmath
 import numpy as np
 
+EPS = np.finfo(float).eps
 RHO_TARGET = 2.5
 SAFETY = 0.25
 MOVE = 0.5
@@ -219,14 +220,25 @@ class Tracker:
         self.n_mp_nodes = 0
 
     # -------------------------------------------------------------- node evaluation
-    def _eval_nodes(self, x, dx):
+    def _eval_nodes(self, x, dx, precise=True):
         poly = self.poly
         R, A = poly.roots(x)
-        fy, fx = poly.fy_fx(x, R, A)
+        if precise:
+            # compensated (double-double) Newton polish and f_y: roots accurate to ~eps |y| even
+            # where the sheets nearly coincide; the plain float64 bound enters at second order only
+            Ahi, Alo = poly.coeff_polys_dd(x)
+            R, fy = poly.polish_dd(Ahi, Alo, R)
+            _, fx = poly.fy_fx(x, R, A)
+            err = None
+        else:  # tracking-only points (refinement): plain float64 is enough to match sheets
+            fy, fx = poly.fy_fx(x, R, A)
         with np.errstate(divide="ignore", invalid="ignore"):
             D = -fx / fy
         sep = _separations(R)
-        err = poly.root_error_bound(x, R, fy)
+        if precise:
+            err = EPS * np.abs(R) + 4 * poly.n * EPS * poly.root_error_bound(x, R, fy)
+        else:
+            err = poly.root_error_bound(x, R, fy)
         self._last_rel = None
         # float64 roots whose rounding error is not negligible against the gaps between sheets
         # (nearly colliding branch points) are recomputed in mpmath
@@ -293,7 +305,8 @@ class Tracker:
                 (abs(dt * (rootd1[i] - yd0)) / (SAFETY * sep1[i])) ** 0.5 if sep1[i] > 0 else 4.0)
         m = int(min(64, max(2, np.ceil(1.5 * r))))
         ts = t0 + (t1 - t0) * np.arange(1, m) / m
-        Rm, _, _, Dm, sepm, tcm = self._eval_nodes(np.atleast_1d(pc.x(ts)), np.atleast_1d(pc.dx(ts)))
+        Rm, _, _, Dm, sepm, tcm = self._eval_nodes(np.atleast_1d(pc.x(ts)), np.atleast_1d(pc.dx(ts)),
+                                                   precise=False)
         seq_R = list(Rm) + [roots1]
         seq_D = list(Dm) + [rootd1]
         seq_s = list(sepm) + [sep1]
@@ -310,69 +323,76 @@ class Tracker:
 
     # -------------------------------------------------------------- main entry
     def track(self, pieces):
-        """Continue every piece's starting values; returns a :class:`Tracked` (integrate later)."""
+        """Continue every piece's starting values; returns a :class:`Tracked` (integrate later).
+
+        Matching runs node to node, vectorized over all tracks; steps that fail the safety tests are
+        subdivided for all pieces at once (one vectorized evaluation per round), and the matching is
+        rerun until every step is safe (scalar recursive subdivision as a last resort).
+        """
         nodes = _Nodes(pieces, self.sites, self.tol)
         if not pieces:
             return Tracked(self, pieces, nodes, None, None, None, [], np.zeros(0, int), np.zeros((0, 0), int))
         R, A, fy, Dt, sep, tc = self._eval_nodes(nodes.x, nodes.dx)
         rel = self._last_rel
         off = nodes.offsets
+        N0 = len(nodes.tau)
         tp, ty = [], []
         for p, pc in enumerate(pieces):
             tp.extend([p] * len(pc.y0))
             ty.extend(pc.y0)
         tp = np.asarray(tp, dtype=int)
         T = len(tp)
-        lens = np.diff(off)
-        start = np.asarray(off[:-1])
-        choice = np.full((T, int(lens.max())), -1, dtype=int)
-        ycur = np.asarray(ty, dtype=complex)
-        k0 = start[tp]
-        d = np.abs(R[k0] - ycur[:, None])
+        y0 = np.asarray(ty, dtype=complex)
+        k0 = np.asarray(off[:-1])[tp]
+        d = np.abs(R[k0] - y0[:, None])
         c0 = np.argmin(d, axis=1)
         dmin = d[np.arange(T), c0]
-        scale = 1e-7 * (np.abs(ycur) + np.where(np.isfinite(sep[k0, c0]), sep[k0, c0], 0) + 1e-300)
+        scale = 1e-7 * (np.abs(y0) + np.where(np.isfinite(sep[k0, c0]), sep[k0, c0], 0) + 1e-300)
         if np.any(dmin > scale):
             bad = int(np.argmax(dmin > scale))
-            raise ValueError(f"starting value y = {ycur[bad]:.6g} is not a root of f at x = {nodes.x[k0[bad]]:.6g}")
-        choice[:, 0] = c0
-        ycur = R[k0, c0]
-        ydcur = Dt[k0, c0]
-        tccur = tc[k0, c0]
-        n = R.shape[1]
-        for k in range(1, int(lens.max())):
-            act = np.nonzero(lens[tp] > k)[0]
-            if len(act) == 0:
+            raise ValueError(f"starting value y = {y0[bad]:.6g} is not a root of f at x = {nodes.x[k0[bad]]:.6g}")
+        pool = {"tau": nodes.tau.copy(), "R": R, "Dt": Dt, "sep": sep, "tc": tc}
+        seqs = [np.arange(off[p], off[p + 1]) for p in range(len(pieces))]
+        for _round in range(12):
+            choice_seq, unsafe = self._match_pass(pieces, seqs, pool, tp, c0, scalar=False)
+            if not unsafe:
                 break
-            node = start[tp[act]] + k
-            dt = nodes.tau[node] - nodes.tau[node - 1]
-            mp_ = ycur[act] + 0.5 * dt * ydcur[act]
-            mc = R[node] - 0.5 * dt[:, None] * Dt[node]
-            dd = np.abs(mc - mp_[:, None])
-            i = np.argmin(dd, axis=1)
-            d1 = dd[np.arange(len(act)), i]
-            d2 = np.partition(dd, 1, axis=1)[:, 1] if n > 1 else np.full(len(act), np.inf)
-            sepi = sep[node, i]
-            # the tangent may turn by no more than a fraction of the gap over the step (curvature),
-            # otherwise the Hermite discrepancy is not a reliable error measure
-            safe = ((d1 <= SAFETY * d2) & (d1 <= SAFETY * sepi)
-                    & (np.abs(dt) <= MOVE * tccur[act])
-                    & (np.abs(dt) <= MOVE * tc[node, i])
-                    & (np.abs(dt * (Dt[node, i] - ydcur[act])) <= SAFETY * sepi))
-            # two tracks of one piece may not pick the same root
-            key = tp[act] * (n + 1) + i
-            _, inv, cnt = np.unique(key, return_inverse=True, return_counts=True)
-            safe &= cnt[inv] == 1
-            for q in np.nonzero(~safe)[0]:
-                t = act[q]
-                pc = pieces[tp[t]]
-                nd = node[q]
-                i[q] = self._refine(pc, nodes.tau[nd - 1], ycur[t], ydcur[t], nodes.tau[nd],
-                                    R[nd], Dt[nd], sep[nd], tc[nd], tccur[t])
-            choice[act, k] = i
-            ycur[act] = R[node, i]
-            ydcur[act] = Dt[node, i]
-            tccur[act] = tc[node, i]
+            new_tau, new_piece = [], []
+            for p, k, m in unsafe:
+                t0, t1 = pool["tau"][seqs[p][k - 1]], pool["tau"][seqs[p][k]]
+                ts = t0 + (t1 - t0) * np.arange(1, m) / m
+                new_tau.append(ts)
+                new_piece.append(np.full(m - 1, p))
+            new_tau = np.concatenate(new_tau)
+            new_piece = np.concatenate(new_piece)
+            xs = np.empty(len(new_tau), complex)
+            dxs = np.empty(len(new_tau), complex)
+            for p in np.unique(new_piece):
+                sel = new_piece == p
+                xs[sel] = pieces[p].x(new_tau[sel])
+                dxs[sel] = pieces[p].dx(new_tau[sel])
+            Rn, _, _, Dn, sn, tn = self._eval_nodes(xs, dxs, precise=False)
+            self.n_refined_steps += len(unsafe)
+            base = len(pool["tau"])
+            pool["tau"] = np.concatenate([pool["tau"], new_tau])
+            pool["R"] = np.concatenate([pool["R"], Rn])
+            pool["Dt"] = np.concatenate([pool["Dt"], Dn])
+            pool["sep"] = np.concatenate([pool["sep"], sn])
+            pool["tc"] = np.concatenate([pool["tc"], tn])
+            idx = base + np.arange(len(new_tau))
+            for p in np.unique(new_piece):
+                merged = np.concatenate([seqs[p], idx[new_piece == p]])
+                seqs[p] = merged[np.argsort(pool["tau"][merged], kind="stable")]
+        else:
+            choice_seq, _ = self._match_pass(pieces, seqs, pool, tp, c0, scalar=True, pieces_obj=pieces)
+        # choices at the quadrature nodes (the original pool entries, in order)
+        lens = np.diff(off)
+        choice = np.full((T, int(lens.max())), -1, dtype=int)
+        for t in range(T):
+            p = tp[t]
+            sq = seqs[p]
+            keep = sq < N0
+            choice[t, :lens[p]] = choice_seq[t, :len(sq)][keep]
         ends = []
         pos = 0
         for p, pc in enumerate(pieces):
@@ -381,11 +401,84 @@ class Tracker:
             if len(set(last.tolist())) != m:
                 raise ValueError(f"sheet continuation is not injective along the path from x = {pc.a:.6g} "
                                  "(numerically singular curve)")
-            ends.append(R[start[p] + lens[p] - 1, last])
+            ends.append(R[off[p] + lens[p] - 1, last])
             pos += m
         tr = Tracked(self, pieces, nodes, R, fy, A, ends, tp, choice)
         tr.rel = rel
         return tr
+
+    def _match_pass(self, pieces, seqs, pool, tp, c0, scalar, pieces_obj=None):
+        """Match along every sequence; returns (choices (T, Lmax), unsafe steps [(piece, k, m)]).
+
+        With scalar=True unsafe steps are resolved by :meth:`_refine` instead of being reported.
+        """
+        Rp, Dp, Sp, Tc, tau = pool["R"], pool["Dt"], pool["sep"], pool["tc"], pool["tau"]
+        T = len(tp)
+        L = np.array([len(sq) for sq in seqs])
+        Lmax = int(L.max())
+        S = np.full((len(seqs), Lmax), -1, dtype=int)
+        for p, sq in enumerate(seqs):
+            S[p, :len(sq)] = sq
+        n = Rp.shape[1]
+        choice = np.full((T, Lmax), -1, dtype=int)
+        choice[:, 0] = c0
+        first = S[tp, 0]
+        ycur = Rp[first, c0]
+        ydcur = Dp[first, c0]
+        tccur = Tc[first, c0]
+        unsafe = {}
+        for k in range(1, Lmax):
+            act = np.nonzero(L[tp] > k)[0]
+            if len(act) == 0:
+                break
+            node = S[tp[act], k]
+            prev = S[tp[act], k - 1]
+            dt = tau[node] - tau[prev]
+            mp_ = ycur[act] + 0.5 * dt * ydcur[act]
+            mc = Rp[node] - 0.5 * dt[:, None] * Dp[node]
+            dd = np.abs(mc - mp_[:, None])
+            i = np.argmin(dd, axis=1)
+            ar = np.arange(len(act))
+            d1 = dd[ar, i]
+            d2 = np.partition(dd, 1, axis=1)[:, 1] if n > 1 else np.full(len(act), np.inf)
+            sepi = Sp[node, i]
+            turn = np.abs(dt * (Dp[node, i] - ydcur[act]))
+            adt = np.abs(dt)
+            # the tangent may turn by no more than a fraction of the gap over the step (curvature),
+            # otherwise the Hermite discrepancy is not a reliable error measure
+            safe = ((d1 <= SAFETY * d2) & (d1 <= SAFETY * sepi)
+                    & (adt <= MOVE * tccur[act]) & (adt <= MOVE * Tc[node, i])
+                    & (turn <= SAFETY * sepi))
+            # two tracks of one piece may not pick the same root
+            key = tp[act] * (n + 1) + i
+            _, inv, cnt = np.unique(key, return_inverse=True, return_counts=True)
+            dup = cnt[inv] != 1
+            safe &= ~dup
+            bad = np.nonzero(~safe)[0]
+            if len(bad):
+                if scalar:
+                    for q in bad:
+                        t = act[q]
+                        nd = node[q]
+                        i[q] = self._refine(pieces_obj[tp[t]], tau[prev[q]], ycur[t], ydcur[t], tau[nd],
+                                            Rp[nd], Dp[nd], Sp[nd], Tc[nd], tccur[t])
+                else:
+                    with np.errstate(divide="ignore", invalid="ignore"):
+                        r = np.maximum.reduce([
+                            np.where(sepi > 0, (d1 / (SAFETY * sepi)) ** (1 / 3), 4.0),
+                            np.where(tccur[act] > 0, adt / (MOVE * tccur[act]), 4.0),
+                            np.where(Tc[node, i] > 0, adt / (MOVE * Tc[node, i]), 4.0),
+                            np.where(sepi > 0, (turn / (SAFETY * sepi)) ** 0.5, 4.0),
+                            np.where(d2 > 0, (d1 / (SAFETY * d2)) ** (1 / 3), 4.0)])
+                    m = np.clip(np.ceil(1.5 * np.nan_to_num(r[bad], nan=4.0, posinf=64.0)), 2, 64).astype(int)
+                    for q, mq in zip(bad, m):
+                        key2 = (int(tp[act[q]]), k)
+                        unsafe[key2] = max(unsafe.get(key2, 2), int(mq))
+            choice[act, k] = i
+            ycur[act] = Rp[node, i]
+            ydcur[act] = Dp[node, i]
+            tccur[act] = Tc[node, i]
+        return choice, [(p, k, m) for (p, k), m in unsafe.items()]
 
 
 class Tracked:
@@ -416,16 +509,16 @@ class Tracked:
 
         Two error sources are estimated per interval, relative to its absolute mass (sum of
         |weight * integrand|): the rounding of the node positions (relative jitter eps |x| / length,
-        large for intervals shorter than ~1e-3 |x| next to close critical values) and the rounding
-        error of the roots (err / gap, large where two sheets nearly coincide).  An interval is summed
-        in mpmath when the estimate (a bound, typically ~50x pessimistic) exceeds 1e-12 of the
-        largest piece mass.
+        large for intervals shorter than ~1e-3 |x| next to close critical values) and the remaining
+        error of the (compensated) roots relative to the gap between sheets (at least the rounding of
+        y to float64, eps |y| / gap).  An interval is summed in mpmath when the first exceeds 1e-14,
+        or the second 1e-13, of the largest piece mass.
         """
         out = []
         eps = np.finfo(float).eps
         offs = self.nodes.offsets
         total = max(float(mass[offs[p]:offs[p + 1]].sum()) for p in range(len(self.pieces))) if self.pieces else 0.0
-        thr = 1e-12 * total
+        thr = 1e-14 * total
         for p, pc in enumerate(self.pieces):
             k = offs[p] + 1
             for lo, hi, N in self.nodes.plans[p]:
@@ -435,7 +528,7 @@ class Tracked:
                 jit = eps * (abs(pc.dx(mid)) * abs(mid) + max(abs(xl), abs(xh)))
                 rel = float(np.max(self.rel[k:k + N])) if self.rel is not None else 0.0
                 m_int = float(mass[k:k + N].sum())
-                if ell > 0 and (jit / ell + rel) * m_int > thr:
+                if ell > 0 and (jit / ell * m_int > thr or rel * m_int > 10 * thr):
                     out.append((p, k, (lo, hi, N)))
                 k += N
         return out
