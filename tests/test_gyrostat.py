@@ -35,23 +35,75 @@ def dop853(J, N, Q0, w0, t):
     return sol.y[:3].T @ Ii.T, sol.y[3:].T.reshape(-1, 3, 3)
 
 
-def heyoka_ref(J, N, Q0, w0, t):
+_TAYLOR = {}
+
+
+def _taylor(fp, tol):
+    """heyoka Taylor integrator of mdot = (m + N) x I^-1 m, Qdot = Q hat(I^-1 m), with I^-1 and N
+    as runtime parameters (compiled once per precision, compact mode)."""
     hy = pytest.importorskip("heyoka")
+    key = (str(fp), tol)
+    if key not in _TAYLOR:
+        xs = hy.make_vars(*[f"m{i}" for i in range(3)], *[f"q{i}{j}" for i in range(3) for j in range(3)])
+        m = xs[:3]
+        Q = [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]
+        w = [sum(hy.par[3 * i + k] * m[k] for k in range(3)) for i in range(3)]
+        h = [m[i] + hy.par[9 + i] for i in range(3)]
+        md = [h[1] * w[2] - h[2] * w[1], h[2] * w[0] - h[0] * w[2], h[0] * w[1] - h[1] * w[0]]
+        W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
+        Qd = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
+        _TAYLOR[key] = hy.taylor_adaptive(list(zip(xs, md + Qd)), np.zeros(12, dtype=fp), tol=fp(tol),
+                                          fp_type=fp, pars=np.zeros(12, dtype=fp), compact_mode=True)
+    return _TAYLOR[key]
+
+
+def heyoka_ref(J, N, Q0, w0, t, quad=False):
+    """Reference trajectory (omega, Q) at the times t (either sign) by heyoka in extended precision
+    (80-bit, tol 1e-19), or with ``quad`` in quadruple precision (tol 1e-32: for orbits next to a
+    separatrix, whose conditioning amplifies the reference's own errors).  For principal moments
+    ``I`` and ``m = I omega0`` are formed in the working precision, as the closed form does (near
+    a separatrix a float64 rounding of the data moves the phase by far more than round-off)."""
+    hy = pytest.importorskip("heyoka")
+    fp = hy.real128 if quad else np.longdouble
+    ta = _taylor(fp, 1e-32 if quad else 1e-19)
     I = inertia(J)
-    Ii = np.linalg.inv(I)
-    xs = hy.make_vars(*[f"m{i}" for i in range(3)], *[f"q{i}{j}" for i in range(3) for j in range(3)])
-    m = xs[:3]
-    Q = [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]
-    w = [sum(float(Ii[i, k]) * m[k] for k in range(3)) for i in range(3)]
-    h = [m[i] + float(N[i]) for i in range(3)]
-    md = [h[1] * w[2] - h[2] * w[1], h[2] * w[0] - h[0] * w[2], h[0] * w[1] - h[1] * w[0]]
-    W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
-    Qd = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
-    fp = np.longdouble
-    ta = hy.taylor_adaptive(list(zip(xs, md + Qd)), np.concatenate([I @ w0, Q0.ravel()]).astype(fp),
-                            tol=fp(1e-19), fp_type=fp)
-    st = np.asarray(ta.propagate_grid(np.asarray(t, dtype=fp))[-1], dtype=float)
-    return st[:, :3] @ Ii.T, st[:, 3:].reshape(-1, 3, 3)
+
+    def cv(x):
+        return np.array([fp(float(v)) for v in np.ravel(x)])
+
+    if np.ndim(J) == 1:  # principal moments: I_i = J_j + J_k and m = I omega0 in the working precision
+        Jf = cv(J)
+        Iw = [Jf[1] + Jf[2], Jf[0] + Jf[2], Jf[0] + Jf[1]]
+        Iw = [[Iw[i] if i == j else fp(0) for j in range(3)] for i in range(3)]
+    else:
+        Iw = [list(cv(I[i])) for i in range(3)]
+    m0 = np.array([sum(Iw[i][k] * fp(float(w0[k])) for k in range(3)) for i in range(3)])
+    # I^-1 by Gauss-Jordan in the working precision (numpy.linalg is float64 only)
+    A = [list(Iw[i]) + [fp(1) if i == j else fp(0) for j in range(3)] for i in range(3)]
+    for c in range(3):
+        p = max(range(c, 3), key=lambda r: abs(float(A[r][c])))
+        A[c], A[p] = A[p], A[c]
+        A[c] = [x / A[c][c] for x in A[c]]
+        for r in range(3):
+            if r != c:
+                A[r] = [x - A[r][c] * y for x, y in zip(A[r], A[c])]
+    Ii = np.array([A[i][3:] for i in range(3)])
+    t = np.asarray(t, dtype=float)
+    out = np.empty((t.size, 12))
+    for sel in (t >= 0, t < 0):
+        if not sel.any():
+            continue
+        idx = np.nonzero(sel)[0]
+        order = np.argsort(np.abs(t[idx]))
+        ta.pars[:] = np.concatenate([np.asarray(Ii).ravel(), cv(N)])
+        ta.state[:] = np.concatenate([m0, cv(Q0)])
+        ta.time = fp(0)
+        grid = [fp(float(x)) for x in t[idx][order]]
+        lead = [] if grid[0] == 0 else [fp(0)]
+        res = np.asarray(ta.propagate_grid(np.array(lead + grid))[-1])[len(lead):].astype(float)
+        out[idx[order]] = res
+    Iif = np.linalg.inv(I)
+    return out[:, :3] @ Iif.T, out[:, 3:].reshape(-1, 3, 3)
 
 
 def generic_cases(n=8, seed=0):
@@ -239,3 +291,215 @@ def test_bad_input(kw, msg):
     args.update(kw)
     with pytest.raises(ValueError, match=msg):
         solve_gyrostat(**args)
+
+
+# -- regression: the inversion's removable singularities, slow anchors, saddles -------------------
+
+EPS = np.finfo(float).eps
+
+# found by hypothesis (test_conservation_and_orthogonality): energy violated by 6.9e-11 of its
+# scale.  Not a saddle: W&W's inversion formula based at a general point of the quartic has a
+# numerator and a denominator with two common zeros per period, here on the real orbit (the
+# float64 evaluation was 0/0 there; 1e-3 of the energy at t = 11.9335)
+PROPERTY_FAILURE = (np.array([4.5, 2.0, 3.5]), np.array([0.0, -1.75, 1.421875]), np.array([0.0, 3.0, 0.0]))
+
+# generic data of generic_cases' distribution whose real orbit met those common zeros (6 of
+# 200: energy errors 1.4e-9 to 5.6e-7 of its scale before the fix)
+COMMON_ZERO_CASES = [
+    ([1.3958581836582835, 1.845364322495386, 0.8034716083784583], [-0.2852280931686581, -0.2251507779770402, -0.44088770777595554], [1.3355454216308837, -0.5564888399932533, 0.7875408171027013]),
+    ([0.4631907077037518, 0.54072397429931, 1.6616530718248295], [-0.018665030114593893, 0.013305645306260485, -0.028837324501231193], [0.3806924762430092, 1.164447913936147, -0.33621322049705094]),
+    ([1.237449540606763, 1.3513329345914555, 1.6791056707920031], [0.12979833694670387, -0.0678208111038323, 0.09387535352726717], [-2.2665206299327094, -0.35789247427932736, 0.32613645199293473]),
+]
+
+# next to a saddle (found by sampling the singular level sets): a data point close to the
+# saddle (the pencil's anchor had to move to a fast point), a turning point of the pencil
+# next to the saddle (a residual coefficient that cancels there), an orbit at 3e-11 from the
+# separatrix
+NEAR_SADDLE_CASES = [
+    ([1.5422519500024736, 1.737423829414948, 1.0215431193207938], [-5.829591040703852, -3.4742576190041543, -4.5236231145773225], [52.78821807222933, -40.973780990940874, 7.149238634824681]),
+    ([0.8802899850162753, 2.693647151186379, 0.41676817476893424], [-0.8480358053942576, 0.6699161416834842, -1.363954913923379], [-0.18837914651566254, -2.0416296115943746, -0.08081750545349492]),
+    ([2.7629070883129443, 0.5567284253369378, 0.40597613492576967], [-0.8540264523001458, 3.018010470232149, -0.07613353000487062], [-4.794726015726387, -42.91838564850039, 7.713949081994629]),
+]
+
+
+def _energy_and_sphere_errors(J, N, w0, sol, t):
+    I = inertia(J)
+    w = sol.omega(t)
+    h = w @ I.T + N
+    G = np.linalg.norm(I @ w0 + N)
+    T0 = 0.5 * w0 @ I @ w0
+    dE = np.max(np.abs(0.5 * np.einsum("ni,ij,nj->n", w, I, w) - T0)) / (T0 + G * G / np.min(np.linalg.eigvalsh(I)))
+    dG = np.max(np.abs(np.linalg.norm(h, axis=-1) / G - 1))
+    return dE, dG
+
+
+def test_property_failure_invariants_on_a_dense_grid():
+    """Every point of two periods (5e-5 apart, the old spikes at t = 9.9418, 11.9335 included)
+    on the invariant sphere and ellipsoid to round-off."""
+    J, N, w0 = PROPERTY_FAILURE
+    sol = solve_gyrostat(J, N, np.eye(3), w0)
+    t = np.concatenate([np.arange(0.0, 40.0, 5e-5), [9.9418, 11.9335]])
+    dE, dG = _energy_and_sphere_errors(J, N, w0, sol, t)
+    assert dE < 16 * EPS and dG < 16 * EPS
+
+
+@pytest.mark.parametrize("case", range(len(COMMON_ZERO_CASES)))
+def test_common_zero_cases_invariants_on_a_dense_grid(case):
+    J, N, w0 = (np.array(x) for x in COMMON_ZERO_CASES[case])
+    sol = solve_gyrostat(J, N, np.eye(3), w0)
+    T = sol.invariants["period"]
+    dE, dG = _energy_and_sphere_errors(J, N, w0, sol, np.linspace(-T, T, 200001))
+    assert dE < 16 * EPS and dG < 16 * EPS
+
+
+def _nearby(case, k):
+    """The property failure and data next to it (rotor and velocity moved by ~1e-3)."""
+    J, N, w0 = case
+    if k == 0:
+        return J, N, w0
+    rng = np.random.default_rng(100 + k)
+    return J, N + 1e-3 * rng.normal(size=3), w0 * (1 + 1e-3 * rng.normal(size=3))
+
+
+@pytest.mark.parametrize("k", range(3))
+def test_property_failure_and_nearby_against_dop853(k):
+    J, N, w0 = _nearby(PROPERTY_FAILURE, k)
+    Q0 = rand_Q(np.random.default_rng(7))
+    sol = solve_gyrostat(J, N, Q0, w0)
+    t = np.linspace(0.0, 20.0, 201)
+    w, Q = sol(t)
+    wr, Qr = dop853(J, N, Q0, w0, t)  # DOP853's own error reaches ~5e-13 by t = 20
+    s = max(1.0, np.abs(wr).max())
+    assert np.max(np.abs(w - wr)) < 1e-12 * s and np.max(np.abs(Q - Qr)) < 1e-12
+
+
+@pytest.mark.parametrize("k", range(3))
+def test_property_failure_and_nearby_against_heyoka_to_t100(k):
+    J, N, w0 = _nearby(PROPERTY_FAILURE, k)
+    Q0 = rand_Q(np.random.default_rng(8))
+    sol = solve_gyrostat(J, N, Q0, w0)
+    t = np.linspace(0.0, 100.0, 401)
+    w, Q = sol(t)
+    wr, Qr = heyoka_ref(J, N, Q0, w0, t)
+    s = max(1.0, np.abs(wr).max())
+    assert np.max(np.abs(w - wr)) < 1e-12 * s and np.max(np.abs(Q - Qr)) < 1e-12
+
+
+@pytest.mark.parametrize("case", range(len(COMMON_ZERO_CASES)))
+def test_common_zero_cases_against_heyoka_to_t100(case):
+    J, N, w0 = (np.array(x) for x in COMMON_ZERO_CASES[case])
+    Q0 = rand_Q(np.random.default_rng(9))
+    sol = solve_gyrostat(J, N, Q0, w0)
+    t = np.linspace(-100.0, 100.0, 401)
+    w, Q = sol(t)
+    wr, Qr = heyoka_ref(J, N, Q0, w0, t)
+    s = max(1.0, np.abs(wr).max())
+    assert np.max(np.abs(w - wr)) < 1e-12 * s and np.max(np.abs(Q - Qr)) < 1e-12
+
+
+@pytest.mark.parametrize("case", range(len(NEAR_SADDLE_CASES)))
+def test_near_saddle_cases_against_quad_heyoka(case):
+    """Orbits at 7.5e-8 to 3e-11 from a separatrix: against heyoka in quadruple precision (whose
+    errors the near-separatrix conditioning amplifies less than float64 rounding), over a
+    stretch that passes the saddle; the error stays within the solution's own estimate."""
+    J, N, w0 = (np.array(x) for x in NEAR_SADDLE_CASES[case])
+    Q0 = rand_Q(np.random.default_rng(10))
+    sol = solve_gyrostat(J, N, Q0, w0)
+    assert sol.method == "gyrostat/elliptic"
+    T = sol.invariants["period"]
+    t = np.linspace(-T, T, 121)
+    w, Q = sol(t)
+    wr, Qr = heyoka_ref(J, N, Q0, w0, t, quad=True)
+    m, mr = w @ inertia(J).T, wr @ inertia(J).T
+    err = np.max(np.abs(m - mr)) / np.max(np.abs(mr))
+    est = sol.invariants["error_estimate"]
+    assert err < 1e-13 and err <= 2 * est * 2.0  # two periods
+    assert np.max(np.abs(Q - Qr)) < 1e-12
+
+
+# an orbit exactly on a separatrix (float data: the saddle h = (0, 0, 5) on the rotor axis,
+# the homoclinic loop through h = (0, 4, 3)), and data on a singular level set whose orbit is
+# periodic (the elliptic parameter is exactly 0 there)
+SEPARATRIX = (np.array([0.75, 0.25, 1.25]), np.array([0.0, 0.0, 2.0]), np.array([0.0, 2.0, 1.0]))
+SINGULAR_PERIODIC = (np.array([0.25, 0.75, 1.75]), np.array([0.0, 0.0, 2.0]), np.array([0.0, 2.0, 1.0]))
+
+
+def test_separatrix_closed_form_against_quad_heyoka():
+    J, N, w0 = SEPARATRIX
+    assert np.allclose(inertia(J).diagonal(), [1.5, 2.0, 1.0])
+    Q0 = rand_Q(np.random.default_rng(11))
+    sol = solve_gyrostat(J, N, Q0, w0)
+    assert sol.method == "gyrostat/separatrix"
+    assert sol.invariants["period"] == np.inf
+    t = np.linspace(-60.0, 60.0, 121)  # omega within 1e-10 of the saddle at both ends
+    w, Q = sol(t)
+    wr, Qr = heyoka_ref(J, N, Q0, w0, t, quad=True)
+    assert np.max(np.abs(w - wr)) < 2e-15 * 3 and np.max(np.abs(Q - Qr)) < 1e-13
+    assert np.max(np.abs(np.swapaxes(Q, -1, -2) @ Q - np.eye(3))) < 1e-14
+
+
+def test_separatrix_limits_are_the_saddle():
+    """t -> +-inf: omega -> omega_s = (0, 0, 3) (h_s = (0, 0, 5) = I omega_s + N), and the body
+    turns uniformly about the space momentum at the saddle's rate |omega_s| = precession_rate."""
+    J, N, w0 = SEPARATRIX
+    Q0 = rand_Q(np.random.default_rng(12))
+    sol = solve_gyrostat(J, N, Q0, w0)
+    ws = np.array([0.0, 0.0, 3.0])
+    for t in (1e3, -1e3, 1e6, -1e9):
+        assert np.max(np.abs(sol.omega(np.array([t]))[0] - ws)) < 1e-15
+    assert sol.invariants["precession_rate"] == pytest.approx(3.0, rel=1e-14)
+    L = Q0 @ (inertia(J) @ w0 + N)
+    K = hat(L / np.linalg.norm(L))
+    t1, dt = np.array([400.0, -700.0]), 12.345
+    ang = 3.0 * dt
+    Rl = np.eye(3) + np.sin(ang) * K + (1 - np.cos(ang)) * K @ K
+    assert np.max(np.abs(sol.Q(t1 + dt) - Rl @ sol.Q(t1))) < 1e-12
+
+
+def test_separatrix_kinematics_and_invariants():
+    J, N, w0 = SEPARATRIX
+    Q0 = rand_Q(np.random.default_rng(13))
+    sol = solve_gyrostat(J, N, Q0, w0)
+    h = 1e-3
+    tc = np.array([-7.0, 0.0, 2.5, 30.0])
+    Qs = [sol.Q(tc + k * h) for k in (-2, -1, 1, 2)]
+    dQ = (Qs[0] - 8 * Qs[1] + 8 * Qs[2] - Qs[3]) / (12 * h)
+    assert np.max(np.abs(dQ - sol.Q(tc) @ hat(sol.omega(tc)))) < 1e-9
+    t = np.linspace(-200.0, 200.0, 4001)
+    dE, dG = _energy_and_sphere_errors(J, N, w0, sol, t)
+    assert dE < 16 * EPS and dG < 16 * EPS
+    w, Q = sol(t)
+    L = np.einsum("nij,nj->ni", Q, w @ inertia(J).T + N)
+    assert np.max(np.abs(L - Q0 @ (inertia(J) @ w0 + N))) < 2e-14 * 5
+
+
+@pytest.mark.parametrize("eps", [1e-4, 1e-8, 1e-12])
+def test_next_to_the_separatrix_against_quad_heyoka(eps):
+    """Data moved off the separatrix by eps: the elliptic closed form (mc ~ eps) against heyoka
+    in quadruple precision over the first passage of the saddle, and against the separatrix
+    closed form where the two motions have not yet parted (|t| <= 10)."""
+    J, N, w0 = SEPARATRIX
+    w1 = w0 * np.array([1.0, 1.0 + eps, 1.0])
+    Q0 = rand_Q(np.random.default_rng(14))
+    sol = solve_gyrostat(J, N, Q0, w1)
+    assert sol.method == "gyrostat/elliptic"
+    t = np.linspace(-60.0, 60.0, 61)
+    w, Q = sol(t)
+    wr, Qr = heyoka_ref(J, N, Q0, w1, t, quad=True)
+    assert np.max(np.abs(w - wr)) < 1e-13 and np.max(np.abs(Q - Qr)) < 1e-12
+    near = np.abs(t) <= 10
+    ws, _ = solve_gyrostat(J, N, Q0, w0)(t[near])
+    assert np.max(np.abs(w[near] - ws)) < 1e3 * eps + 1e-14
+
+
+def test_singular_periodic_level_set():
+    """The level set is singular (a relative equilibrium elsewhere on it) but the orbit through
+    the data is periodic: the elliptic form with m = 0 exactly."""
+    J, N, w0 = SINGULAR_PERIODIC
+    Q0 = rand_Q(np.random.default_rng(15))
+    sol = solve_gyrostat(J, N, Q0, w0)
+    assert sol.method == "gyrostat/elliptic" and sol._impl.m == 0.0
+    t = np.linspace(0.0, 60.0, 61)
+    w, Q = sol(t)
+    wr, Qr = heyoka_ref(J, N, Q0, w0, t)
+    assert np.max(np.abs(w - wr)) < 1e-13 * 3 and np.max(np.abs(Q - Qr)) < 1e-12

@@ -58,6 +58,7 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 
@@ -114,17 +115,15 @@ def _frame_with_e3(p):
     return np.stack([x, y, p], axis=1)
 
 
-def _algebra(a, n, m0, dps=34):
+def _algebra(Ip, n, m0, dps=34):
     """See :func:`_algebra_at`; the precision is raised until the discriminant of the
     Weierstrass cubic is resolved (tiny orbits about a relative equilibrium make g2, g3
-    nearly cancel)."""
+    nearly cancel).  A discriminant that vanishes to 2000 digits is taken as exactly zero:
+    an orbit on a separatrix (or a regular orbit on a singular level set)."""
     while True:
         try:
-            return _algebra_at(a, n, m0, dps)
+            return _algebra_at(Ip, n, m0, dps, exact=dps > 2000)
         except _NeedDigits:
-            if dps > 2000:
-                raise NotImplementedError("solve_gyrostat: the orbit is (within 2000 digits) "
-                                          "a separatrix of the gyrostat") from None
             dps *= 2
 
 
@@ -156,20 +155,139 @@ def _cubic_roots_mp(mp, g2, g3):
     return out
 
 
-def _algebra_at(a, n, m0, dps):
-    """Frame, quartic, Weierstrass invariants and the elliptic parameters, in mpmath.
+def _mpq(mp, x):
+    """An mpmath number from a float, an mpf or an exact Fraction (exact when the working
+    precision holds it)."""
+    if isinstance(x, Fraction):
+        return mp.mpf(x.numerator) / x.denominator
+    return mp.mpf(x)
+
+
+def _pmul(p, q):
+    r = [0] * (len(p) + len(q) - 1)
+    for i, x in enumerate(p):
+        for j, y in enumerate(q):
+            r[i + j] += x * y
+    return r
+
+
+def _psub(p, q):
+    L = max(len(p), len(q))
+    p = list(p) + [0] * (L - len(p))
+    q = list(q) + [0] * (L - len(q))
+    return [x - y for x, y in zip(p, q)]
+
+
+def _rotate_quartic(f, c, s):
+    """Ascending coefficients in y of ``Dh(c - s y, s + c y)``, ``Dh(Z0, Z1) = sum f_k Z1^k Z0^(4-k)``
+    the homogeneous form of the quartic ``f`` (ascending): the pencil turned by the angle
+    ``(c, s) = (cos, sin)``."""
+    out = [0] * 5
+    for k in range(5):
+        p = [f[k]]
+        for _ in range(k):
+            p = _pmul(p, [s, c])
+        for _ in range(4 - k):
+            p = _pmul(p, [c, -s])
+        for i, x in enumerate(p):
+            out[i] += x
+    return out
+
+
+def _turning_point(mp, f, s0, e_top, roots):
+    """The pencil angle ``theta_r`` of a turning point of ``theta(t)`` next to the anchor
+    (``theta = 0``), and the time from it to the anchor.
+
+    ``theta(t)`` oscillates between the two real zeros of ``Dh(cos theta, sin theta)`` adjacent
+    to 0 (the real orbit always has turning points: a real component of the curve meets every
+    plane of the pencil in an even number of points).  Of the two, the one where ``Dh`` has the
+    larger slope is taken (next to a separatrix the other is one of a nearly double pair, where
+    the formula below would cancel).  In the pencil turned by ``theta_r`` the quartic has a root
+    at 0 and (Whittaker & Watson 20.6, base point at a root)
+    ``y(t) = k / (wp(t - t_r) - c)``, ``k = Dr'(0)/4``, ``c = Dr''(0)/24``: numerator and
+    denominator never vanish together (the general base point of W&W's formula gives a
+    numerator and a denominator with two common zeros per period, on the real orbit for some
+    data, where float64 evaluation is 0/0).  The anchor ``y_a = -tan theta_r`` gives
+    ``wp(t_a - t_r) = c + k / y_a``, inverted with Carlson's ``R_F``; the sign of ``t_a - t_r``
+    is that of ``k dy/dt`` (``wp' < 0`` on the real half-period), ``dy/dt`` having the sign of
+    ``dtheta/dt = s0`` at the anchor.
+    """
+    # zeros of Dh on the unit circle, located at moderate precision (in a turned pencil whose
+    # leading coefficient is large; a double zero, on a separatrix, converges only linearly)
+    # and polished by Newton's method at the working precision
+    dps = mp.mp.dps
+    with mp.workdps(min(dps, 50)):
+        best = None
+        for j in range(4):
+            phi = mp.pi * j / 4
+            fr = _rotate_quartic(f, mp.cos(phi), mp.sin(phi))
+            if best is None or abs(fr[4]) > abs(best[1][4]):
+                best = (phi, fr)
+        phi, fr = best
+        ys = mp.polyroots(fr[::-1], maxsteps=2000, extraprec=2 * mp.mp.prec)
+        ths = [+((phi + mp.atan(mp.re(y))) % mp.pi) for y in ys if abs(mp.im(y)) <= 1e-20 * (1 + abs(y))]
+        ths = [th - mp.pi if th > mp.pi / 2 else th for th in ths]
+        slopes = [abs(_rotate_quartic(f, mp.cos(th), mp.sin(th))[1]) for th in ths]
+    tol = mp.mpf(10) ** (-(dps // 2))
+
+    def polish(th):  # Newton on Dh(cos th, sin th) = 0, doubling the precision each step
+        prec = 40
+        while True:
+            prec = min(2 * prec, dps)
+            with mp.workdps(prec + 10):
+                c, s = mp.cos(th), mp.sin(th)
+                v = sum(f[k] * s ** k * c ** (4 - k) for k in range(5))
+                dv = sum(f[k] * (k * s ** (k - 1) * c ** (5 - k) if k else 0)
+                         - f[k] * (4 - k) * s ** (k + 1) * c ** (3 - k) for k in range(5))
+                if dv != 0:
+                    th = th - v / dv
+            if prec >= dps:
+                return +th
+
+    cands = [(sl, th) for sl, th in zip(slopes, ths)]
+    # every real zero is a turning point of this orbit or of the other real component (then the
+    # anchor is not on its arc: wp(t_a - t_r) < e_top); the steepest of this orbit's is taken
+    cands.sort(key=lambda x: -x[0])
+    etol = tol * max(abs(x) for x in roots)
+    for _, th in cands:
+        th = polish(polish(th))
+        dr = _rotate_quartic(f, mp.cos(th), mp.sin(th))
+        k, c = dr[1] / 4, dr[2] / 12
+        if k == 0:
+            continue
+        if abs(th) <= tol:  # the anchor is itself a turning point (zero torsion)
+            return th, k, c, mp.mpf(0)
+        Pa = c - k * mp.cos(th) / mp.sin(th)
+        if Pa < e_top - etol:
+            continue
+        Pa = max(Pa, e_top)
+        va = mp.re(mp.elliprf(Pa - roots[0], Pa - roots[1], Pa - roots[2]))
+        if (k > 0) != (s0 > 0):
+            va = -va
+        return th, k, c, va
+    raise RuntimeError("internal: the turning point of the pencil parameter was not found")
+
+
+def _algebra_at(Ip, n, m0, dps, exact=False):
+    """Frame, quartic, Weierstrass invariants, the turning point and the elliptic parameters,
+    in mpmath.
 
     The invariants ``g2, g3`` are sums of products that cancel (they lose 2-3 digits) and
     the parameter ``mc`` of an orbit near a separatrix amplifies that loss by ``1/mc``; so
     these few scalars are formed at ``dps`` digits from the (exact) float data and rounded.
-    Returns floats (and float vectors) only.
+    With ``exact`` a discriminant below the working precision is taken as zero (a double
+    root of the cubic: ``m = 1``, the separatrix, or ``m = 0``).
+    Returns floats (and float vectors) and, under ``"mpc"``, the same in mpmath.
     """
     import mpmath as mp
 
     with mp.workdps(dps):
-        A_ = [mp.mpf(float(x)) for x in a]
-        mm = [mp.mpf(float(x)) for x in m0]
-        nn = [mp.mpf(float(x)) for x in n]
+        # the data exactly (Ip and m0 as exact rationals from the float data, or an mpmath
+        # re-anchoring point), not their float64 roundings: the curve, its period and a
+        # separatrix are the data's
+        A_ = [1 / _mpq(mp, x) for x in Ip]
+        mm = [_mpq(mp, x) for x in m0]
+        nn = [_mpq(mp, x) for x in n]
         h = [mm[k] + nn[k] for k in range(3)]  # exact: no loss of a small m against a large N
 
         def cross(u, v):
@@ -202,95 +320,125 @@ def _algebra_at(a, n, m0, dps):
         dE = [dot(tau, av(mu0)), dot(tau, av(mu1))]
         gS = [1, 0, 1]
         gE = [dot(mu0, av(mu0)), 2 * dot(mu0, av(mu1)), dot(mu1, av(mu1))]
-
-        def pmul(p, q):
-            r = [0] * (len(p) + len(q) - 1)
-            for i, x in enumerate(p):
-                for j, y in enumerate(q):
-                    r[i + j] += x * y
-            return r
-
-        def psub(p, q):
-            L = max(len(p), len(q))
-            p = list(p) + [0] * (L - len(p))
-            q = list(q) + [0] * (L - len(q))
-            return [x - y for x, y in zip(p, q)]
-
-        A = psub(pmul(bS, [alphaE]), bE)
-        B = pmul(bS, dE)
-        C = psub(pmul(bS, gE), pmul(bE, gS))
-        D = psub(pmul(B, B), pmul(A, C))
-        D = (D + [0] * 5)[:5]
-        # dz/dt = W with W^2 = Delta(z) = B^2 - A C: the constant kappa in dt = kappa dz / W is
-        # exactly 1 for this normalization (checked to 50 digits on random data, and by the
-        # tests against integration), so zdot(0) = W(0) = -B(0) (our point is the root of the
-        # quadratic that runs to infinity on the osculating plane z = 0).  This needs no third
-        # derivative and stays valid where the torsion of the orbit vanishes at h(0).
-        kappa = mp.mpf(1)
+        A = _psub(_pmul(bS, [alphaE]), bE)
+        B = _pmul(bS, dE)
+        C = _psub(_pmul(bS, gE), _pmul(bE, gS))
+        D = _psub(_pmul(B, B), _pmul(A, C))
+        f = (D + [0] * 5)[:5]
+        # dz/dt = W with W^2 = Delta(z) = B^2 - A C (z = Z1/Z0 the pencil parameter, z = 0 the
+        # osculating plane at h(0)): the constant in dt = kappa dz / W is exactly 1 for this
+        # normalization (checked to 50 digits on random data, and by the tests against
+        # integration), and zdot(0) = -B(0) (our point is the root of the quadratic that runs to
+        # infinity on the osculating plane).
         zdot0 = -B[0]
-        f = D
         a4, a3, a2, a1, a0 = f[0], f[1] / 4, f[2] / 6, f[3] / 4, f[4]
         g2 = a0 * a4 - 4 * a1 * a3 + 3 * a2 ** 2
         g3 = a0 * a2 * a4 + 2 * a1 * a2 * a3 - a2 ** 3 - a0 * a3 ** 2 - a1 ** 2 * a4
         disc = g2 ** 3 - 27 * g3 ** 2
         if abs(disc) <= mp.mpf(10) ** (8 - dps) * (abs(g2) ** 3 + 27 * g3 ** 2):
-            raise _NeedDigits
+            if not exact:
+                raise _NeedDigits
+            disc = 0
         out = {}
         if disc > 0:
             r = sorted(_cubic_roots_mp(mp, g2, g3), reverse=True)
+        elif disc == 0:
+            if g2 == 0:
+                raise NotImplementedError("solve_gyrostat: a triple root of the Weierstrass cubic "
+                                          "(degenerate orbit); not supported")
+            ed = -3 * g3 / (2 * g2)  # 4x^3 - g2 x - g3 = 4 (x - ed)^2 (x + 2 ed)
+            r = [ed, ed, -2 * ed] if ed > 0 else [-2 * ed, ed, ed]
+        if disc >= 0:
             beta = r[0] - r[2]
             m, mc = (r[1] - r[2]) / beta, (r[0] - r[1]) / beta
             scale = mp.sqrt(beta)
-            out.update(kind=3, p1=r[2], p0=beta, kwp=-2 * beta ** 1.5, T=2 * mp.ellipk(m) / scale)
-        elif disc < 0:
+            T = 2 * mp.ellipk(m) / scale if mc > 0 else mp.inf
+            out.update(kind=3, p1=r[2], p0=beta, T=T)
+            roots, e_top = r, r[0]
+        else:
             e2r = _cubic_roots_mp(mp, g2, g3)[0]
             H = mp.sqrt(3 * e2r ** 2 - g2 / 4)
             m, mc = mp.mpf(1) / 2 - 3 * e2r / (4 * H), mp.mpf(1) / 2 + 3 * e2r / (4 * H)
             scale = 2 * mp.sqrt(H)
-            out.update(kind=1, p1=e2r - H, p0=2 * H, kwp=-4 * H ** 1.5, T=4 * mp.ellipk(m) / scale)
-        else:
-            m = mc = scale = None
-        if m is None or mc <= mp.mpf(2) ** -1020 or not mp.isfinite(out.get("T", mp.inf)):
-            raise NotImplementedError("solve_gyrostat: the orbit is (within float range) a separatrix "
-                                      "of the gyrostat: infinite period")
-        out.update(m=m, mc=mc, scale=scale, q1=out["p1"] - a2 / 2, kappa=kappa, s0=zdot0,
-                   g2=g2, g3=g3, alphaE=alphaE, loss=mp.sqrt(dot(h, h) * dot(w, w)) / n1)
-        res = {k: (int(v) if k == "kind" else float(v)) for k, v in out.items()}
-        res["wc"] = tuple(float(x) for x in (a0, a1, a2, a3, a4))
+            out.update(kind=1, p1=e2r - H, p0=2 * H, T=4 * mp.ellipk(m) / scale)
+            ei = mp.sqrt(3 * e2r ** 2 - g2) / 2
+            roots, e_top = [mp.mpc(-e2r / 2, ei), e2r, mp.mpc(-e2r / 2, -ei)], e2r
+        if mc != 0 and (mc <= mp.mpf(2) ** -1020 or not mp.isfinite(out["T"])):
+            raise NotImplementedError("solve_gyrostat: the orbit is within 1e-307 (mc = "
+                                      f"{mp.nstr(mc, 3)}) of a separatrix of the gyrostat, "
+                                      "closer than float64 resolves; not supported")
+        th, k, cq, va = _turning_point(mp, f, zdot0, e_top, roots)
+        # qe = e_top - c: wp - c = qe + (wp - e_top), both terms >= 0 unless y passes infinity
+        out.update(m=m, mc=mc, scale=scale, s0=zdot0, k=k, qe=e_top - cq, g2=g2, g3=g3,
+                   cr=mp.cos(th), sr=mp.sin(th), va=va)
+        res = {k_: (int(v) if k_ == "kind" else float(v)) for k_, v in out.items()}
+        res["va_lo"] = float(va - res["va"])
         # the residual quadratic's coefficients as exact-coefficient polynomials in z: evaluated
         # near their roots (a small orbit about a relative equilibrium, |m| << |N|) they keep
         # their relative accuracy, which dot products of O(|h|) vectors would not
-        res["polys"] = tuple(np.array([float(x) for x in (P + [0] * 4)[:k]])
-                             for P, k in ((bS, 2), (A, 2), (B, 3), (C, 4)))
+        res["polys"] = tuple(np.array([float(x) for x in (P + [0] * 4)[:k_]])
+                             for P, k_ in ((bS, 2), (A, 2), (B, 3), (C, 4)))
         res["tau"] = np.array([float(x) for x in tau])
         res["e1"] = np.array([float(x) for x in e1])
         res["e2"] = np.array([float(x) for x in e2])
-        res["mpc"] = dict(out, wc=(a0, a1, a2, a3, a4), polys=(bS, A, B, C), tau=tau, e1=e1, e2=e2,
-                          m0=mm, dps=dps)
+        res["mpc"] = dict(out, polys=(bS, A, B, C), tau=tau, e1=e1, e2=e2, m0=mm, dps=dps)
         return res
 
 
 # -- the generic (elliptic) motion ------------------------------------------------------------
 
-class _Elliptic:
-    """h(t) by the tangent-line pencil and Weierstrass' inversion; psi by Fourier series."""
+def _cheb_nodes(n):
+    return np.cos(np.pi * (np.arange(n) + 0.5) / n)
 
-    def __init__(self, a, n, m0, Pbody, t_anchor=0.0):
+
+class _Elliptic:
+    """h(t) by the tangent-line pencil and Weierstrass' inversion based at a turning point;
+    psi by Fourier series (periodic orbit) or by a Chebyshev series in ``tanh`` (separatrix)."""
+
+    def __init__(self, Ip, n, m0, Pbody, t_anchor=0.0, m0_mp=None, dps=34, Ip_exact=None):
         # the state is carried as m = m0 + Delta(t) (Delta the displacement of h from the
         # anchor h(t_anchor) = m0 + N), so that omega = a m keeps its relative accuracy when
         # |m| << |N| (fast rotors)
         h0 = m0 + n
-        self.a, self.n, self.m0, self.h0 = a, n, m0, h0
+        self.Ip, self.a, self.n, self.m0, self.h0 = Ip, 1.0 / Ip, n, m0, h0
         self.P = Pbody  # principal -> body
         self.G = _norm(h0)
-        self.w0 = a * m0
+        self.w0 = self.a * m0
         self.t_anchor = float(t_anchor)
-        c = _algebra(a, n, m0)
+        # (a re-anchoring point is passed in mpmath, so that the curve stays the data's to the
+        # working precision: rounding it would move an orbit on a separatrix off it)
+        self.Ip_exact = Ip if Ip_exact is None else Ip_exact
+        c = _algebra(self.Ip_exact, n, m0 if m0_mp is None else m0_mp, dps)
         for k, v in c.items():
             setattr(self, k, v)
+        self.separatrix = self.mc == 0.0
+        # the time origin of the formula, t_r = t_anchor - v_a, as a double-double
+        self.tr_hi, lo = _el._two_sum(self.t_anchor, -self.va)
+        self.tr_lo = lo - self.va_lo
 
-    def momentum_mp(self, t: float, near=None) -> np.ndarray:
-        """m(t) from the same closed form evaluated in mpmath (used to re-anchor exactly).
+    def orbit_times(self, n, off=None):
+        """n times spread over the orbit: one period from the anchor, or on a separatrix
+        ``tanh`` at Chebyshev nodes (the saddle approached at both ends); ``off`` shifts the
+        grid by that fraction of its step."""
+        if not self.separatrix:
+            return self.t_anchor + (np.arange(n) + (off or 0.0)) * (self.T / n)
+        s = np.cos(np.pi * (np.arange(n) + (0.5 if off is None else off)) / n)
+        return self.tr_hi + np.arctanh(s) / self.scale
+
+    def speed(self, t):
+        """|hdot| = |h x omega| along the orbit."""
+        d = self._dW(t)[0]
+        return np.linalg.norm(np.cross(self.h0 + d, self.a * (self.m0 + d)), axis=-1)
+
+    def fast_times(self, n=64):
+        """Times on the orbit ordered by decreasing speed (a grid offset by a generic fraction
+        of its step, so that no point a symmetry of the orbit singles out is on it)."""
+        ts = self.orbit_times(n, off=0.313)
+        return ts[np.argsort(-self.speed(ts))]
+
+    def momentum_mp(self, t: float, near=None, as_mp=False):
+        """m(t) from the same closed form evaluated in mpmath (used to re-anchor exactly and
+        to measure the float64 evaluation's error).
 
         With ``near`` given, of the two residual points for this ``z`` the one nearer to
         ``near`` is returned (where the two nearly coincide the sign test on ``B W`` is not
@@ -299,23 +447,19 @@ class _Elliptic:
 
         c = self.mpc
         with mp.workdps(c["dps"]):
-            a0, a1, a2, a3, a4 = c["wc"]
             sc = c["scale"]
-            u = sc * (mp.mpf(t) - mp.mpf(self.t_anchor))
+            u = sc * (mp.mpf(t) - mp.mpf(self.t_anchor) + c["va"])
             sn, cn, dn = (mp.ellipfun(f, u, m=c["m"]) for f in ("sn", "cn", "dn"))
             if c["kind"] == 3:
-                X, Y = sn * sn, cn * dn * sn
-                Xd, Yd = 2 * sn * cn * dn * sc, sc * (cn * cn * dn * dn - sn * sn * dn * dn - c["m"] * sn * sn * cn * cn)
+                X, Xd = sn * sn, 2 * sn * cn * dn * sc
+                Z0p = c["qe"] * X + c["p0"] * cn * cn
             else:
-                X, Y = 1 - cn, sn * dn
-                Xd, Yd = sc * sn * dn, sc * cn * (dn * dn - c["m"] * sn * sn)
-            q1, p0, s0, kw = c["q1"], c["p0"], c["s0"], c["kwp"]
-            Pq = q1 * X + p0
-            Z1 = -s0 * kw * Y + 2 * a3 * Pq * X + a1 * a4 * X * X
-            Z0 = 2 * Pq * Pq - a0 * a4 * X * X / 2
-            Z1d = -s0 * kw * Yd + 2 * a3 * (2 * q1 * X + p0) * Xd + 2 * a1 * a4 * X * Xd
-            Z0d = (4 * q1 * Pq - a0 * a4 * X) * Xd
-            W = Z0 * Z1d - Z1 * Z0d
+                X, Xd = 1 - cn, sc * sn * dn
+                Z0p = c["qe"] * X + c["p0"] / 2 * (1 + cn)
+            Z1p = c["k"] * X
+            W = c["k"] * c["p0"] * Xd
+            Z0 = c["cr"] * Z0p - c["sr"] * Z1p
+            Z1 = c["sr"] * Z0p + c["cr"] * Z1p
             bSp, Ap, Bp, Cp = c["polys"]
 
             def hom(P):  # homogeneous evaluation of an ascending polynomial in z = Z1/Z0
@@ -334,36 +478,61 @@ class _Elliptic:
                 nrm = num * num + gS * den * den
                 fac = -2 * bS / nrm if nrm != 0 else 0
                 d = [fac * (num * den * c["tau"][k] + den * den * mu[k]) for k in range(3)]
-                return np.array([float(c["m0"][k] + d[k]) for k in range(3)])
+                return [c["m0"][k] + d[k] for k in range(3)]
 
             p1 = point(W)
-            if near is None:
-                return p1
-            p2 = point(-W)
-            return p1 if _norm(p1 - near) <= _norm(p2 - near) else p2
+            if near is not None:
+                p2 = point(-W)
+                f1, f2 = (np.array([float(x) for x in p]) for p in (p1, p2))
+                p1 = p1 if _norm(f1 - near) <= _norm(f2 - near) else p2
+            return p1 if as_mp else np.array([float(x) for x in p1])
 
-    def check_float_against_mp(self, n=12):
-        """Empirical error of the float64 evaluation: float vs mpmath (same closed form) at the
-        points of the orbit where it is slowest (|dtheta_Z/dt| smallest, near a saddle the
-        parametrization is worst conditioned) and at a few others."""
-        ts = np.arange(128) * (self.T / 128)
-        W = np.abs(self._dW(ts)[1])
-        # t = 0 (the data point, always evaluated) is included
-        pick = np.concatenate([[0.0], ts[np.argsort(W)[: n - 4]], ts[:: 32]])
+    def check_float_against_mp(self):
+        """Error of the float64 evaluation, relative to |m(0)|.
+
+        Measured against the same closed form in mpmath at the data point and at the points
+        of a dense grid over the orbit where the float64 result is least trustworthy: where it
+        is slowest (turning points of the pencil, the approach to a saddle), where it is
+        farthest from the invariant sphere and ellipsoid (rounding across the orbit shows there
+        first), at the end of the period (the largest reduced argument), and a few others.
+        To this the phase error is added: the argument ``scale (t - t_r)`` and the period
+        carry the rounding of ``scale`` and ``K``, ``~2 eps`` per period in the phase."""
+        n = 512
+        ts = self.orbit_times(n, off=0.4137)
+        d, W = self._dW(ts)
+        h, m = self.h0 + d, self.m0 + d
+        G2, E0 = self.G ** 2, np.sum(self.a * self.m0 ** 2)
+        res = (np.abs(np.sum(h * h, -1) / G2 - 1)
+               + np.abs(np.sum(self.a * m * m, -1) - E0) / (E0 + G2 * np.max(self.a)))
+        pick = np.concatenate([[0.0, self.t_anchor], ts[np.argsort(np.abs(W))[:4]],
+                               ts[np.argsort(-res)[:4]], ts[n // 10::n // 5], ts[-2:]])
         mf = self.momentum(pick)
         scale = max(_norm(self.m0), 1e-300)
         self.float_error = max(_norm(mf[i] - self.momentum_mp(float(tp), near=mf[i]))
                                for i, tp in enumerate(pick)) / scale
+        hdot = np.linalg.norm(np.cross(h, self.a * m), axis=-1)
+        if self.separatrix:
+            u = np.abs(sum(self._u(ts)))
+            self.phase_error = 2 * _EPS * np.max(u * hdot) / (self.scale * scale)
+        else:
+            self.phase_error = 4 * _EPS * self.T * np.max(hdot) / scale
+
+    def anchor_is_slow(self) -> bool:
+        """h(0) is much slower than the fast part of the orbit (next to a saddle)."""
+        return self.speed(np.array([self.t_anchor]))[0] < 0.25 * np.max(self.speed(self.orbit_times(64)))
 
     def anchor_is_degenerate(self) -> bool:
-        """The orbit's torsion (nearly) vanishes at the anchor: dtheta_Z/dt = -B(0) ~ 0 there, and
+        """The orbit's torsion (nearly) vanishes at the anchor: dtheta_Z/dt = s0 ~ 0 there, and
         the pencil formula becomes 0/0 where the orbit meets the osculating plane again."""
-        _, W = self._dW(np.arange(64) * (self.T / 64) + self.t_anchor)
+        _, W = self._dW(self.orbit_times(64))
         return abs(self.s0) < 1e-2 * np.max(np.abs(W))
 
     def finish(self):
         self._pole()
-        self._fourier()
+        if self.separatrix:
+            self._chebyshev()
+        else:
+            self._fourier()
 
     # momentum --------------------------------------------------------------------------
     def h(self, t):
@@ -372,38 +541,39 @@ class _Elliptic:
     def momentum(self, t):
         return self.m0 + self._dW(t)[0]
 
+    def _u(self, t):
+        """The elliptic argument scale (t - t_r) as a double-double (hi, lo)."""
+        d_hi, d_lo = _el._two_sum(t, -self.tr_hi)
+        hi, lo = _el._two_prod(self.scale, d_hi)
+        return hi, lo + self.scale * (d_lo - self.tr_lo)
+
     def _dW(self, t):
         """Delta(t) = h(t) - h(0) and the homogeneous W (unit (Z0, Z1)): dtheta_Z/dt = W."""
-        a0, a1, a2, a3, a4 = self.wc
-        if self.t_anchor:
-            d_hi, d_lo = _el._two_sum(t, -self.t_anchor)
-            hi, lo = _el._two_prod(self.scale, d_hi)
-            lo = lo + self.scale * d_lo
-        else:
-            hi, lo = _el._two_prod(self.scale, t)
-        sn, cn, dn, _ = _el._ellipj_reduced(hi, lo, np.full(t.shape, self.m), np.full(t.shape, self.mc))
+        return self._dW_u(*self._u(t))
+
+    def _dW_u(self, hi, lo):
+        """The state at the elliptic argument ``u = hi + lo = scale (t - t_r)``."""
+        sn, cn, dn, _ = _el._ellipj_reduced(hi, lo, np.full(hi.shape, self.m), np.full(hi.shape, self.mc))
         sc = self.scale
-        if self.kind == 3:
+        # y = k / (wp - c) in the pencil turned by theta_r, wp = p1 + p0 / X, multiplied by X:
+        # X (wp - c) = qe X + X (wp - e_top), the second term in a form free of cancellation
+        # (next to a saddle wp - e_top is small and c nearly e_top: q1 X + p0 would cancel)
+        if self.kind == 3:  # wp = e3 + (e1 - e3) / sn^2
             X = sn * sn
-            Y = cn * dn * sn
             Xd = 2 * sn * cn * dn * sc
-            Yd = sc * (cn * cn * dn * dn - sn * sn * dn * dn - self.m * sn * sn * cn * cn)
-        else:
+            Z0p = self.qe * X + self.p0 * (cn * cn)
+        else:  # wp = e2 + H (1 + cn) / (1 - cn), p0 = 2 H
             with np.errstate(divide="ignore", invalid="ignore"):
                 X = np.where(cn > 0, sn * sn / (1 + cn), 1 - cn)
-            Y = sn * dn
+                Y = np.where(cn < 0, sn * sn / (1 - cn), 1 + cn)
             Xd = sc * sn * dn
-            Yd = sc * cn * (dn * dn - self.m * sn * sn)
-        q1, p0 = self.q1, self.p0
-        Pq = q1 * X + p0
-        # W&W's "sqrt f(x0)" is -zdot(0) with wp' ~ -2/t^3 (checked against integration)
-        Z1 = -self.s0 * self.kwp * Y + 2 * a3 * Pq * X + a1 * a4 * X * X
-        Z0 = 2 * Pq * Pq - 0.5 * a0 * a4 * X * X
-        Z1d = -self.s0 * self.kwp * Yd + 2 * a3 * (2 * q1 * X + p0) * Xd + 2 * a1 * a4 * X * Xd
-        Z0d = (4 * q1 * Pq - a0 * a4 * X) * Xd
+            Z0p = self.qe * X + (0.5 * self.p0) * Y
+        Z1p = self.k * X
+        W = self.k * self.p0 * Xd  # the Wronskian Z0 Z1' - Z1 Z0' (invariant under the turn)
+        Z0 = self.cr * Z0p - self.sr * Z1p
+        Z1 = self.sr * Z0p + self.cr * Z1p
         nz = np.hypot(Z0, Z1)
-        Z0, Z1, Z0d, Z1d = Z0 / nz, Z1 / nz, Z0d / nz, Z1d / nz
-        W = self.kappa * (Z0 * Z1d - Z1 * Z0d)
+        Z0, Z1, W = Z0 / nz, Z1 / nz, W / (nz * nz)
         return self._point(Z0, Z1, W), W
 
     def _point(self, Z0, Z1, W):
@@ -412,25 +582,38 @@ class _Elliptic:
         pb, pA, pB, pC = self.polys  # ascending powers of z = Z1/Z0, homogenized below
         bS = pb[0] * Z0 + pb[1] * Z1
         gS = Z0 * Z0 + Z1 * Z1
-        A = pA[0] * Z0 + pA[1] * Z1
-        B = (pB[0] * Z0 + pB[1] * Z1) * Z0 + pB[2] * Z1 * Z1
-        C = ((pC[0] * Z0 + pC[1] * Z1) * Z0 + pC[2] * Z1 * Z1) * Z0 + pC[3] * Z1 * Z1 * Z1
-        same = B * W > 0
-        num = np.where(same, C, W - B)
-        den = np.where(same, -B - W, A)
+        At = [pA[0] * Z0, pA[1] * Z1]
+        Bt = [pB[0] * Z0 * Z0, pB[1] * Z0 * Z1, pB[2] * Z1 * Z1]
+        Ct = [pC[0] * Z0 * Z0 * Z0, pC[1] * Z0 * Z0 * Z1, pC[2] * Z0 * Z1 * Z1, pC[3] * Z1 * Z1 * Z1]
+        A, B, C = sum(At), sum(Bt), sum(Ct)
+        # the point's coordinate along the plane is the root w = (W - B)/A = C/(-B - W) of
+        # A w^2 + 2 B w + C; of the two forms the one with the smaller rounding error bound is
+        # used (not just "W - B cancels": next to a saddle B and C are small against their
+        # terms, and C loses most of its digits)
+        aA, aB = sum(np.abs(x) for x in At), sum(np.abs(x) for x in Bt) + np.abs(W)
+        aC = sum(np.abs(x) for x in Ct)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            err1 = (aB + np.abs(W - B) * aA / np.abs(A)) / np.abs(A)
+            err2 = (aC + np.abs(C) * aB / np.abs(B + W)) / np.abs(B + W)
+        second = np.nan_to_num(err2, nan=np.inf) < np.nan_to_num(err1, nan=np.inf)
+        num = np.where(second, C, W - B)
+        den = np.where(second, -B - W, A)
         nrm = num * num + gS * den * den
         with np.errstate(divide="ignore", invalid="ignore"):
             fac = np.where(nrm > 0, -2 * bS / nrm, 0.0)
-        # at the anchor itself (t - t_anchor a multiple of the period: Z1 = 0 exactly) the
-        # formula is 0/0; the point is the anchor
+        # at the anchor itself (the osculating plane, Z1 = 0) the formula is 0/0; the point
+        # is the anchor
         fac = np.where(Z1 == 0, 0.0, fac)
         return fac[:, None] * ((num * den)[:, None] * tau + (den * den)[:, None] * mu)
 
     # attitude --------------------------------------------------------------------------
     def _pole(self):
         """Pole p maximizing min over the orbit of 1 + p.h/G (kept away from the orbit)."""
-        ts = np.linspace(0.0, self.T, 257)[:-1]
+        ts = self.orbit_times(256)
         hs = (self.h0 + self._dW(ts)[0]) / self.G
+        if self.separatrix:  # the saddle itself (u -> +-inf)
+            big = np.array([40.0, -40.0])
+            hs = np.concatenate([hs, (self.h0 + self._dW_u(big, 0 * big)[0]) / self.G])
         cands = [np.eye(3)[i] * s for i in range(3) for s in (1, -1)]
         mean = hs.mean(axis=0)
         if np.linalg.norm(mean) > 1e-3:
@@ -439,12 +622,15 @@ class _Elliptic:
         self.p = best
         self.Pw = _frame_with_e3(best)
 
-    def _psidot(self, t):
-        d = self._dW(t)[0]
+    def _psidot_d(self, d):
         h = self.h0 + d
         w = self.a * (self.m0 + d)
         hw = np.sum(h * w, -1)
-        return (hw + self.G * (w @ self.p)) / (self.G + h @ self.p), h
+        return (hw + self.G * (w @ self.p)) / (self.G + h @ self.p)
+
+    def _psidot(self, t):
+        d = self._dW(t)[0]
+        return self._psidot_d(d), self.h0 + d
 
     def _fourier(self):
         """Fourier coefficients of psi' over one period, doubling the sampling until the tail
@@ -456,7 +642,7 @@ class _Elliptic:
             c = np.fft.rfft(f) / n
             scale = np.max(np.abs(c))
             tail = np.max(np.abs(c[3 * len(c) // 4:]))
-            if tail <= 4 * _EPS * scale or (n >= 256 and tail > 0.5 * prev) or n >= 2 ** 17:
+            if tail <= 4 * _EPS * scale or (tail > 0.5 * prev and tail < 1e-11 * scale) or n >= 2 ** 17:
                 break
             prev = tail
             n *= 2
@@ -472,7 +658,45 @@ class _Elliptic:
         self.d_sum = self.d.sum()
         self.nterms = len(self.d)
 
+    def _chebyshev(self):
+        """On a separatrix: psi' is a rational function of s = tanh(u) (X = s^2, Xd is
+        2 scale s (1 - s^2)) equal to the saddle's rate nu at s = +-1.  psi = nu t + phi(s) with
+        phi' = (psi' - nu) / (scale (1 - s^2)): the Chebyshev interpolant of psi'(s) (to round-
+        off, adaptive), less nu and its linear part at +-1 (the rounding of psi' at the saddle),
+        is divided exactly by 1 - s^2 and integrated term by term."""
+        C = np.polynomial.chebyshev
+        n, prev = 64, np.inf
+        while True:
+            s = _cheb_nodes(n)
+            u = np.arctanh(s)
+            f = self._psidot_d(self._dW_u(u, 0 * u)[0])
+            c = _dct2(f)
+            scale = np.max(np.abs(c))
+            tail = np.max(np.abs(c[3 * n // 4:]))
+            if tail <= 4 * _EPS * scale or (tail > 0.5 * prev and tail < 1e-11 * scale) or n >= 2 ** 14:
+                break
+            prev = tail
+            n *= 2
+        self.fourier_tail = tail / scale
+        if self.fourier_tail > 1e-9:
+            raise NotImplementedError("solve_gyrostat: the precession angle's Chebyshev series on the "
+                                      f"separatrix does not converge (tail {self.fourier_tail:.1e})")
+        p1, m1 = C.chebval(1.0, c), C.chebval(-1.0, c)
+        self.nu = 0.5 * (p1 + m1)
+        c = c.copy()
+        c[0] -= self.nu
+        c[1] -= 0.5 * (p1 - m1)
+        q, _ = C.chebdiv(c, [0.5, 0.0, -0.5])  # 1 - s^2 = (T0 - T2) / 2
+        self.cheb = C.chebint(q) / self.scale
+        self.nterms = len(self.cheb)
+
     def psi(self, t):
+        if self.separatrix:
+            C = np.polynomial.chebyshev
+            s = np.tanh(sum(self._u(t)))
+            s0 = np.tanh(sum(self._u(np.zeros(1))))
+            per = C.chebval(s, self.cheb) - C.chebval(s0, self.cheb)
+            return _angle_mod_2pi(self.nu, t, per)
         th = _angle_mod_2pi(self.Om, t, 0.0)
         z = np.exp(1j * th)
         s = np.zeros(t.shape, dtype=complex)
@@ -505,6 +729,15 @@ class _Elliptic:
 
     def omega(self, t):
         return (self.a * self.momentum(t)) @ self.P.T
+
+
+def _dct2(f):
+    """Chebyshev coefficients of the interpolant at the first-kind nodes (c_0 full weight)."""
+    from scipy.fft import dct
+
+    c = dct(f, type=2) / len(f)
+    c[0] *= 0.5
+    return c
 
 
 class _Steady:
@@ -704,20 +937,32 @@ def solve_gyrostat(J, N, Q0, omega0) -> GyrostatSolution:
                                   "relative equilibrium; not supported")
     # the motion scales with |h|: m(t) = G m1(G t) for the data divided by G (so that tiny or
     # huge momenta neither underflow nor overflow in the orbit's polynomial coefficients)
-    Gs = _norm(m + n)
+    # (a power of two near |h|: the scaled data are the data, exactly)
+    Gs = 2.0 ** round(np.log2(_norm(m + n)))
     n, m = n / Gs, m / Gs
-    impl = _Elliptic(1.0 / Ip, n, m, R)
+    # the exact data for the algebra: I_i = J_j + J_k and m = I omega0 (no rounding)
+    wp = R.T @ w0
+    Iq = [Fraction(float(Jp[1])) + Fraction(float(Jp[2])), Fraction(float(Jp[0])) + Fraction(float(Jp[2])),
+          Fraction(float(Jp[0])) + Fraction(float(Jp[1]))]
+    mq = [Iq[i] * Fraction(float(wp[i])) / Fraction(Gs) for i in range(3)]
+    impl = _Elliptic(Ip, n, m, R, m0_mp=mq, Ip_exact=Iq)
     m_data = m
-    for frac in (0.0313, 0.0517, 0.1):
-        if not impl.anchor_is_degenerate():
-            break
-        # zero torsion at h(0) (typically a point on a symmetry plane of the orbit): the
-        # formula is 0/0 where the orbit meets the osculating plane again.  Re-anchor a little
-        # later, at a generic point (not a fraction of the period a symmetry could single
-        # out), given there by the closed form evaluated in mpmath; rounding it perturbs the
-        # data by ~1e-16, which the motion carries back to t = 0 (measured below)
-        ta = frac * impl.T
-        impl = _Elliptic(1.0 / Ip, n, impl.momentum_mp(ta), R, t_anchor=ta)
+    if impl.anchor_is_degenerate() or impl.anchor_is_slow():
+        # The pencil is anchored at h(0).  Two anchors are bad: zero torsion at h(0)
+        # (typically a point on a symmetry plane of the orbit), where the formula is 0/0 where
+        # the orbit meets the osculating plane again; and a slow point (next to a saddle),
+        # whose tangent line passes close to the saddle, so that the pencil angle resolves the
+        # points around the saddle, where the orbit lingers, only to eps / (distance), and the
+        # Weierstrass form is based at a nearly double root.  Re-anchor at a fast point of the
+        # orbit, given there by the closed form in mpmath (not rounded: the curve stays the
+        # data's to the working precision).
+        for ta in impl.fast_times()[:6]:
+            ma = impl.momentum_mp(float(ta), as_mp=True)
+            new = _Elliptic(Ip, n, np.array([float(x) for x in ma]), R, t_anchor=float(ta),
+                            m0_mp=ma, dps=impl.mpc["dps"], Ip_exact=Iq)
+            if not new.anchor_is_degenerate():
+                impl = new
+                break
     impl.finish()
     impl.setup_attitude(Q0p)
     impl.check_float_against_mp()
@@ -726,12 +971,13 @@ def solve_gyrostat(J, N, Q0, omega0) -> GyrostatSolution:
                            _norm(impl.momentum(np.zeros(1))[0] - m_data) / max(_norm(m_data), 1e-300))
     # relative error: the float64 evaluation's (measured against mpmath at the worst-
     # conditioned points of the orbit) and the Fourier tail of psi' (per period)
-    err = max(8 * _EPS, impl.float_error) + impl.fourier_tail
+    err = max(8 * _EPS, impl.float_error) + impl.phase_error + impl.fourier_tail
     if err > 1e-10:
         warnings.warn(f"solve_gyrostat: estimated relative error {err:.1e} per period of the "
                       "orbit (close to a separatrix); see "
                       "invariants['error_estimate']", RuntimeWarning, stacklevel=2)
-    return make("gyrostat/elliptic", _Scaled(impl, Gs), period=impl.T / Gs, rate=impl.nu * Gs, err=err)
+    method = "gyrostat/separatrix" if impl.separatrix else "gyrostat/elliptic"
+    return make(method, _Scaled(impl, Gs), period=impl.T / Gs, rate=impl.nu * Gs, err=err)
 
 
 class _Scaled:
