@@ -424,3 +424,42 @@ def test_poles_of_y_against_a_birational_model():
     # the places over the poles x = +-1 are at y = infinity
     for b in (1, -1):
         assert all(np.isinf(abs(P.y)) for P in C1.places_over(b))
+
+
+@pytest.mark.parametrize("name", ["klein", "spectral_g4", "spectral_nodal_g3"])
+def test_riemann_constant_with_the_library_theta(name):
+    """The vanishing property checked with thetasol.theta (an independent theta implementation,
+    with Siegel reduction) instead of the private sum used to select K."""
+    theta = pytest.importorskip("thetasol.theta")
+    _, f, _, _ = load_ref(name)
+    C = PlaneCurve(f, x, y)
+    g = C.genus
+    tau = C.riemann_matrix()
+    K = C.riemann_constant()
+    rng = np.random.default_rng(11)
+    D = _random_points(C, g, rng)
+    A = C.abel_map(D)
+    e0 = A.sum(axis=0) + K
+    _, v = theta.riemann_theta_separated(A - e0, tau)
+    assert np.max(np.abs(v)) < 1e-9
+    _, v = theta.riemann_theta_separated(C.abel_map(_random_points(C, 3, rng)) - e0, tau)
+    assert np.min(np.abs(v)) > 1e-4
+
+
+@pytest.mark.parametrize("name", ["trigonal", "spectral_g4"])
+def test_meromorphic_exact_differential(name):
+    """dy = -f_x / f_y dx is exact (poles at infinity): zero periods over the cycles, and
+    integrate() along the Abel-map paths gives y(P) - y(base)."""
+    _, f, _, _ = load_ref(name)
+    C = PlaneCurve(f, x, y)
+    p = -sp.diff(f, x)
+    P = C.period_matrix([p])
+    assert np.max(np.abs(P)) < 1e-11 * max(1.0, np.max(np.abs(C.period_matrix())))
+    rng = np.random.default_rng(5)
+    pts = _random_points(C, 4, rng)
+    I = C.integrate([p], pts)
+    y0 = C.base_point[1]
+    assert np.allclose(I[:, 0], np.array([q[1] for q in pts]) - y0, rtol=1e-11, atol=1e-11)
+    # a place where y has a pole cannot be a target
+    with pytest.raises(ValueError, match="pole"):
+        C.integrate([p], C.places_at_infinity()[0])
