@@ -10,10 +10,12 @@ below the tolerance (the classical a-priori estimate; geometric refinement appea
 close critical values).
 
 The sheets are continued through the quadrature nodes: all roots in y are computed at once
-(companion eigenvalues, vectorized over every node of every piece), then matched node to node with
-a Hermite test (the tangents from both ends must meet at the midpoint far closer than the roots are
-to each other).  A step that fails the test is bisected; a step that cannot be resolved in
-float64 is recomputed with mpmath from the exact coefficients (where the curve is nearly singular).
+(companion eigenvalues, vectorized over every node of every piece, then Newton steps with
+compensated double-double residuals), then matched node to node with a Hermite test (the tangents
+from both ends must meet at the midpoint far closer than the roots are to each other), a
+gap-closing-time test and a tangent-turn test.  Failed steps are subdivided in vectorized rounds;
+roots that float64 cannot separate are recomputed with mpmath from the exact coefficients, and
+intervals whose float64 sum is not accurate enough are summed in mpmath (nearly singular curves).
 This is written by hand rather than with a homotopy-continuation library because none of the
 allowed dependencies offers vectorized polynomial root tracking.
 """
