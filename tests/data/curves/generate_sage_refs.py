@@ -71,7 +71,7 @@ def curves():
 
 
 # Sage needs tens of minutes at 212 bits for this one; 128 bits (38 digits) is ample for the tests
-PREC = {"close_branch_points": 128}
+PREC = {"close_branch_points": 120}
 
 
 def main(names):
@@ -81,9 +81,10 @@ def main(names):
     for name in names:
         f = allc[name]
         t0 = time.time()
-        S53 = RiemannSurface(f, prec=53)
-        S53.period_matrix()
-        t53 = time.time() - t0
+        if name not in PREC:  # (the 53-bit run of close_branch_points does not finish)
+            S53 = RiemannSurface(f, prec=53)
+            S53.period_matrix()
+        t53 = time.time() - t0 if name not in PREC else None
         prec = PREC.get(name, 212)
         t0 = time.time()
         S = RiemannSurface(f, prec=prec)
@@ -105,7 +106,7 @@ def main(names):
         }
         with open(f"{name}.json", "w") as fh:
             json.dump(rec, fh, indent=1)
-        print(name, "genus", S.genus, f"{t53:.2f}s / {t200:.2f}s", flush=True)
+        print(name, "genus", S.genus, f"{t53}s / {t200:.2f}s", flush=True)
 
 
 if __name__ == "__main__":
