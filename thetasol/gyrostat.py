@@ -12,17 +12,26 @@ Method
 ``h(t)`` runs on the intersection of the sphere ``|h| = G`` with the ellipsoid
 ``(h - N) . I^{-1} (h - N) = 2T``, an elliptic curve (Volterra 1899; Basak 2009 gives its
 sigma-function form).  We parametrize it by the pencil of planes through the tangent line of
-the orbit at ``h(0)``: each plane meets the curve in two further points, which solve a
-quadratic whose discriminant ``Delta(z)`` is a quartic in the pencil parameter ``z`` (``z = 0``
-is the osculating plane).  ``dt`` is the holomorphic differential: with our normalization
-``dz / dt = W``, ``W^2 = Delta(z)`` exactly (checked to 50 digits, and by the tests), so
-``z(t)`` is given by Weierstrass' addition formula for the
-inversion of a quartic (Whittaker & Watson 20.6) with ``wp`` of the quartic's invariants
-``g2, g3``; ``wp`` is written with our Jacobi functions (three real roots of
-``4x^3 - g2 x - g3``: ``wp = e3 + (e1 - e3)/sn^2``; one real root: the ``cn`` form), and the
-whole formula is multiplied through by ``sn^4`` (resp. ``(1 - cn)^2``) so that nothing is
-infinite at ``t = 0``.  The point is then rebuilt from ``z`` and the sign of ``W`` (a stable
-root of the quadratic).  Argument reduction modulo the periods is as in the Euler top.
+the orbit at an anchor point ``h_a`` (normally ``h(0)``): each plane meets the curve in two
+further points, which solve a quadratic whose discriminant ``Delta(z)`` is a quartic in the
+pencil parameter ``z`` (``z = 0`` is the osculating plane).  ``dt`` is the holomorphic
+differential: with our normalization ``dz / dt = W``, ``W^2 = Delta(z)`` exactly (checked to
+50 digits, and by the tests).  ``z(t)`` oscillates between two real zeros of ``Delta`` (a real
+component of the curve meets every plane of the pencil in an even number of points), and is
+inverted by Weierstrass' formula based at such a zero ``z_r`` (Whittaker & Watson 20.6):
+in the pencil turned so that ``z_r`` is at 0, ``y(t) = k / (wp(t - t_r) - c)`` with
+``k = Delta'/4``, ``c = Delta''/24`` there and ``wp`` of the quartic's invariants ``g2, g3``,
+written with our Jacobi functions (three real roots of ``4x^3 - g2 x - g3``:
+``wp = e3 + (e1 - e3)/sn^2``; one real root: the ``cn`` form).  Multiplied through by ``sn^2``
+(resp. ``1 - cn``), its homogeneous numerator and denominator never vanish together.  (The
+formula based at a general point, the anchor, has a numerator and a denominator with two
+common zeros per period; for some data, about 3 in 100 generic ones, they lie on the real orbit,
+where float64 evaluation is 0/0: energy errors up to 1e-3 of its scale next to them.)  Of the
+zeros bounding the orbit the steepest is taken (next to a separatrix the other can be one of a
+nearly double pair, where ``wp - c`` would cancel), and ``t_r``, the time it is reached, comes
+from ``wp(t_a - t_r)`` by Carlson's ``R_F``.  The point is rebuilt from ``z`` and ``W`` (a root
+of the quadratic, in whichever of its two algebraic forms has the smaller rounding bound).
+Argument reduction modulo the periods is as in the Euler top.
 
 Attitude: as for the Euler top, ``Q = S R_3(psi) B(h)`` with ``B`` the minimal rotation
 taking ``h/G`` to a pole ``p`` kept away from the orbit, and
@@ -31,28 +40,49 @@ secular rate and periodic part are taken from the Fourier series of this closed-
 periodic integrand, the coefficients computed by FFT to round-off (the series converges
 geometrically; the number of terms is chosen adaptively).
 
+Separatrix: when the cubic has a double root the parameter is ``m = 1`` exactly (or ``m = 0``:
+a regular orbit on a level set with a relative equilibrium elsewhere): ``sn = tanh``,
+``cn = dn = sech`` and the orbit is homoclinic to the saddle ("gyrostat/separatrix", period
+``inf``).  ``psi'`` is then a rational function of ``s = tanh(u)`` equal to the saddle's rate at
+``s = +-1``; ``psi - nu t`` is the integral of a Chebyshev series in ``s`` (the interpolant of
+``psi'``, less its values at ``+-1``, divided exactly by ``1 - s^2``).
+
 Numerics: the few algebraic constants (the frame, the quartic, ``g2, g3``, the cubic's
-roots, ``K``) are formed in mpmath from the exact float data (``g2, g3`` cancel, and near a
-separatrix the parameter amplifies that by ``1/mc``); the residual quadratic is evaluated from
+roots, the turning point and ``t_r``, ``K``) are formed in mpmath from the data exactly
+(``I_i = J_j + J_k`` and ``m = I omega0`` as rationals, a power-of-two scaling by ``|h|``):
+``g2, g3`` cancel, near a separatrix the parameter amplifies that by ``1/mc``, and a float64
+rounding of the data would move the period there by far more than round-off.  A discriminant
+that vanishes to 2000 digits is taken as exactly zero.  The residual quadratic is evaluated from
 exact-coefficient polynomials in ``z`` (so that small orbits about a relative equilibrium,
 ``|m| << |N|``, and nearly planar orbits of nearly axisymmetric dual-spin bodies keep their
-relative accuracy); ``m(t)`` is carried as ``m(0) + (h(t) - h(0))``.  Where the torsion of the
-orbit vanishes at ``h(0)`` (a point on a symmetry plane of the orbit: ``N`` along a principal
-axis and ``omega0`` in a principal plane, say) the formula is 0/0 where the orbit meets the
-osculating plane again: the parametrization is then re-anchored a little later on the same
-orbit, at the point the closed form gives there in mpmath.
+relative accuracy); ``wp - c`` as ``(e_top - c) + (wp - e_top)``, each term free of
+cancellation; ``m(t)`` is carried as ``m(h_a) + (h(t) - h_a)``.
+
+The anchor: the pencil is re-anchored (at a point of the same orbit that the closed form gives
+in mpmath, unrounded) when the torsion vanishes at ``h(0)`` (a point on a symmetry plane of the
+orbit: ``N`` along a principal axis and ``omega0`` in a principal plane, say), where the
+formula is 0/0 where the orbit meets the osculating plane again, and when ``h(0)`` is slow (next
+to a saddle): its tangent line then passes close to the saddle, and the pencil resolves the
+points around it, where the orbit lingers, only to ``eps / distance`` (2e-11 was seen).  The
+new anchor is a fast point where the pencil turns fastest.
 
 Degenerate cases are separate closed forms: ``N = 0`` (or below the rounding of ``m``) is the
 Euler top (:mod:`thetasol.euler_top`), ``m = 0`` rest, ``h x omega = 0`` (to the rounding of the
 data) steady rotation, a spherical carrier and an axisymmetric carrier with ``N`` along its
 axis are trigonometric.
 
-Error report: ``invariants["error_estimate"]`` is the float64 evaluation's relative error
-measured against the same closed form in mpmath at the orbit's worst-conditioned points (where
-it is slowest, near a saddle it can reach ~1e-12) and at ``t = 0``, plus the Fourier tail of
-``psi'`` per period; a :class:`RuntimeWarning` is issued above 1e-10.  Orbits exactly on a
-separatrix of the gyrostat (infinite period) and motions within 1e-60 (relative) of a relative
-equilibrium raise :class:`NotImplementedError`.  There is no ``dps=`` path.
+Error report: ``invariants["error_estimate"]`` is the float64 evaluation's error relative to
+``|m|``, per period: twice the largest difference from the same closed form in mpmath at the
+data point and at the points of a dense grid where the float64 result is least trustworthy
+(largest ``|dh/dtheta|``, farthest from the invariant sphere and ellipsoid, the end of the
+period, a few others), plus the phase error of the rounded period (``4 eps T max|hdot|``) and
+the Fourier tail of ``psi'``; a :class:`RuntimeWarning` is issued above 1e-10.  Float64
+round-off is reached everywhere except on nearly planar orbits (a rotor momentum small against
+``|m|`` next to the Euler top's separatrix, where the torsion of the orbit is small everywhere
+and the pencil degenerates): there the loss grows like ``eps / torsion ratio`` (1e-10 at
+``|N| = 1e-4 |m|``, 1e-6 at ``1e-6 |m|``) and the estimate reports it.  Orbits within 1e-307
+(but not exactly on) a separatrix, and motions within 1e-60 (relative) of a relative
+equilibrium, raise :class:`NotImplementedError`.  There is no ``dps=`` path.
 """
 from __future__ import annotations
 
@@ -363,6 +393,11 @@ def _algebra_at(Ip, n, m0, dps, exact=False):
             out.update(kind=1, p1=e2r - H, p0=2 * H, T=4 * mp.ellipk(m) / scale)
             ei = mp.sqrt(3 * e2r ** 2 - g2) / 2
             roots, e_top = [mp.mpc(-e2r / 2, ei), e2r, mp.mpc(-e2r / 2, -ei)], e2r
+        # next to a double root the cubic's close roots, hence m and mc, carry the rounding of
+        # g2, g3 amplified by 1/min(m, mc)^2: work with enough digits for float64-accurate m, mc
+        small = min(m, mc)
+        if not exact and small > mp.mpf(2) ** -1020 and mp.mpf(10) ** -dps > mp.mpf(10) ** -20 * small ** 2:
+            raise _NeedDigits
         if mc != 0 and (mc <= mp.mpf(2) ** -1020 or not mp.isfinite(out["T"])):
             raise NotImplementedError("solve_gyrostat: the orbit is within 1e-307 (mc = "
                                       f"{mp.nstr(mc, 3)}) of a separatrix of the gyrostat, "
@@ -430,13 +465,27 @@ class _Elliptic:
         d = self._dW(t)[0]
         return np.linalg.norm(np.cross(self.h0 + d, self.a * (self.m0 + d)), axis=-1)
 
-    def fast_times(self, n=64):
-        """Times on the orbit ordered by decreasing speed (a grid offset by a generic fraction
-        of its step, so that no point a symmetry of the orbit singles out is on it)."""
+    def anchor_candidates(self, n=64):
+        """Times on the orbit for a new anchor: of a grid (offset by a generic fraction of its
+        step, so that no point a symmetry of the orbit singles out is on it) the points not slower
+        than a quarter of the fastest, by decreasing torsion rate |tau| |hdot| (the rate at which
+        the pencil turns there)."""
         ts = self.orbit_times(n, off=0.313)
-        return ts[np.argsort(-self.speed(ts))]
+        d = self._dW(ts)[0]
+        h, a = self.h0 + d, self.a
+        w = a * (self.m0 + d)
+        h1 = np.cross(h, w)
+        w1 = a * h1
+        h2 = np.cross(h1, w) + np.cross(h, w1)
+        h3 = np.cross(h2, w) + 2 * np.cross(h1, w1) + np.cross(h, a * h2)
+        b = np.cross(h1, h2)
+        speed = np.linalg.norm(h1, axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            rate = np.abs(np.sum(b * h3, -1)) / np.sum(b * b, -1) * speed
+        rate = np.where(np.isfinite(rate) & (speed >= 0.25 * np.nanmax(speed)), rate, -1.0)
+        return ts[np.argsort(-rate)]
 
-    def momentum_mp(self, t: float, near=None, as_mp=False):
+    def momentum_mp(self, t: float, near=None, as_mp=False, dps=None):
         """m(t) from the same closed form evaluated in mpmath (used to re-anchor exactly and
         to measure the float64 evaluation's error).
 
@@ -446,7 +495,7 @@ class _Elliptic:
         import mpmath as mp
 
         c = self.mpc
-        with mp.workdps(c["dps"]):
+        with mp.workdps(dps or c["dps"]):
             sc = c["scale"]
             u = sc * (mp.mpf(t) - mp.mpf(self.t_anchor) + c["va"])
             sn, cn, dn = (mp.ellipfun(f, u, m=c["m"]) for f in ("sn", "cn", "dn"))
@@ -504,13 +553,20 @@ class _Elliptic:
         G2, E0 = self.G ** 2, np.sum(self.a * self.m0 ** 2)
         res = (np.abs(np.sum(h * h, -1) / G2 - 1)
                + np.abs(np.sum(self.a * m * m, -1) - E0) / (E0 + G2 * np.max(self.a)))
-        pick = np.concatenate([[0.0, self.t_anchor], ts[np.argsort(np.abs(W))[:4]],
+        hdot = np.linalg.norm(np.cross(h, self.a * m), axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            amp = np.nan_to_num(hdot / np.abs(W), nan=np.inf)  # |dh/dtheta|: rounding of theta
+        pick = np.concatenate([[0.0, self.t_anchor], ts[np.argsort(-amp)[:6]],
                                ts[np.argsort(-res)[:4]], ts[n // 10::n // 5], ts[-2:]])
         mf = self.momentum(pick)
         scale = max(_norm(self.m0), 1e-300)
-        self.float_error = max(_norm(mf[i] - self.momentum_mp(float(tp), near=mf[i]))
-                               for i, tp in enumerate(pick)) / scale
-        hdot = np.linalg.norm(np.cross(h, self.a * m), axis=-1)
+        # (twice the largest: the error between sampled points is rounding noise of that size)
+        # (digits enough for float64 accuracy of m, mc; an exactly degenerate orbit was set up
+        # at 2000 digits, which this comparison does not need)
+        small = min(self.m, self.mc)
+        dps = min(self.mpc["dps"], 50 + (int(-2 * np.log10(small)) if small > 0 else 0))
+        self.float_error = 2 * max(_norm(mf[i] - self.momentum_mp(float(tp), near=mf[i], dps=dps))
+                                   for i, tp in enumerate(pick)) / scale
         if self.separatrix:
             u = np.abs(sum(self._u(ts)))
             self.phase_error = 2 * _EPS * np.max(u * hdot) / (self.scale * scale)
@@ -519,13 +575,21 @@ class _Elliptic:
 
     def anchor_is_slow(self) -> bool:
         """h(0) is much slower than the fast part of the orbit (next to a saddle)."""
-        return self.speed(np.array([self.t_anchor]))[0] < 0.25 * np.max(self.speed(self.orbit_times(64)))
+        v0, v = self.speed(np.array([self.t_anchor]))[0], self.speed(self.orbit_times(64))
+        return not (np.isfinite(v0) and np.all(np.isfinite(v))) or v0 < 0.25 * np.max(v)
+
+    def torsion_ratio(self) -> float:
+        """|dtheta/dt| at the anchor against its maximum over the orbit."""
+        W = np.abs(self._dW(self.orbit_times(64))[1])
+        return abs(self.s0) / np.max(W) if np.all(np.isfinite(W)) and np.max(W) > 0 else 0.0
 
     def anchor_is_degenerate(self) -> bool:
         """The orbit's torsion (nearly) vanishes at the anchor: dtheta_Z/dt = s0 ~ 0 there, and
         the pencil formula becomes 0/0 where the orbit meets the osculating plane again."""
         _, W = self._dW(self.orbit_times(64))
-        return abs(self.s0) < 1e-2 * np.max(np.abs(W))
+        W = np.abs(W)
+        # (a non-finite value on the orbit: the formula is 0/0 somewhere, re-anchor)
+        return not np.all(np.isfinite(W)) or abs(self.s0) < 1e-2 * np.max(W)
 
     def finish(self):
         self._pole()
@@ -871,14 +935,24 @@ def solve_gyrostat(J, N, Q0, omega0) -> GyrostatSolution:
         ``u(t)``, ``method``, ``invariants``) plus ``N`` and ``h(t)``.  ``invariants`` has
         ``energy`` (``1/2 m . omega``), ``H`` ((8.40): ``1/2 tr(M omega) = -2 energy``),
         ``H2`` ((8.40): ``tr (M + N)^2 = -2 |h|^2``), ``h2 = |h|^2``, ``period`` (of
-        ``omega``; 0 when constant), ``precession_rate`` and ``error_estimate``.
+        ``omega``; 0 when constant, ``inf`` on a separatrix), ``precession_rate`` (the mean
+        rate; on a separatrix the saddle's) and ``error_estimate`` (relative error of
+        ``m(t)`` per period, see the module notes).  ``method`` is one of
+        ``gyrostat/elliptic``, ``gyrostat/separatrix``, ``gyrostat/steady``,
+        ``gyrostat/sphere``, ``gyrostat/axisymmetric``, ``rest`` or the Euler top's.
 
     Raises
     ------
     ValueError
         Bad data (non-finite, wrong shapes, unphysical ``J``, ``Q0`` not a rotation).
     NotImplementedError
-        An orbit exactly on a separatrix of the gyrostat (infinite period).
+        An orbit within 1e-307 of a separatrix but not on it (the elliptic parameter is not
+        representable), or a motion within 1e-60 of a relative equilibrium.
+
+    Warns
+    -----
+    RuntimeWarning
+        When ``error_estimate`` exceeds 1e-10 (nearly planar orbits, see the module notes).
     """
     Jm = V.second_moments(J, "J")
     n_body = V.vector3(N, "N")
@@ -956,13 +1030,43 @@ def solve_gyrostat(J, N, Q0, omega0) -> GyrostatSolution:
         # Weierstrass form is based at a nearly double root.  Re-anchor at a fast point of the
         # orbit, given there by the closed form in mpmath (not rounded: the curve stays the
         # data's to the working precision).
-        for ta in impl.fast_times()[:6]:
+        best = None
+        for ta in impl.anchor_candidates()[:6]:
             ma = impl.momentum_mp(float(ta), as_mp=True)
             new = _Elliptic(Ip, n, np.array([float(x) for x in ma]), R, t_anchor=float(ta),
                             m0_mp=ma, dps=impl.mpc["dps"], Ip_exact=Iq)
             if not new.anchor_is_degenerate():
-                impl = new
+                best = new
                 break
+            # (a nearly planar orbit, next to a separatrix of a nearly torque-free body: the
+            # torsion is small everywhere; the least degenerate anchor is kept, and the error
+            # estimate says what is lost)
+            if best is None or new.torsion_ratio() > best.torsion_ratio():
+                best = new
+        # The new anchor came from the old pencil, whose mpmath evaluation loses digits where
+        # that pencil is degenerate (15-20 were seen); next to a separatrix the phase amplifies
+        # an error in the anchor by ~1/mc.  Check that the new pencil gives back the data at
+        # t = 0 to 1e-20 min(m, mc) (exactly degenerate orbits: to the working precision, less
+        # 40 digits); else redo both with twice the digits.
+        dps = best.mpc["dps"]
+        while True:
+            import mpmath as mp
+
+            with mp.workdps(dps):
+                back = best.momentum_mp(0.0, as_mp=True)
+                mis = max(abs(back[k] - _mpq(mp, mq[k])) for k in range(3)) / max(abs(_mpq(mp, x)) for x in mq)
+                small = min(best.mpc["m"], best.mpc["mc"])
+                ok = mis <= (mp.mpf(10) ** -20 * small if small > 0 else mp.mpf(10) ** (40 - dps))
+            if ok or dps > 4000:
+                break
+            dps *= 2
+            first = _Elliptic(Ip, n, m, R, m0_mp=mq, Ip_exact=Iq, dps=dps)
+            ta = best.t_anchor
+            ma = first.momentum_mp(ta, as_mp=True)
+            best = _Elliptic(Ip, n, np.array([float(x) for x in ma]), R, t_anchor=ta, m0_mp=ma,
+                             dps=first.mpc["dps"], Ip_exact=Iq)
+            dps = best.mpc["dps"]
+        impl = best
     impl.finish()
     impl.setup_attitude(Q0p)
     impl.check_float_against_mp()
