@@ -236,7 +236,6 @@ def interval_mp(pc, lo, hi, N, seeds, ev, nums, dps):
         tau = mid + half * t
         x, dxdt = piece_x_mp(pc, tau)
         a = ev.ycoeffs(x, wdps)
-        xp = [mpmath.mpc(1)]
         for s in range(m):
             y0 = complex(seeds[s, q])
             y = mpmath.mpc(y0)

@@ -11,7 +11,6 @@ exactly instead of appearing as clusters of nearly equal floating roots.
 from __future__ import annotations
 
 from fractions import Fraction
-from math import gcd
 
 import mpmath
 import numpy as np
@@ -93,7 +92,6 @@ class CurvePoly:
             C[i, j] = float(re) + 1j * float(im)
         if not np.all(np.isfinite(C)):
             raise ValueError("f has coefficients that overflow float64")
-        # Normalize so that max |c| = 1 (periods are scaled back by the differentials' own factor).
         self.C = C
         self.absC = np.abs(C)
         self.Cx = C[1:, :] * np.arange(1, dx + 1)[:, None] if dx > 0 else np.zeros((1, n + 1), complex)
@@ -285,7 +283,7 @@ def _poly_to_fracs(P):
     return [_to_fraction_pair(c) for c in P.all_coeffs()]
 
 
-def _fracs_to_complex(coef, scale_exp=0):
+def _fracs_to_complex(coef):
     return np.array([float(r) + 1j * float(i) for r, i in coef], dtype=complex)
 
 
@@ -405,7 +403,7 @@ def comp_horner(chi, clo, z):
         s, se = _cadd_eft(p, np.broadcast_to(chi[..., j], z.shape))
         comp = comp * z + (pe + se + clo[..., j])
     hi, lo = _cadd_eft(s, comp)
-    return hi, lo + 0.0 * lo
+    return hi, lo
 
 
 def _coeff_polys_dd(self, x):

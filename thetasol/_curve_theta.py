@@ -10,7 +10,6 @@ theta that the zero tests use.
 """
 from __future__ import annotations
 
-import itertools
 
 import numpy as np
 

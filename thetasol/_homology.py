@@ -125,11 +125,6 @@ class LiftedGraph:
         return G
 
 
-def intersection_matrix(cycles, G):
-    S = cycles @ G @ cycles.T
-    return S
-
-
 def symplectic_basis(cycles, G, weights=None):
     """Integer symplectic reduction.
 

@@ -318,12 +318,3 @@ def _vertex_position(keys, pts, sites, box):
         return complex(np.mean(pts))
     return complex(best)
 
-
-def edge_sites(graph: CellGraph):
-    """For each edge, the sites (indices into allsites; -1 for the outside) on either side."""
-    ne = len(graph.edges)
-    sides = [[] for _ in range(ne)]
-    for k, seq in enumerate(graph.cells + graph.extra_cells):
-        for e, _ in seq:
-            sides[e].append(k)
-    return sides

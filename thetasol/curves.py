@@ -45,21 +45,6 @@ def _ncycles(perm):
     return c
 
 
-def _cycles(perm):
-    seen = np.zeros(len(perm), bool)
-    out = []
-    for i in range(len(perm)):
-        if not seen[i]:
-            cyc = []
-            j = i
-            while not seen[j]:
-                seen[j] = True
-                cyc.append(int(j))
-                j = perm[j]
-            out.append(tuple(cyc))
-    return out
-
-
 class _Numerators(np.ndarray):
     """Complex coefficient array (nd, I, J) of differential numerators carrying their exact form."""
 
