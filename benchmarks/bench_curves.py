@@ -177,6 +177,10 @@ def main(quick=False):
     J, M, u = float_spectral(seed=12)
     cases.append(dict(label="spectral (4.12), random float data (2), g=4",
                       make=lambda J=J, M=M, u=u: spectral_curve(J, M, u), diffs=None, Pref=None, sage_f=None))
+    J, M, u = float_spectral(seed=12)
+    J = np.array([J[0], J[1], J[1] * 1.004])
+    cases.append(dict(label="spectral, nearly symmetric body (J3/J2 = 1.004), g=4",
+                      make=lambda J=J, M=M, u=u: spectral_curve(J, M, u), diffs=None, Pref=None, sage_f=None))
     J, M, u = near_rank_one()
     cases.append(dict(label="spectral, near rank-one a (eps 1e-8), g=4", make=lambda J=J, M=M, u=u: spectral_curve(J, M, u, tol=1e-12),
                       diffs=None, Pref=None, sage_f=None))
