@@ -207,3 +207,35 @@ def test_nearly_reducible_data_are_handled_or_refused():
     assert_same_lattice(C2.period_matrix(), P, tol=1e-11)
     with pytest.raises(ValueError, match="reducible"):
         spectral_curve(J, 1e-11 * hat([1.0, 2.0, 3.0]), u)  # within the tolerance: refused as reducible
+
+
+@pytest.mark.slow
+def test_random_physical_spectral_curves():
+    """60 random bodies and potentials (every 5th a rank-one gravity-gradient potential): genus,
+    Riemann bilinear relations, path independence, Jacobi inversion with the Riemann constant."""
+    from thetasol._curve_theta import theta_normalized_abs
+    for seed in range(60):
+        rng = np.random.default_rng(1000 + seed)
+        J = np.sort(rng.uniform(0.2, 3.0, 3))
+        m = rng.normal(size=3) * rng.uniform(0.1, 5)
+        Q, _ = np.linalg.qr(rng.normal(size=(3, 3)))
+        a = rng.normal(size=(3, 3)) * rng.uniform(0.1, 5)
+        a = a + a.T
+        if seed % 5 == 0:
+            gam = rng.normal(size=3)
+            a = 3 * np.outer(gam, gam)
+        C = spectral_curve(J, hat(m), -Q.T @ a @ Q)
+        assert C.genus == (3 if seed % 5 == 0 else 4)
+        tau = C.riemann_matrix()
+        assert np.min(np.linalg.eigvalsh(tau.imag)) > 0
+        K = C.riemann_constant()
+        pts = []
+        for i in range(C.genus):
+            E0 = complex(rng.normal(), rng.normal())
+            R, _ = C._poly.roots(np.array([E0]))
+            pts.append((E0, R[0, i % 3]))
+        A = C.abel_map(pts)
+        assert theta_normalized_abs(A - A.sum(axis=0) - K, tau).max() < 1e-9
+        if seed % 6 == 0:
+            C2 = PlaneCurve(C._poly.sympy_expr(), C.x, C.y, _extra_sites=[0.05 + 0.031j, -0.2 + 0.11j])
+            assert_same_lattice(C2.period_matrix(), C.period_matrix(), tol=1e-12)
