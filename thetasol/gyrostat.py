@@ -79,8 +79,10 @@ period, a few others), plus the phase error of the rounded period (``4 eps T max
 the Fourier tail of ``psi'``; a :class:`RuntimeWarning` is issued above 1e-10.  Float64
 round-off is reached everywhere except on nearly planar orbits (a rotor momentum small against
 ``|m|`` next to the Euler top's separatrix, where the torsion of the orbit is small everywhere
-and the pencil degenerates): there the loss grows like ``eps / torsion ratio`` (1e-10 at
-``|N| = 1e-4 |m|``, 1e-6 at ``1e-6 |m|``) and the estimate reports it.  Orbits within 1e-307
+and every pencil of planes through a line meeting the curve twice degenerates): there the loss
+grows like ``eps / torsion ratio`` (``J = (2, 0.25, 1)``, ``omega0 = (0, 0, 1)``,
+``N = (0, n, 0)``: 1.7e-12 at ``n = 1e-3``, 1.4e-10 at ``1e-4``, 8e-7 at ``1e-6``) and the
+estimate reports it.  Orbits within 1e-307
 (but not exactly on) a separatrix, and motions within 1e-60 (relative) of a relative
 equilibrium, raise :class:`NotImplementedError`.  There is no ``dps=`` path.
 """
