@@ -503,3 +503,24 @@ def test_singular_periodic_level_set():
     w, Q = sol(t)
     wr, Qr = heyoka_ref(J, N, Q0, w0, t)
     assert np.max(np.abs(w - wr)) < 1e-13 * 3 and np.max(np.abs(Q - Qr)) < 1e-12
+
+
+@pytest.mark.parametrize("n", [1e-3, 1e-5])
+def test_nearly_planar_orbits_report_their_loss(n):
+    """A rotor momentum small against |m| next to the Euler top's separatrix: the orbit nearly
+    lies in a plane and the pencil degenerates (the known limitation).  The error against heyoka
+    in quadruple precision stays within error_estimate, and above 1e-10 a RuntimeWarning says so."""
+    J, N, w0 = np.array([2.0, 0.25, 1.0]), np.array([0.0, n, 0.0]), np.array([0.0, 0.0, 1.0])
+    with warnings.catch_warnings(record=True) as rec:
+        warnings.simplefilter("always")
+        sol = solve_gyrostat(J, N, np.eye(3), w0)
+    est = sol.invariants["error_estimate"]
+    assert any(issubclass(r.category, RuntimeWarning) for r in rec) == (est > 1e-10)
+    T = sol.invariants["period"]
+    t = np.linspace(-T, T, 41)
+    w, _ = sol(t)
+    wr, _ = heyoka_ref(J, N, np.eye(3), w0, t, quad=True)
+    I = inertia(J)
+    err = np.max(np.abs((w - wr) @ I.T)) / np.max(np.abs(wr @ I.T))
+    assert err <= 2 * est  # two periods
+    assert (est > 1e-10) == (n < 1e-4)

@@ -224,7 +224,7 @@ def test_near_separatrix_error_estimate_bounds_the_error(data, seed):
     """Against heyoka in quadruple precision (tol 1e-32, the same exact data): over the first
     stretch of the orbit (a saddle passage when the data are next to one) the error in m,
     relative to max |m|, is within the solution's error estimate (per period) and within
-    1e-12."""
+    1e-12, and so is the attitude's."""
     from test_gyrostat import heyoka_ref
 
     J, N, w0 = data
@@ -246,3 +246,4 @@ def test_near_separatrix_error_estimate_bounds_the_error(data, seed):
     nper = 1.0 + (tspan / T if np.isfinite(T) else 0.0)
     assert err <= 2 * sol.invariants["error_estimate"] * nper + 16 * EPS
     assert err <= 1e-12
+    assert np.max(np.abs(Q - Qr)) <= 1e-12
