@@ -232,9 +232,10 @@ def _turning_point(mp, f, s0, e_top, roots):
 
     ``theta(t)`` oscillates between the two real zeros of ``Dh(cos theta, sin theta)`` adjacent
     to 0 (the real orbit always has turning points: a real component of the curve meets every
-    plane of the pencil in an even number of points).  Of the two, the one where ``Dh`` has the
-    larger slope is taken (next to a separatrix the other is one of a nearly double pair, where
-    the formula below would cancel).  In the pencil turned by ``theta_r`` the quartic has a root
+    plane of the pencil in an even number of points).  The real zeros are tried by decreasing
+    slope of ``Dh`` (next to a separatrix a zero can be one of a nearly double pair, where the
+    formula below would cancel); a zero bounding the other real component is recognized by
+    ``wp(t_a - t_r) < e_top`` and skipped.  In the pencil turned by ``theta_r`` the quartic has a root
     at 0 and (Whittaker & Watson 20.6, base point at a root)
     ``y(t) = k / (wp(t - t_r) - c)``, ``k = Dr'(0)/4``, ``c = Dr''(0)/24``: numerator and
     denominator never vanish together (the general base point of W&W's formula gives a
