@@ -116,16 +116,34 @@ def local_data(curve):
         ld = LocalData(kind, k, b, ref, x1, xs[:M], ys[:, :M], perm)
         ld.index = p
         rel = tr2.rel[tr2.nodes.offsets[p]:tr2.nodes.offsets[p] + M] if tr2.rel is not None else None
-        ld.ys, ld.fys = _accurate_samples(curve, ld.xs, ld.ys, rel)
+        xi = None
+        if kind == "critical":
+            # the FFT assumes samples exactly at b + xi_m, xi_m = (x1 - b) exp(2 pi i m / M)
+            xi = (x1 - b) * np.exp(2j * np.pi * np.arange(M) / M)
+            ld.xs = b + xi
+        ld.ys, ld.fys = _accurate_samples(curve, ld.xs, ld.ys, rel, center=b if kind == "critical" else None,
+                                          xi=xi)
         out.append(ld)
     curve._cache["local"] = out
     curve._cache["local_lines"] = tr1
     return out
 
 
-def _accurate_samples(curve, xs, ys, rel):
-    """Sample values and f_y at them; polished in mpmath where float64 roots lose digits."""
+def _accurate_samples(curve, xs, ys, rel, center=None, xi=None):
+    """Sample values and f_y at them, with compensated (double-double) Newton steps.
+
+    With ``center`` b, the samples are taken at exactly b + (xs - b) evaluated through the exactly
+    shifted polynomial f(b + xi, y) when the circle is small against |b| (otherwise rounding x to
+    float64 would jitter the samples by eps |b| / radius of the circle, which the FFT turns into
+    spurious negative powers).  Where even that loses digits, the samples are polished in mpmath.
+    """
     poly = curve._poly
+    if center is not None:
+        if np.finfo(float).eps * abs(center) > 1e-14 * np.min(np.abs(xi)):
+            Chi, Clo = poly.shifted_dd(center)
+            Ahi, Alo = poly.coeff_polys_dd_local(xi, Chi, Clo)
+            Y, fy = poly.polish_dd(Ahi, Alo, ys.T.copy())
+            return Y.T.copy(), fy.T.copy()
     Ahi, Alo = poly.coeff_polys_dd(xs)
     Y, fy = poly.polish_dd(Ahi, Alo, ys.T.copy())
     ys, fys = Y.T.copy(), fy.T.copy()
@@ -178,11 +196,19 @@ def series_eval(k, t0, F, t):
     return (F[..., keep] * r ** k[keep]).sum(axis=-1)
 
 
-def series_integral(k, t0, Fh, t, what="differential"):
+def noise_level(ld):
+    """Relative size of spurious negative Laurent coefficients at this circle: the critical value is
+    a float64 number, off by ~eps |b|, which shows up as ~eps |b| / radius."""
+    if ld.kind != "critical":
+        return 1e-9
+    return max(1e-9, 100 * np.finfo(float).eps * abs(ld.center) / abs(ld.x1 - ld.center))
+
+
+def series_integral(k, t0, Fh, t, what="differential", noise=1e-9):
     """Integral from the place (t = 0) to t of h(t) dt from its scaled Laurent data Fh (nd, N)."""
     scale = np.max(np.abs(Fh), axis=-1, keepdims=True) + 1e-300
     neg = (k < 0) & (k > -len(k) // 4)
-    if np.any(np.abs(Fh[..., neg]) > 1e-9 * scale):
+    if np.any(np.abs(Fh[..., neg]) > noise * scale):
         raise ValueError(f"the {what} has a pole at this place: its integral to the place diverges")
     pos = k >= 0
     kk = k[pos]

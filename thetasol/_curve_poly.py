@@ -325,6 +325,18 @@ def polynomial_roots(P) -> np.ndarray:
     else:
         sep = np.full(1, np.inf)
     if np.all(err < 1e-6 * sep) and np.all(np.isfinite(r)):
+        # compensated Newton steps: the critical values to ~eps |r| (the local series at a branch
+        # point are centred there; an offset delta shows up as spurious poles ~ delta / radius)
+        asc = coef[::-1]
+        hi = np.array([complex(float(a), float(b)) for a, b in asc])
+        lo = np.array([complex(float(a - Fraction(h.real)), float(b - Fraction(h.imag)))
+                       for (a, b), h in zip(asc, hi)])
+        dc = np.polyder(c)
+        for _ in range(2):
+            ph, pl = comp_horner(hi, lo, r)
+            d = np.polyval(dc, r)
+            step = np.where(d != 0, (ph + pl) / np.where(d != 0, d, 1), 0)
+            r = np.where(np.abs(step) < 1e-6 * (np.abs(r) + sep), r - step, r)
         return r
     return _mp_polyroots(coef, deg)
 
@@ -446,3 +458,79 @@ def _two_prod_c(a, k):
 
 CurvePoly.coeff_polys_dd = _coeff_polys_dd
 CurvePoly.polish_dd = _polish_dd
+
+
+def _shifted_dd(self, b):
+    """Coefficients of F(xi, y) = f(b + xi, y) in double-double: (hi, lo), arrays (dx + 1, n + 1).
+
+    The shift is exact (rational arithmetic; b is the exact binary value of a float), so F is
+    evaluated accurately for small xi even where |b| is large against |xi| (a local chart at b).
+    """
+    from math import comb
+    b = complex(b)
+    br, bi = Fraction(b.real), Fraction(b.imag)
+    # powers of b as exact complex fractions
+    pw = [(Fraction(1), Fraction(0))]
+    for _ in range(self.dx):
+        r, i = pw[-1]
+        pw.append((r * br - i * bi, r * bi + i * br))
+    hi = np.zeros((self.dx + 1, self.n + 1), complex)
+    lo = np.zeros_like(hi)
+    for j in range(self.n + 1):
+        for i in range(self.dx + 1):
+            sr, si = Fraction(0), Fraction(0)
+            for k in range(i, self.dx + 1):
+                c = self.exact.get((k, j))
+                if c is None:
+                    continue
+                cr, ci = c
+                pr, pi = pw[k - i]
+                m = comb(k, i)
+                sr += m * (cr * pr - ci * pi)
+                si += m * (cr * pi + ci * pr)
+            h = complex(float(sr), float(si))
+            hi[i, j] = h
+            lo[i, j] = complex(float(sr - Fraction(h.real)), float(si - Fraction(h.imag)))
+    return hi, lo
+
+
+def _coeff_polys_dd_local(self, xi, Chi, Clo):
+    """a_j(b + xi) in double-double from the shifted coefficients of :meth:`shifted_dd`."""
+    xi = np.asarray(xi, dtype=complex)
+    K = len(xi)
+    chi = np.broadcast_to(Chi.T[None, :, :], (K,) + Chi.T.shape)
+    clo = np.broadcast_to(Clo.T[None, :, :], (K,) + Clo.T.shape)
+    return comp_horner(chi, clo, np.broadcast_to(xi[:, None], (K, self.n + 1)))
+
+
+CurvePoly.shifted_dd = _shifted_dd
+CurvePoly.coeff_polys_dd_local = _coeff_polys_dd_local
+
+
+def _second_derivatives(self, x, Y):
+    """f_xx, f_xy, f_yy at (x[k], Y[k, s]) (plain float64; used only for step control)."""
+    x = np.asarray(x, dtype=complex)
+    n, dx = self.n, self.dx
+    C = self.C
+    ii = np.arange(dx + 1)
+
+    def cpoly(coef):
+        A = np.broadcast_to(coef[-1], x.shape + (n + 1,)).copy()
+        for i in range(coef.shape[0] - 2, -1, -1):
+            A *= x[..., None]
+            A += coef[i]
+        return A
+
+    Cx = C * ii[:, None]
+    Cxx = C * (ii * (ii - 1))[:, None]
+    A0 = cpoly(C)
+    A1 = cpoly(Cx[1:]) if dx >= 1 else np.zeros(x.shape + (n + 1,), complex)
+    A2 = cpoly(Cxx[2:]) if dx >= 2 else np.zeros(x.shape + (n + 1,), complex)
+    jj = np.arange(n + 1)
+    fxx, _ = self.horner_y(A2, Y)
+    fxy, _ = self.horner_y(A1[:, 1:] * jj[1:], Y) if n >= 1 else (np.zeros_like(Y), None)
+    fyy, _ = self.horner_y(A0[:, 2:] * (jj[2:] * (jj[2:] - 1)), Y) if n >= 2 else (np.zeros_like(Y), None)
+    return fxx, fxy, fyy
+
+
+CurvePoly.second_derivatives = _second_derivatives

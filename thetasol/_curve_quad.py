@@ -87,6 +87,18 @@ class Piece:
             return -e * (self.a - self.b) * u ** (e - 1) + 0j
         return e * (self.a - self.b) / u ** (e + 1) + 0j
 
+    def ddx(self, tau):
+        tau = np.asarray(tau, dtype=float)
+        if self.kind == "line":
+            return np.zeros(tau.shape, dtype=complex)
+        if self.kind == "circle":
+            return (2j * np.pi * self.e) ** 2 * (self.x(tau) - self.b)
+        u = 1.0 - tau
+        e = self.e
+        if self.kind == "point":
+            return e * (e - 1) * (self.a - self.b) * u ** (e - 2) + 0j if e > 1 else np.zeros(tau.shape, complex)
+        return e * (e + 1) * (self.a - self.b) / u ** (e + 2) + 0j
+
     def singularities(self, sites):
         """Preimages in the tau-plane of the critical values ``sites``."""
         sites = np.asarray(sites, dtype=complex)
@@ -178,13 +190,15 @@ class _Nodes:
             self.offsets.append(self.offsets[-1] + len(tt))
         self.tau = np.concatenate(taus) if taus else np.zeros(0)
         self.w = np.concatenate(wts) if wts else np.zeros(0)
-        xs, dxs = [], []
+        xs, dxs, ddxs = [], [], []
         for p, pc in enumerate(pieces):
             t = self.tau[self.offsets[p]:self.offsets[p + 1]]
             xs.append(pc.x(t))
             dxs.append(pc.dx(t))
+            ddxs.append(pc.ddx(t))
         self.x = np.concatenate(xs) if xs else np.zeros(0, complex)
         self.dx = np.concatenate(dxs) if dxs else np.zeros(0, complex)
+        self.ddx = np.concatenate(ddxs) if ddxs else np.zeros(0, complex)
 
 
 def _collision_times(R, Dt, sep):
@@ -222,7 +236,7 @@ class Tracker:
         self.n_mp_nodes = 0
 
     # -------------------------------------------------------------- node evaluation
-    def _eval_nodes(self, x, dx, precise=True):
+    def _eval_nodes(self, x, dx, precise=True, ddx=None):
         poly = self.poly
         R, A = poly.roots(x)
         if precise:
@@ -241,6 +255,18 @@ class Tracker:
             err = EPS * np.abs(R) + 4 * poly.n * EPS * poly.root_error_bound(x, R, fy)
         else:
             err = poly.root_error_bound(x, R, fy)
+            weak = (err > 1e-8 * sep).any(axis=1)
+            if np.any(weak):
+                # compensated polish where plain float64 is not clearly enough (still cheap)
+                w = np.nonzero(weak)[0]
+                Ahi, Alo = poly.coeff_polys_dd(x[w])
+                Rw, fyw = poly.polish_dd(Ahi, Alo, R[w])
+                _, fxw = poly.fy_fx(x[w], Rw, A[w])
+                R[w], fy[w], fx[w] = Rw, fyw, fxw
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    D[w] = -fxw / fyw
+                sep[w] = _separations(Rw)
+                err[w] = EPS * np.abs(Rw) + 4 * poly.n * EPS * poly.root_error_bound(x[w], Rw, fyw)
         self._last_rel = None
         # float64 roots whose rounding error is not negligible against the gaps between sheets
         # (nearly colliding branch points) are recomputed in mpmath
@@ -259,68 +285,72 @@ class Tracker:
             err[idx] = 0.0
             self.n_mp_nodes += len(idx)
         Dt = D * dx[:, None]
+        # second derivative in tau: y_xx x_tau^2 + y_x x_tautau, y_xx = -(f_xx + 2 f_xy y' + f_yy y'^2) / f_y
+        fxx, fxy, fyy = poly.second_derivatives(x, R)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            Dxx = -(fxx + 2 * fxy * D + fyy * D * D) / fy
+            D2 = Dxx * (dx * dx)[:, None] + (D * ddx[:, None] if ddx is not None else 0)
+        D2 = np.where(np.isfinite(D2), D2, 0)
         # time (in tau) until the gap to the nearest other root closes at its current rate
         tc = _collision_times(R, Dt, sep)
         with np.errstate(divide="ignore", invalid="ignore"):
             self._last_rel = np.where(sep > 0, err / sep, np.inf).max(axis=1)
+        self._last_D2 = D2
         return R, A, fy, Dt, sep, tc
 
     # -------------------------------------------------------------- matching
     @staticmethod
-    def _match(yp, ydp, dt, roots, rootd, sep, tc, tcp):
+    def _match(yp, ydp, dt, roots, rootd, sep, tc, tcp, y2p=0.0, root2=0.0):
         """Index of the root continuing yp and whether the step is safe.
 
         Safe: each root moves by less than half its distance to the others (the linear model of the
         step is valid) and the tangents from both ends meet at the midpoint much closer than the
         roots are to each other (Hermite test).
         """
-        mp = yp + 0.5 * dt * ydp
-        mc = roots - 0.5 * dt * rootd
+        h2 = 0.125 * dt * dt
+        mp = yp + 0.5 * dt * ydp + h2 * y2p
+        mc = roots - 0.5 * dt * rootd + h2 * root2
         d = np.abs(mc - mp)
         i = int(np.argmin(d))
         d1 = d[i]
         d2 = np.partition(d, 1)[1] if len(d) > 1 else np.inf
+        r2 = root2[i] if np.ndim(root2) else root2
         safe = bool(d1 <= SAFETY * d2 and d1 <= SAFETY * sep[i]
                     and abs(dt) <= MOVE * tcp and abs(dt) <= MOVE * tc[i]
-                    and abs(dt * (rootd[i] - ydp)) <= SAFETY * sep[i])
+                    and abs(dt * dt * (r2 - y2p)) <= SAFETY * sep[i])
         return i, safe
 
-    def _refine(self, pc, t0, y0, yd0, t1, roots1, rootd1, sep1, tc1, tc0, depth=0):
+    def _refine(self, pc, t0, y0, yd0, t1, roots1, rootd1, sep1, tc1, tc0, y20, root21, depth=0):
         """Subdivide the step t0 -> t1 until matching is safe; return the root index at t1.
 
-        The step is cut into m equal parts at once (m from how far the safety tests failed: the
-        Hermite discrepancy shrinks like m^-3, the tangent turn like m^-2, the gap motion like m^-1),
-        all new points are evaluated in one vectorized call, and any sub-step still unsafe recurses.
+        The step is cut into m equal parts at once (m from how far the safety tests failed), all new
+        points are evaluated in one vectorized call, and any sub-step still unsafe recurses.
         """
         self.n_refined_steps += 1
         if depth > 40 or abs(t1 - t0) < 1e-15:
             x0 = complex(pc.x(t0))
             raise ValueError(f"cannot continue the sheets near x = {x0:.6g}: the curve is numerically singular there")
         dt = t1 - t0
-        mp_ = y0 + 0.5 * dt * yd0
-        mc = roots1 - 0.5 * dt * rootd1
-        d = np.abs(mc - mp_)
+        h2 = 0.125 * dt * dt
+        d = np.abs(roots1 - 0.5 * dt * rootd1 + h2 * root21 - (y0 + 0.5 * dt * yd0 + h2 * y20))
         i = int(np.argmin(d))
-        r = max((d[i] / (SAFETY * sep1[i])) ** (1 / 3) if sep1[i] > 0 else 4.0,
+        r = max((d[i] / (SAFETY * sep1[i])) ** (1 / 4) if sep1[i] > 0 else 4.0,
                 abs(dt) / (MOVE * tc0) if tc0 > 0 else 4.0,
                 abs(dt) / (MOVE * tc1[i]) if tc1[i] > 0 else 4.0,
-                (abs(dt * (rootd1[i] - yd0)) / (SAFETY * sep1[i])) ** 0.5 if sep1[i] > 0 else 4.0)
+                (abs(dt * dt * (root21[i] - y20)) / (SAFETY * sep1[i])) ** (1 / 3) if sep1[i] > 0 else 4.0)
         m = int(min(64, max(2, np.ceil(1.5 * r))))
         ts = t0 + (t1 - t0) * np.arange(1, m) / m
         Rm, _, _, Dm, sepm, tcm = self._eval_nodes(np.atleast_1d(pc.x(ts)), np.atleast_1d(pc.dx(ts)),
-                                                   precise=False)
-        seq_R = list(Rm) + [roots1]
-        seq_D = list(Dm) + [rootd1]
-        seq_s = list(sepm) + [sep1]
-        seq_t = list(tcm) + [tc1]
-        tt = list(ts) + [t1]
-        yc, ydc, tcc, tc_ = y0, yd0, tc0, t0
+                                                   precise=False, ddx=np.atleast_1d(pc.ddx(ts)))
+        D2m = self._last_D2
+        seq = list(zip(Rm, Dm, sepm, tcm, D2m, ts)) + [(roots1, rootd1, sep1, tc1, root21, t1)]
+        yc, ydc, tcc, y2c, tc_ = y0, yd0, tc0, y20, t0
         j = -1
-        for q in range(m):
-            j, safe = self._match(yc, ydc, tt[q] - tc_, seq_R[q], seq_D[q], seq_s[q], seq_t[q], tcc)
+        for Rq, Dq, sq, tq, D2q, tauq in seq:
+            j, safe = self._match(yc, ydc, tauq - tc_, Rq, Dq, sq, tq, tcc, y2c, D2q)
             if not safe:
-                j = self._refine(pc, tc_, yc, ydc, tt[q], seq_R[q], seq_D[q], seq_s[q], seq_t[q], tcc, depth + 1)
-            yc, ydc, tcc, tc_ = seq_R[q][j], seq_D[q][j], seq_t[q][j], tt[q]
+                j = self._refine(pc, tc_, yc, ydc, tauq, Rq, Dq, sq, tq, tcc, y2c, D2q, depth + 1)
+            yc, ydc, tcc, y2c, tc_ = Rq[j], Dq[j], tq[j], D2q[j], tauq
         return j
 
     # -------------------------------------------------------------- main entry
@@ -334,8 +364,9 @@ class Tracker:
         nodes = _Nodes(pieces, self.sites, self.tol)
         if not pieces:
             return Tracked(self, pieces, nodes, None, None, None, [], np.zeros(0, int), np.zeros((0, 0), int))
-        R, A, fy, Dt, sep, tc = self._eval_nodes(nodes.x, nodes.dx)
+        R, A, fy, Dt, sep, tc = self._eval_nodes(nodes.x, nodes.dx, ddx=nodes.ddx)
         rel = self._last_rel
+        D2 = self._last_D2
         off = nodes.offsets
         N0 = len(nodes.tau)
         tp, ty = [], []
@@ -353,7 +384,7 @@ class Tracker:
         if np.any(dmin > scale):
             bad = int(np.argmax(dmin > scale))
             raise ValueError(f"starting value y = {y0[bad]:.6g} is not a root of f at x = {nodes.x[k0[bad]]:.6g}")
-        pool = {"tau": nodes.tau.copy(), "R": R, "Dt": Dt, "sep": sep, "tc": tc}
+        pool = {"tau": nodes.tau.copy(), "R": R, "Dt": Dt, "sep": sep, "tc": tc, "D2": D2}
         seqs = [np.arange(off[p], off[p + 1]) for p in range(len(pieces))]
         for _round in range(12):
             choice_seq, unsafe = self._match_pass(pieces, seqs, pool, tp, c0, scalar=False)
@@ -369,11 +400,14 @@ class Tracker:
             new_piece = np.concatenate(new_piece)
             xs = np.empty(len(new_tau), complex)
             dxs = np.empty(len(new_tau), complex)
+            ddxs = np.empty(len(new_tau), complex)
             for p in np.unique(new_piece):
                 sel = new_piece == p
                 xs[sel] = pieces[p].x(new_tau[sel])
                 dxs[sel] = pieces[p].dx(new_tau[sel])
-            Rn, _, _, Dn, sn, tn = self._eval_nodes(xs, dxs, precise=False)
+                ddxs[sel] = pieces[p].ddx(new_tau[sel])
+            Rn, _, _, Dn, sn, tn = self._eval_nodes(xs, dxs, precise=False, ddx=ddxs)
+            D2n = self._last_D2
             self.n_refined_steps += len(unsafe)
             base = len(pool["tau"])
             pool["tau"] = np.concatenate([pool["tau"], new_tau])
@@ -381,6 +415,7 @@ class Tracker:
             pool["Dt"] = np.concatenate([pool["Dt"], Dn])
             pool["sep"] = np.concatenate([pool["sep"], sn])
             pool["tc"] = np.concatenate([pool["tc"], tn])
+            pool["D2"] = np.concatenate([pool["D2"], D2n])
             idx = base + np.arange(len(new_tau))
             for p in np.unique(new_piece):
                 merged = np.concatenate([seqs[p], idx[new_piece == p]])
@@ -414,7 +449,7 @@ class Tracker:
 
         With scalar=True unsafe steps are resolved by :meth:`_refine` instead of being reported.
         """
-        Rp, Dp, Sp, Tc, tau = pool["R"], pool["Dt"], pool["sep"], pool["tc"], pool["tau"]
+        Rp, Dp, Sp, Tc, tau, D2p = pool["R"], pool["Dt"], pool["sep"], pool["tc"], pool["tau"], pool["D2"]
         T = len(tp)
         L = np.array([len(sq) for sq in seqs])
         Lmax = int(L.max())
@@ -428,6 +463,7 @@ class Tracker:
         ycur = Rp[first, c0]
         ydcur = Dp[first, c0]
         tccur = Tc[first, c0]
+        y2cur = D2p[first, c0]
         unsafe = {}
         for k in range(1, Lmax):
             act = np.nonzero(L[tp] > k)[0]
@@ -436,15 +472,17 @@ class Tracker:
             node = S[tp[act], k]
             prev = S[tp[act], k - 1]
             dt = tau[node] - tau[prev]
-            mp_ = ycur[act] + 0.5 * dt * ydcur[act]
-            mc = Rp[node] - 0.5 * dt[:, None] * Dp[node]
+            h2 = 0.125 * dt * dt
+            # second-order (Taylor to y'') predictions of the midpoint from both ends
+            mp_ = ycur[act] + 0.5 * dt * ydcur[act] + h2 * y2cur[act]
+            mc = Rp[node] - 0.5 * dt[:, None] * Dp[node] + h2[:, None] * D2p[node]
             dd = np.abs(mc - mp_[:, None])
             i = np.argmin(dd, axis=1)
             ar = np.arange(len(act))
             d1 = dd[ar, i]
             d2 = np.partition(dd, 1, axis=1)[:, 1] if n > 1 else np.full(len(act), np.inf)
             sepi = Sp[node, i]
-            turn = np.abs(dt * (Dp[node, i] - ydcur[act]))
+            turn = np.abs(dt * dt * (D2p[node, i] - y2cur[act]))
             adt = np.abs(dt)
             # the tangent may turn by no more than a fraction of the gap over the step (curvature),
             # otherwise the Hermite discrepancy is not a reliable error measure
@@ -463,15 +501,15 @@ class Tracker:
                         t = act[q]
                         nd = node[q]
                         i[q] = self._refine(pieces_obj[tp[t]], tau[prev[q]], ycur[t], ydcur[t], tau[nd],
-                                            Rp[nd], Dp[nd], Sp[nd], Tc[nd], tccur[t])
+                                            Rp[nd], Dp[nd], Sp[nd], Tc[nd], tccur[t], y2cur[t], D2p[nd])
                 else:
                     with np.errstate(divide="ignore", invalid="ignore"):
                         r = np.maximum.reduce([
-                            np.where(sepi > 0, (d1 / (SAFETY * sepi)) ** (1 / 3), 4.0),
+                            np.where(sepi > 0, (d1 / (SAFETY * sepi)) ** (1 / 4), 4.0),
                             np.where(tccur[act] > 0, adt / (MOVE * tccur[act]), 4.0),
                             np.where(Tc[node, i] > 0, adt / (MOVE * Tc[node, i]), 4.0),
-                            np.where(sepi > 0, (turn / (SAFETY * sepi)) ** 0.5, 4.0),
-                            np.where(d2 > 0, (d1 / (SAFETY * d2)) ** (1 / 3), 4.0)])
+                            np.where(sepi > 0, (turn / (SAFETY * sepi)) ** (1 / 3), 4.0),
+                            np.where(d2 > 0, (d1 / (SAFETY * d2)) ** (1 / 4), 4.0)])
                     m = np.clip(np.ceil(1.5 * np.nan_to_num(r[bad], nan=4.0, posinf=64.0)), 2, 64).astype(int)
                     for q, mq in zip(bad, m):
                         key2 = (int(tp[act[q]]), k)
@@ -480,6 +518,7 @@ class Tracker:
             ycur[act] = Rp[node, i]
             ydcur[act] = Dp[node, i]
             tccur[act] = Tc[node, i]
+            y2cur[act] = D2p[node, i]
         return choice, [(p, k, m) for (p, k), m in unsafe.items()]
 
 
