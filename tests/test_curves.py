@@ -463,3 +463,25 @@ def test_meromorphic_exact_differential(name):
     # a place where y has a pole cannot be a target
     with pytest.raises(ValueError, match="pole"):
         C.integrate([p], C.places_at_infinity()[0])
+
+
+def test_abel_jacobi_at_clustered_branch_points():
+    """Branch points in pairs 2e-3 apart (the near-equilibrium situation): the Abel images of the
+    places over them (local series on small circles) satisfy Abel-Jacobi to rounding level."""
+    f = y**2 - ((x - 1) ** 2 - sp.Rational(1, 10**6)) * ((x + 2) ** 2 - sp.Rational(1, 10**6)) * (x - 5)
+    C = PlaneCurve(f, x, y)
+    tau = C.riemann_matrix()
+    (Pinf,) = C.places_at_infinity()
+    for b in C.branch_points:
+        (P,) = C.places_over(b)
+        assert P.e == 2
+        assert np.max(np.abs(_reduce(C.abel_map({P: 2, Pinf: -2}), tau))) < 1e-12
+    # points very close to a branch point (inside its local disc) approach its place like sqrt(dx)
+    b = C.branch_points[0]
+    (P,) = C.places_over(b)
+    dist = []
+    for h in (1e-8, 1e-10):
+        R, _ = C._poly.roots(np.array([b + h]))
+        A = C.abel_map([(b + h, r) for r in R[0]])
+        dist.append(min(np.max(np.abs(_reduce(a - C.abel_map(P), tau))) for a in A))
+    assert dist[0] < 1e-3 and abs(dist[0] / dist[1] - 10) < 0.5
