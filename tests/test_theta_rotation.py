@@ -23,8 +23,6 @@ REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.j
 KNOWN_LIMITS = {
     "near_unstable_equilibrium": "Abel images next to clustered branch points lose ~1e-11 (curve engine)",
     "nearly_symmetric": "curve construction for J1 ~ J2 (1e-6) falls back to slow mpmath tracking",
-    "near_stable_equilibrium": "a point next to a critical value: the engine reports a pole of a "
-                               "holomorphic differential (depends on the last bits of Q0)",
 }
 
 
@@ -63,14 +61,16 @@ def test_reconstruction_at_zero_returns_the_initial_data(name):
 def test_integrals_4_13_are_constant_on_the_theta_solution(name):
     J, a, Q0, w0, _ = _case(name)
     sol = solve_rotation(J, a, Q0, w0)
-    t = np.concatenate([np.linspace(0, 50, 401), [997.0, 4002.0, 1e6]])
+    t = np.concatenate([np.linspace(0, 50, 401), [997.0, 4002.0, 1e5, 1e6]])
     w, Q = sol(t)
     inv = invariants(J, a, Q, w)
+    # float64 resolves the phases t u to eps |t u|: the bound grows like eps t at far times
+    bound = np.maximum(1e-10, 1e-14 * t)
     for key in ("energy", "I2", "I3"):
         v = inv[key]
-        assert np.abs(v - v[0]).max() <= 1e-10 * (1 + abs(v[0])), key
+        assert np.all(np.abs(v - v[0]) <= bound * (1 + abs(v[0]))), key
     C = inv["curve"]
-    assert np.abs(C - C[0]).max() <= 1e-10 * (1 + np.abs(C[0]).max())
+    assert np.all(np.abs(C - C[0]).max(axis=(1, 2)) <= bound * (1 + np.abs(C[0]).max()))
 
 
 def test_linear_flow_velocity_is_the_drift_of_the_eigenvector_divisor():

@@ -6,11 +6,11 @@ expansions at the places over E = infinity.  J is diagonal (principal frame).
 
 The pole divisor.  With psi(P) the eigenvector of L(E) at P = (E, w) normalized by
 <alpha, psi> = 1, its poles are the points where alpha^T v(P) = 0 for the right eigenvector
-v.  With B2 an orthonormal basis of alpha^perp, v = B2 y and the conditions
-(B2^T L B2 - w) y = 0, alpha^T L B2 y = 0 say that y is orthogonal to
-r(E) = B2^T L(E)^T alpha and is an eigenvector of L22(E) = B2^T L(E) B2.  In two dimensions
-y = rot90(r), so the E-coordinates are the roots of the degree-6 polynomial
-det[L22(E) y(E), y(E)]; w is the eigenvalue of L22 on y.  This avoids resultants of the
+v.  With B2 a basis of {v : alpha^T v = 0}, v = B2 y and the conditions
+alpha^T L B2 y = 0 and B2^H (L - w) B2 y = 0 say that y is (bilinearly) orthogonal to
+r(E) = B2^T L(E)^T alpha and an eigenvector of L22(E) = B2^H L(E) B2.  In two dimensions
+y = rot90(r), so the E-coordinates are the roots of the degree-6 polynomial det[L22(E) y(E), y(E)];
+w is the eigenvalue of L22 on y.  This avoids resultants of the
 degree-24 system and gives each point once.
 """
 from __future__ import annotations
@@ -55,17 +55,22 @@ def eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.nda
     Returns ``(E, w)`` arrays of the finite points (6 for generic alpha, with multiplicity; fewer
     when alpha is orthogonal to an eigenvector of J^2, whose place at infinity then takes the rest).
     """
-    alpha = np.asarray(alpha, float)
+    alpha = np.asarray(alpha)
     alpha = alpha / np.linalg.norm(alpha)
-    Qb = np.linalg.qr(np.column_stack([alpha, np.eye(3)]))[0][:, :3]
-    B2 = Qb[:, 1:]
+    # basis of {v : alpha^T v = 0} (bilinear: alpha may be complex, e.g. (e1 - i e2)/sqrt(2))
+    B2 = np.linalg.svd(alpha[None, :])[2][1:].conj().T
+    if np.isrealobj(alpha):
+        B2 = B2.real
     Lc = [u, M, np.diag(J * J)]
     if left:
         Lc = [X.T for X in Lc]
-    L22 = [B2.T @ X @ B2 for X in Lc]
+    # The row alpha^T of (L - w) B2 y = 0 drops w (alpha^T B2 = 0): y is bilinearly orthogonal to
+    # r = B2^T L^T alpha.  The other two rows are taken with B2^H: [alpha, conj(B2)] is invertible
+    # even for an isotropic alpha (alpha^T alpha = 0, e.g. (e1 - i e2)/sqrt(2)), and B2^H B2 = 1.
+    L22 = [B2.conj().T @ X @ B2 for X in Lc]
     y = [np.array([-r[1], r[0]]) for r in (B2.T @ X.T @ alpha for X in Lc)]
     Ly = _polymatmul(L22, [v[:, None] for v in y])
-    p = np.zeros(7, dtype=np.result_type(M, u, float))
+    p = np.zeros(7, dtype=np.result_type(M, u, B2, float))
     for i, A in enumerate(Ly):
         for j, v in enumerate(y):
             p[i + j] += A[0, 0] * v[1] - A[1, 0] * v[0]

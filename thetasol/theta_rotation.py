@@ -137,11 +137,12 @@ class ThetaRotation(RotationSolution):
         vb, vd = v[:, :9].reshape(-1, 3, 3), v[:, 9:]          # [n, s, k], [n, k]
         phase = np.exp(1j * np.multiply.outer(t, c["nu"]))      # [n, s, k]
         Psi = c["amp"][None] * phase * vb / vd[:, None, :]      # Psi_k(P_s, t)
-        Phi = np.einsum("nsk,si->nki", Psi, c["X0inv"])        # Phi X0 = [Psi(P_s)]
+        B = c["B"]                                              # components -> principal frame
+        Phi = B @ np.einsum("nsk,si->nki", Psi, c["X0inv"])    # Phi X0 = B [Psi_c(P_s)]
         if not derivative:
             return Phi, None
         rate = 1j * c["nu"][None] + dv[:, :9].reshape(-1, 3, 3) / vb - (dv[:, 9:] / vd)[:, None, :]
-        return Phi, np.einsum("nsk,si->nki", Psi * rate, c["X0inv"])
+        return Phi, B @ np.einsum("nsk,si->nki", Psi * rate, c["X0inv"])
 
     def _evaluate(self, t: np.ndarray):
         Phi, Phidot = self._phi0(t, derivative=True)
@@ -161,23 +162,60 @@ class ThetaRotation(RotationSolution):
 
 # -- set-up --------------------------------------------------------------------------------------
 
-def _kappa(curve, nums, Jp) -> np.ndarray:
-    """omega_i / ds at inf_j (s = 1/E) for the numerators g_i of omega_i = g_i dE / f_w.
+def _infinity_data(curve, J2, M):
+    """The places over E = infinity with J_j (w / E^2 -> J_j^2) and the eigenvector b_j of L there.
 
-    f = lc prod (w - w_l), w_l = J_l^2 E^2 + O(E): f_w(inf_j) ~ lc E^4 prod_{l != j}(J_j^2 - J_l^2),
-    dE = -ds / s^2, so only the weight-2 part (E^2, w) of g_i survives at s = 0.
+    b_j spans the eigenspace of J^2 for J_j^2 when it is simple (a coordinate axis); for a symmetric
+    body the node at infinity has two branches w = J_1^2 E^2 + mu E + ..., and b_j is the eigenvector
+    of M compressed to that eigenspace with eigenvalue mu ((e1 +- i e2) / sqrt 2).  B = [b_1 b_2 b_3]
+    is unitary and the components of the Baker-Akhiezer function are taken in it, so that at inf_j
+    only the j-th component survives.
     """
-    E, w = curve.x, curve.y
-    lc = float(sp.Poly(curve._poly.sympy_expr(), w).LC())
-    J2 = Jp * Jp
-    out = np.zeros((len(nums), 3))
-    for i, gnum in enumerate(nums):
-        pol = sp.Poly(sp.sympify(gnum), E, w)
-        for j in range(3):
-            lead = sum(float(cf) * J2[j] ** mw for (me, mw), cf in pol.terms() if me + 2 * mw == 2)
-            den = np.prod([J2[j] - J2[l] for l in range(3) if l != j])
-            out[i, j] = -lead / (lc * den)
+    places = list(curve.places_at_infinity())
+    if len(places) != 3:
+        raise RuntimeError(f"expected three places over E = infinity, found {len(places)}")
+    Js, bs = [], []
+    for Pl in places:
+        k, c = Pl.series(order=4)
+        lam0 = complex(c[k == -2][0]) if np.any(k == -2) else 0.0
+        lam1 = complex(c[k == -1][0]) if np.any(k == -1) else 0.0
+        idx = np.flatnonzero(np.abs(J2 - lam0.real) <= 1e-8 * J2.max())
+        if len(idx) == 1:
+            b = np.eye(3)[idx[0]].astype(complex)
+        elif len(idx) == 2:
+            W = np.eye(3)[:, idx]
+            mu, V = np.linalg.eig(W.T @ M @ W)
+            b = W @ V[:, int(np.argmin(np.abs(mu - lam1)))]
+            b = b / np.linalg.norm(b)
+        else:
+            raise RuntimeError(f"cannot label the place at infinity with w / E^2 -> {lam0}")
+        Js.append(np.sqrt(lam0.real))
+        bs.append(b)
+    B = np.column_stack(bs)
+    if np.abs(B.conj().T @ B - np.eye(3)).max() > 1e-8:
+        raise RuntimeError("eigenvectors at infinity are not orthonormal")
+    return places, np.array(Js), B
+
+
+def _kappa(curve, nums, places) -> np.ndarray:
+    """omega_i / ds at each place over E = infinity (s = 1/E) for omega_i = g_i dE / f_w.
+
+    The t^0 coefficient of the expansion of the differential in the local parameter t = 1/E (the
+    differentials are holomorphic, so the expansions start at t^0 or later).
+    """
+    out = np.zeros((len(nums), len(places)), complex)
+    for j, Pl in enumerate(places):
+        for i, gnum in enumerate(nums):
+            k, c = Pl.expand(gnum, order=3)
+            out[i, j] = c[k == 0][0] if np.any(k == 0) else 0.0
     return out
+
+
+def _zero_order(Pl, numerator) -> int:
+    """Order of vanishing of numerator dE / f_w at the place (from its expansion)."""
+    k, c = Pl.expand(numerator, order=4)
+    sig = np.abs(c) > 1e-10 * np.abs(c).max()
+    return int(k[np.argmax(sig)])
 
 
 def _local_branch(curve, place, Es: np.ndarray) -> np.ndarray:
@@ -307,7 +345,9 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     def abel(points):
         return curve.abel_map(points, normalized=False) @ Ainv.T
 
-    U = Ainv @ _kappa(curve, nums, Jp) @ Jp
+    Pinf, Jinf, B = _infinity_data(curve, curve.J2, M)
+    Bc = B.conj()                                            # psi -> components: psi @ conj(B)
+    U = Ainv @ _kappa(curve, nums, Pinf) @ Jinf
     scaleU = np.abs(U).max()
     if np.abs(U.imag).max() > 1e-10 * scaleU or np.abs(U[rdim:]).max() > 1e-10 * scaleU:
         raise RuntimeError("the flow velocity is not real in the adapted basis: inaccurate periods")
@@ -326,9 +366,13 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         mu = _node_slopes(curve)
         for Pl, m in zip(_match_branches(curve, branches, mu), mu):
             Pl._slope = m
-    Pinf = [curve.place_at_infinity(j) for j in range(3)]
     P0_reg = [Pl for Pl in P0 if getattr(Pl, "_slope", None) is None]
-    K = _riemann_constant(abel, th, P0_reg, Pinf, Jp, M, u, curve)
+    # canonical divisor of E dE / f_w: simple zeros at the regular places over E = 0 (none at the
+    # node's branches), and at the places at infinity the order their expansions show
+    canon = {Pl: 1 for Pl in P0_reg}
+    for Pl in Pinf:
+        canon[Pl] = _zero_order(Pl, curve.x)          # the curve's symbol E (not sympy's e)
+    K = _riemann_constant(abel, th, canon, Jp, M, u, curve)
     Xtmp = np.column_stack([right_eigenvector(u, Pl.y) if getattr(Pl, "_slope", None) is None
                             else np.ones(3) for Pl in P0])
     alpha = _choose_alpha(Xtmp)
@@ -359,7 +403,8 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
             A_loc = AP0[s_][None, :] + local @ Ainv.T         # (N, g)
             v = right_eigenvector(lax_matrix(Jp, M, u, Ec), wc)
             psi = v / (v @ alpha)[:, None]
-            dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * Ec[:, None, None] + W0[None], psi)
+            dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * Ec[:, None, None] + W0[None], psi) @ Bc
+            psi = psi @ Bc
             X0[:, s_] = psi.mean(axis=0)
             eb, vb, gb = th.jet(A_loc[:, None, :] - e[None, :, :], order=1, separated=True)
             rho[s_] = (psi / vb * np.exp(ed_[None, :] - eb)).mean(axis=0) * vd_
@@ -368,7 +413,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
 
     X0, rho, nu = constants(r)
     X0b, rhob, nub = constants(0.5 * r)
-    nu_aux, h_aux = _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d)
+    nu_aux, h_aux = _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d, Bc)
     nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux)
     scale_nu = 1 + np.abs(nu).max()
     if np.abs(nu.real).max() > 1e-6 * scale_nu:
@@ -384,7 +429,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     scale_b = np.exp(eb_)
     rho_k = (rho / (np.exp(ed_) * vd_)[None, :]).ravel()               # rho_k(P_s), [s*3+k]
     h = X0.T.ravel()                                                     # psi_k(P_s)
-    hdot = (-(W0 @ X0)).T.ravel()                                        # d/dt Psi_k(P_s) at t = 0
+    hdot = (-(B.conj().T @ W0 @ B @ X0)).T.ravel()                       # d/dt Psi_k(P_s) at t = 0
     dlogd = np.tile(dlog_d, 3)
     nu_rows = 1j * nu_fit.ravel()
     theta_b = scale_b * vb_
@@ -402,7 +447,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     flow = FlowTheta(tau, U[:rdim], np.concatenate([b, d]))
     eb = flow.e[:9].reshape(3, 3)
     amp = rho * np.exp(eb - flow.e[9:][None, :])             # rho theta(d) exp(e_b - e_d)
-    consts = {"flow": flow, "nu": nu_fit, "amp": amp, "X0inv": np.linalg.inv(X0), "Q0p": Q0p, "P": P}
+    consts = {"flow": flow, "nu": nu_fit, "amp": amp, "X0inv": np.linalg.inv(X0), "Q0p": Q0p, "P": P, "B": B}
     diag = {
         "nu_real_part": float(np.abs(nu.real).max()),
         "nu_fit_residual": resid,
@@ -416,7 +461,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     return curve, tau, U, AD0, alpha, consts, diag
 
 
-def _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d):
+def _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d, Bc):
     """Exponent constants nu(P, k) at points P where eigenvectors mix (near branch points).
 
     Returns (nu (n, 3), relative component sizes |psi_k| / |psi| (n, 3)).
@@ -424,14 +469,17 @@ def _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d):
     bp = np.asarray(curve.branch_points)
     R = float(np.abs(bp).min())
     trial = [0.35 * R * np.exp(1j * ang) for ang in (0.3, 1.1, 1.9, 2.7)]
-    for b in bp:
+    # Far branch points (|E| ~ 1/(J_2 - J_1) for nearly symmetric bodies) are where L ~ J^2 E^2 and
+    # eigenvectors lose accuracy: use the core of the set only.
+    core = bp[np.abs(bp) <= 10.0 * np.median(np.abs(bp))]
+    for b in core:
         sep = np.abs(bp - b)
         sep = min(sep[sep > 0].min(), abs(b))
         trial += [b + 0.25 * sep * np.exp(1j * ang) for ang in (0.4, 2.5, 4.6)]
     cands = {}
     for E in trial:
         for w in np.linalg.eigvals(lax_matrix(Jp, M, u, E)):
-            v = right_eigenvector(lax_matrix(Jp, M, u, E), w)
+            v = right_eigenvector(lax_matrix(Jp, M, u, E), w) @ Bc
             h = np.abs(v) / np.linalg.norm(v)
             order = np.argsort(h)
             pair = tuple(sorted(order[1:]))
@@ -443,24 +491,25 @@ def _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d):
     A = abel([(complex(a_), complex(b_)) for a_, b_ in zip(E, w)])
     v = right_eigenvector(lax_matrix(Jp, M, u, E), w)
     psi = v / (v @ alpha)[:, None]
-    dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * E[:, None, None] + W0[None], psi)
+    dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * E[:, None, None] + W0[None], psi) @ Bc
+    psi = psi @ Bc
     _, vb, gb = th.jet(A[:, None, :] - e[None, :, :], order=1, separated=True)
     nu = dpsi / psi - (gb @ U) / vb + dlog_d[None, :]
     return nu, np.abs(psi) / np.linalg.norm(psi, axis=1, keepdims=True)
 
 
-def _riemann_constant(abel, th, P0_reg, Pinf, Jp, M, u, curve) -> np.ndarray:
+def _riemann_constant(abel, th, canon, Jp, M, u, curve) -> np.ndarray:
     """Vector of Riemann constants in the curve's normalized coordinates and base point.
 
-    2K = -A(C) for the canonical divisor C of the holomorphic differential E dE / f_w, whose
-    zeros are the regular places over E = 0 and the three places at infinity (on a nodal curve
-    E / f_w stays finite at the node's branches).  Of the 4^g candidates the one with
+    2K = -A(C) for the canonical divisor C of the holomorphic differential E dE / f_w (given as
+    ``canon``, place -> order: the regular places over E = 0 and the places at infinity).  Of the 4^g candidates the one with
     theta(K + A(D')) = 0 for effective D' of degree g - 1 is taken (Riemann's vanishing theorem).
     Only regular places are involved, so clustered branch points do not matter.
     """
     g = th.g
     tau = th.tau
-    AC = abel(list(P0_reg) + list(Pinf)).sum(axis=0)
+    places = list(canon)
+    AC = np.array([canon[P] for P in places], float) @ abel(places)
     bits = (np.arange(2 ** g)[:, None] >> np.arange(g)[None, :]) & 1
     a_, b_ = np.repeat(bits, 2 ** g, axis=0), np.tile(bits, (2 ** g, 1))
     cands = -0.5 * AC + 0.5 * a_ + 0.5 * (b_ @ tau.T)
@@ -476,7 +525,10 @@ def _riemann_constant(abel, th, P0_reg, Pinf, Jp, M, u, curve) -> np.ndarray:
         _, v = th(cands + AD[None, :], separated=True)
         score = np.maximum(score, np.abs(v))
     order = np.argsort(score)
-    if not (score[order[0]] < 1e-8 and score[order[0]] < 1e-4 * score[order[1]]):
+    # Near a pinched cycle two candidates differ only by exp(-pi Im tau_jj / 4): the smallest is
+    # taken when it vanishes to round-off; a wrong choice would show in the consistency checks of
+    # the set-up (imaginary exponents, size of the shift correction).
+    if not (score[order[0]] < 1e-10 and score[order[0]] < 0.1 * score[order[1]]):
         raise RuntimeError(f"Riemann constant: no half-period candidate makes theta vanish "
                            f"(best {score[order[0]]:.2g}, next {score[order[1]]:.2g})")
     return cands[order[0]]
