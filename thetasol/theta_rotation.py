@@ -174,6 +174,9 @@ def _infinity_data(curve, J2, M):
     places = list(curve.places_at_infinity())
     if len(places) != 3:
         raise RuntimeError(f"expected three places over E = infinity, found {len(places)}")
+    if not curve.symmetric_body:
+        # ordered by j with w / E^2 -> J2[j] (J2 ascending): the coordinate axes, exactly
+        return [curve.place_at_infinity(j) for j in range(3)], np.sqrt(J2), np.eye(3, dtype=complex)
     Js, bs = [], []
     for Pl in places:
         k, c = Pl.series(order=4)
@@ -197,12 +200,25 @@ def _infinity_data(curve, J2, M):
     return places, np.array(Js), B
 
 
-def _kappa(curve, nums, places) -> np.ndarray:
+def _kappa(curve, nums, places, Jinf) -> np.ndarray:
     """omega_i / ds at each place over E = infinity (s = 1/E) for omega_i = g_i dE / f_w.
 
-    The t^0 coefficient of the expansion of the differential in the local parameter t = 1/E (the
-    differentials are holomorphic, so the expansions start at t^0 or later).
+    Distinct J_j: exactly, from f = lc prod (w - w_l) with w_l = J_l^2 E^2 + O(E), so that
+    f_w(inf_j) ~ lc E^4 prod_{l != j} (J_j^2 - J_l^2) and only the weight-2 part (E^2, w) of g_i
+    survives at s = 0.  Otherwise (the node at infinity of a symmetric body) the t^0 coefficient of
+    the differential's expansion in t = 1/E at the place.
     """
+    J2 = np.asarray(Jinf, float) ** 2
+    if min(abs(J2[i] - J2[j]) for i in range(3) for j in range(i)) > SNAP_TOL * J2.max():
+        E, w = curve.x, curve.y
+        lc = float(sp.Poly(curve._poly.sympy_expr(), w).LC())
+        out = np.zeros((len(nums), 3))
+        for i, gnum in enumerate(nums):
+            pol = sp.Poly(sp.sympify(gnum), E, w)
+            for j in range(3):
+                lead = sum(float(cf) * J2[j] ** mw for (me, mw), cf in pol.terms() if me + 2 * mw == 2)
+                out[i, j] = -lead / (lc * np.prod([J2[j] - J2[l] for l in range(3) if l != j]))
+        return out
     out = np.zeros((len(nums), len(places)), complex)
     for j, Pl in enumerate(places):
         for i, gnum in enumerate(nums):
@@ -347,7 +363,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
 
     Pinf, Jinf, B = _infinity_data(curve, curve.J2, M)
     Bc = B.conj()                                            # psi -> components: psi @ conj(B)
-    U = Ainv @ _kappa(curve, nums, Pinf) @ Jinf
+    U = Ainv @ _kappa(curve, nums, Pinf, Jinf) @ Jinf
     scaleU = np.abs(U).max()
     if np.abs(U.imag).max() > 1e-10 * scaleU or np.abs(U[rdim:]).max() > 1e-10 * scaleU:
         raise RuntimeError("the flow velocity is not real in the adapted basis: inaccurate periods")
@@ -371,7 +387,8 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     # node's branches), and at the places at infinity the order their expansions show
     canon = {Pl: 1 for Pl in P0_reg}
     for Pl in Pinf:
-        canon[Pl] = _zero_order(Pl, curve.x)          # the curve's symbol E (not sympy's e)
+        # simple zeros for distinct J; at a node at infinity read the order off the expansion
+        canon[Pl] = 1 if not curve.symmetric_body else _zero_order(Pl, curve.x)   # curve.x: E, not sympy's e
     K = _riemann_constant(abel, th, canon, Jp, M, u, curve)
     Xtmp = np.column_stack([right_eigenvector(u, Pl.y) if getattr(Pl, "_slope", None) is None
                             else np.ones(3) for Pl in P0])
