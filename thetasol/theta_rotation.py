@@ -110,19 +110,25 @@ class ThetaRotation(RotationSolution):
     ----------
     curve : thetasol.spectral.SpectralCurve
         The spectral curve (4.12) of the initial data (principal frame, ascending ``J``).
+    basis : ndarray of int, shape (2g, 2g)
+        The symplectic homology basis used, adapted to the real Liouville torus: its columns are
+        the new cycles ``[a' | b']`` in the coordinates of ``curve``'s own basis.
     riemann_matrix : ndarray, shape (g, g)
-        ``tau`` of the curve's normalization (g = 4 generic, 3 for a rank-one potential).
+        ``tau`` of the curve's normalization in that basis (g = 4 generic, 3 for a rank-one
+        potential).
     U : ndarray, shape (g,)
         Velocity of the linear flow on the Jacobian: the Abel image of the eigenvector divisor
-        moves as ``A(D(t)) = A(D(0)) - t U`` (normalized coordinates, docs/curves.md).
+        moves as ``A(D(t)) = A(D(0)) - t U``.  Real, zero outside the first
+        ``invariants['torus_dimension']`` coordinates.
     abel_divisor : ndarray, shape (g,)
         Abel image ``A(D0)`` of the pole divisor of the initial eigenvector (normalized by
-        ``<alpha, psi> = 1``), from the curve's base point along its documented paths.
+        ``<alpha, psi> = 1``), see :meth:`abel_map`.
     alpha : ndarray, shape (3,)
         The normalization vector (principal frame).
     """
 
     curve: object = field(default=None, repr=False)
+    basis: np.ndarray = field(default=None, repr=False)
     riemann_matrix: np.ndarray = field(default=None, repr=False)
     U: np.ndarray = field(default=None, repr=False)
     abel_divisor: np.ndarray = field(default=None, repr=False)
@@ -151,6 +157,14 @@ class ThetaRotation(RotationSolution):
         wp = vee(-Phidot.real @ np.swapaxes(Phi_r, -1, -2))
         P = self._c["P"]
         return wp @ P.T, Qp @ P.T
+
+    def abel_map(self, points) -> np.ndarray:
+        """Abel map in the coordinates of :attr:`riemann_matrix` and :attr:`U`.
+
+        ``points`` as for :meth:`thetasol.PlaneCurve.abel_map` (points (E, w) of the spectral curve
+        in the principal frame, places, divisors); values modulo ``Z^g + tau Z^g``.
+        """
+        return self.curve.abel_map(points, normalized=False) @ self._c["Ainv"].T
 
     def imaginary_residual(self, t) -> np.ndarray:
         """max |Im Phi(0, t)|: the theta quotients are complex, their combination is real; the
@@ -464,7 +478,8 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     flow = FlowTheta(tau, U[:rdim], np.concatenate([b, d]))
     eb = flow.e[:9].reshape(3, 3)
     amp = rho * np.exp(eb - flow.e[9:][None, :])             # rho theta(d) exp(e_b - e_d)
-    consts = {"flow": flow, "nu": nu_fit, "amp": amp, "X0inv": np.linalg.inv(X0), "Q0p": Q0p, "P": P, "B": B}
+    consts = {"flow": flow, "nu": nu_fit, "amp": amp, "X0inv": np.linalg.inv(X0), "Q0p": Q0p, "P": P, "B": B,
+              "Ainv": Ainv, "G": G}
     diag = {
         "nu_real_part": float(np.abs(nu.real).max()),
         "nu_fit_residual": resid,
@@ -586,4 +601,5 @@ def _solve_theta_rotation(J, a, Q0, omega0, dps=None) -> ThetaRotation:
     inv["genus"] = curve.genus
     method = "theta/genus-4" if curve.node is None else "theta/nodal-genus-3"
     return ThetaRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=method, invariants=inv,
-                         curve=curve, riemann_matrix=tau, U=U, abel_divisor=AD0, alpha=alpha, _c=consts)
+                         curve=curve, basis=consts["G"], riemann_matrix=tau, U=U, abel_divisor=AD0,
+                         alpha=alpha, _c=consts)
