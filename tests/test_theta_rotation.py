@@ -16,12 +16,10 @@ from thetasol._so3 import hat
 from thetasol.theta_rotation import ThetaRotation, _lattice_coords
 
 REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
-# The curve engine cannot yet reach float64 accuracy for Abel images next to tightly clustered
-# branch points (near-separatrix motion by an unstable relative equilibrium), nor build curves of
-# nearly symmetric bodies in reasonable time: tracked, not hidden.
+# Near-separatrix motion by an unstable relative equilibrium: the torus position is ~1e-10 off
+# (Abel images next to tightly clustered branch points), amplified ~15x at t = 4002: tracked, not hidden.
 KNOWN_LIMITS = {
-    "near_unstable_equilibrium": "Abel images next to clustered branch points lose ~1e-11 (curve engine)",
-    "nearly_symmetric": "curve construction for J1 ~ J2 (1e-6) falls back to slow mpmath tracking",
+    "near_unstable_equilibrium": "torus position ~1e-10 off near clustered branch points: 1.9e-9 at t = 4002 (data conditioning 5e-11)",
 }
 
 
@@ -89,7 +87,10 @@ def test_linear_flow_velocity_is_the_drift_of_the_eigenvector_divisor():
         return sol.abel_map([(complex(x), complex(y)) for x, y in zip(E, w)]).sum(0)
 
     A0 = abel_D(curve.M, curve.u)
-    assert np.allclose(A0, sol.abel_divisor)
+    # abel_divisor may come from another normalization (linearly equivalent divisor): equal mod lattice
+    x1, x2 = _lattice_coords(A0 - sol.abel_divisor, tau)
+    x = np.concatenate([x1, x2])
+    assert np.abs(x - np.round(x)).max() < 1e-11
     for t in (0.4, 1.7):
         w, Q = integrate_rotation(J, a, Q0, w0, np.array([t]), rtol=1e-13)
         wp, Qp = Pf.T @ w[0], Q[0] @ Pf
@@ -176,3 +177,71 @@ def test_splitting_integrator_agrees():
     w, Q = sol(t)
     wr, Qr = integrate_rotation(J, a, Q0, w0, t, method="splitting", step=2e-3)
     assert np.abs(Q - Qr).max() < 1e-9
+
+
+def test_spectral_coefficients_are_exact_for_the_floats_given():
+    # near an equilibrium |M|^2 ~ 1e-6 rides on O(1) terms: float64 coefficients lost it (U 3e-11 off)
+    import sympy as sp
+    from fractions import Fraction
+    from thetasol.spectral import spectral_curve
+    rng = np.random.default_rng(11)
+    J = np.array([0.6, 1.0, 1.7])
+    M = hat(1e-3 * rng.normal(size=3))
+    u = rng.normal(size=(3, 3))
+    u = 0.5 * (u + u.T)
+    C = spectral_curve(J, M, u, tol=1e-12)
+    E, w = sp.symbols("E w")
+    R = lambda x: sp.Rational(*Fraction(float(x)).as_integer_ratio())  # noqa: E731
+    L = sp.Matrix(3, 3, lambda i, j: (R(J[i]) ** 2 * E ** 2 if i == j else 0) + R(M[i, j]) * E + R(u[i, j])
+                  - (w if i == j else 0))
+    exact = sp.Poly(sp.expand(L.det()), E, w)
+    got = sp.Poly(C._poly.sympy_expr(), E, w)
+    for (k, l), c in exact.terms():
+        if k % 2 == 0:
+            assert got.coeff_monomial(E ** k * w ** l) == c
+
+
+def test_flow_velocity_divided_difference_equals_the_sum_over_the_places():
+    # the closed form of sum_j J_j omega_i / ds (inf_j) against the plain sum of the per-place values
+    # -h_i(x_j) / (lc prod_{l != j} (x_j - x_l)), well conditioned for well separated J
+    import sympy as sp
+    from thetasol.spectral import spectral_curve
+    from thetasol.theta_rotation import _kappa, _infinity_data
+    J, a, Q0, w0, _ = _case("generic")
+    C = spectral_curve(J, hat(J @ w0), -(Q0.T @ a @ Q0), tol=1e-12)
+    nums = C.holomorphic_differentials()
+    Pinf, Jinf, _ = _infinity_data(C, C.J2, C.M)
+    x = Jinf ** 2
+    lc = float(sp.Poly(C._poly.sympy_expr(), C.y).LC())
+    direct = np.zeros(len(nums))
+    for i, gn in enumerate(nums):
+        terms = sp.Poly(sp.sympify(gn), C.x, C.y).terms()
+        for j in range(3):
+            h = sum(float(cf) * x[j] ** mw for (me, mw), cf in terms if me + 2 * mw == 2)
+            direct[i] += -Jinf[j] * h / (lc * np.prod([x[j] - x[l] for l in range(3) if l != j]))
+    closed = _kappa(C, nums, Pinf, Jinf)
+    assert np.abs(closed - direct).max() <= 1e-12 * np.abs(direct).max()
+
+
+def test_nearly_symmetric_body_keeps_its_accuracy_or_warns():
+    # J2 / J1 = 1 + 1e-3 is accurate; at 1 + 1e-4 these data lose ~1e-7: the solution must say so
+    from thetasol._so3 import rodrigues
+    rng = np.random.default_rng(3)
+    a = rng.normal(size=(3, 3))
+    a = 0.5 * (a + a.T)
+    Q0, w0 = rodrigues(np.array([0.3, -0.5, 0.2])), np.array([0.4, -0.7, 0.5])
+    t = np.array([3.1, 102.0])
+    for dl in (1e-3, 1e-4):
+        J = np.array([0.8, 0.8 * (1 + dl), 1.5])
+        import warnings
+        with warnings.catch_warnings(record=True) as rec:
+            warnings.simplefilter("always")
+            try:
+                sol = solve_rotation(J, a, Q0, w0)
+            except ClosedFormUnavailable:
+                continue
+        w, Q = sol(t)
+        wr, Qr = integrate_rotation(J, a, Q0, w0, t, rtol=1e-13)
+        err = max(np.abs(w - wr).max(), np.abs(Q - Qr).max())
+        warned = any(issubclass(r.category, RuntimeWarning) for r in rec)
+        assert err <= 1e-9 or warned, (dl, err)
