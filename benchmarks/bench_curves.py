@@ -13,14 +13,11 @@ from __future__ import annotations
 
 import json
 import os
-import platform
 import subprocess
 import sys
-import time
 
 import mpmath
 import numpy as np
-import scipy
 import sympy as sp
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -30,6 +27,7 @@ sys.path.insert(0, ROOT)
 from thetasol.curves import PlaneCurve  # noqa: E402
 from thetasol.spectral import spectral_curve  # noqa: E402
 from thetasol._so3 import hat  # noqa: E402
+from _common import best_of, machine_info  # noqa: E402
 
 SAGE = "/work/sagevenv/bin/python"
 DATA = os.path.join(ROOT, "tests", "data", "curves")
@@ -63,20 +61,6 @@ print(json.dumps(out))
 '''
 
 
-def machine_info():
-    cpu = "unknown"
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return (f"CPU {cpu}, {os.cpu_count()} cores; Python {platform.python_version()}, numpy {np.__version__}, "
-            f"scipy {scipy.__version__}, sympy {sp.__version__}, mpmath {mpmath.__version__}")
-
-
 def lattice_distance(P, Pref):
     """max |P - Pref T| / max |Pref| with T the nearest integer matrix (inf if T is not unimodular)."""
     def real(M):
@@ -86,16 +70,6 @@ def lattice_distance(P, Pref):
     if abs(abs(np.linalg.det(Ti)) - 1) > 1e-6 or np.max(np.abs(T - Ti)) > 1e-3:
         return np.inf
     return float(np.max(np.abs(P - Pref @ Ti)) / np.max(np.abs(Pref)))
-
-
-def best_of(fn, reps):
-    best = np.inf
-    out = None
-    for _ in range(reps):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def float_spectral(seed=11):
@@ -223,7 +197,7 @@ def main(quick=False):
             print(f"Sage run failed: {exc}", file=sys.stderr)
             have_sage = False
     print("# Curve benchmark\n")
-    print(machine_info() + "\n")
+    print(machine_info("sympy", "mpmath") + "\n")
     hdr = "| curve | g | thetasol periods [s] | full pipeline [s] | error (lattice) | reference | dps=30 [s] | dps=30 error |"
     if have_sage:
         hdr += " Sage 53 bits [s] | Sage error | Sage / thetasol |"

@@ -19,47 +19,15 @@ installed the script re-checks it here.
 from __future__ import annotations
 
 import argparse
-import os
-import platform
 import time
 
 import numpy as np
-import scipy
 
 from thetasol import integrate_rotation, solve_rotation
 
+from _common import best_of, machine_info
+
 Z = np.zeros((3, 3))
-
-
-def machine_info() -> str:
-    cpu = "unknown"
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    try:
-        import heyoka
-
-        hy = heyoka.__version__
-    except ImportError:
-        hy = "not installed"
-    return (f"CPU: {cpu}; cores: {os.cpu_count()}; Python {platform.python_version()}, "
-            f"numpy {np.__version__}, scipy {scipy.__version__}, heyoka {hy}")
-
-
-def best_of(fun, repeat=5, number=1):
-    best = np.inf
-    out = None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        for _ in range(number):
-            out = fun()
-        best = min(best, (time.perf_counter() - t0) / number)
-    return best, out
 
 
 def err(a, b):
@@ -209,7 +177,7 @@ def main():
     ap.add_argument("--quick", action="store_true", help="fewer points and tolerances")
     args = ap.parse_args()
     print("# bench_euler_top\n")
-    print(machine_info())
+    print(machine_info("heyoka"))
     probs = problems()
     heyoka_check(probs["generic"])
     for name, data in probs.items():

@@ -12,15 +12,11 @@ Run: python benchmarks/bench_mechanics.py   (best of `REPEAT` runs; the machine 
 """
 from __future__ import annotations
 
-import os
-import platform
 import subprocess
 import sys
-import time
 
 import mpmath
 import numpy as np
-import scipy
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
@@ -31,30 +27,9 @@ from thetasol.masscenter import mass_center
 from thetasol.multibody import integrate_multibody
 from thetasol.scene import solve_configuration
 
+from _common import best_of, machine_info
+
 REPEAT = 3
-
-
-def best(f, repeat=REPEAT):
-    out, times = None, []
-    for _ in range(repeat):
-        s = time.perf_counter()
-        out = f()
-        times.append(time.perf_counter() - s)
-    return out, min(times)
-
-
-def machine():
-    cpu = "?"
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return (f"CPU {cpu}, {os.cpu_count()} cores; Python {platform.python_version()}, numpy {np.__version__}, "
-            f"scipy {scipy.__version__}, mpmath {mpmath.__version__}")
 
 
 def mass_centre_table():
@@ -78,15 +53,15 @@ def mass_centre_table():
                             for tk in tsub])
         scale = np.max(np.abs(ref))
         rows = []
-        (q, _), sec = best(lambda: mass_center(a, b, q0, v0, t))
+        sec, (q, _) = best_of(lambda: mass_center(a, b, q0, v0, t), REPEAT)
         rows.append(("closed form (thetasol)", sec, np.max(np.abs(q[::50] - ref)) / scale))
         for rtol in (1e-8, 1e-11, 1e-13):
             def run(rtol=rtol):
                 return solve_ivp(lambda _t, y: np.r_[y[3:], -(a @ y[:3] + b / 2)], (0, 100), y0[:6],
                                  t_eval=t, method="DOP853", rtol=rtol, atol=rtol * 1e-3).y[:3].T
-            qd, sec = best(run)
+            sec, qd = best_of(run, REPEAT)
             rows.append((f"DOP853 rtol={rtol:g}", sec, np.max(np.abs(qd[::50] - ref)) / scale))
-        qe, sec = best(lambda: np.array([(expm(A * tk) @ y0)[:3] for tk in t]))
+        sec, qe = best_of(lambda: np.array([(expm(A * tk) @ y0)[:3] for tk in t]), REPEAT)
         rows.append(("scipy.linalg.expm per time", sec, np.max(np.abs(qe[::50] - ref)) / scale))
         print(f"\n### {label}: eigenvalues {lam}\n")
         print("| method | time (ms) | max error / max |q| |")
@@ -124,11 +99,11 @@ def split_table():
     print("| solution | time (s) | RHS evals | max position / attitude deviation from the reference |")
     print("|---|---|---|---|")
     for rtol in (1e-10, 1e-12, 1e-13):
-        sp, sec = best(lambda rtol=rtol: solve_configuration(cfg, a, b, t=t, rotation="numerical", rtol=rtol, **s), 1)
+        sec, sp = best_of(lambda rtol=rtol: solve_configuration(cfg, a, b, t=t, rotation="numerical", rtol=rtol, **s), 1)
         d = sp.deviation(ref)
         print(f"| split, DOP853 rotations rtol={rtol:g} | {sec:.2f} | - | {d['position']:.1e} / {d['attitude']:.1e} |")
     for rtol in (1e-10, 1e-11, 1e-12, 1e-13):
-        mb, sec = best(lambda rtol=rtol: integrate_multibody(cfg, a, b, t=t, rtol=rtol, **s), 1)
+        sec, mb = best_of(lambda rtol=rtol: integrate_multibody(cfg, a, b, t=t, rtol=rtol, **s), 1)
         d = mb.deviation(ref)
         print(f"| unsplit multibody, DOP853 rtol={rtol:g} | {sec:.2f} | {mb.info['nfev']} | "
               f"{d['position']:.1e} / {d['attitude']:.1e} |")
@@ -136,13 +111,13 @@ def split_table():
 
 def demo_table():
     print("\n## 3. `python -m thetasol demo` (6 bodies, t <= 30, 601 outputs, with the multibody check)\n")
-    _, sec = best(lambda: subprocess.run([sys.executable, "-m", "thetasol", "demo"], check=True,
-                                         capture_output=True), 2)
+    sec, _ = best_of(lambda: subprocess.run([sys.executable, "-m", "thetasol", "demo"], check=True,
+                                            capture_output=True), 2)
     print(f"wall time {sec:.1f} s (best of 2)")
 
 
 if __name__ == "__main__":
-    print(f"machine: {machine()}\n")
+    print(f"machine: {machine_info('mpmath')}\n")
     mass_centre_table()
     split_table()
     demo_table()

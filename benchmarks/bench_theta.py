@@ -20,14 +20,13 @@ if "--threads" not in sys.argv:
     os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
     os.environ.setdefault("OMP_NUM_THREADS", "1")
 
-import math  # noqa: E402
-import platform  # noqa: E402
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
-import scipy  # noqa: E402
 
 from thetasol import RiemannTheta  # noqa: E402
+
+from _common import best_of, machine_info  # noqa: E402
 
 try:
     import flint
@@ -57,12 +56,7 @@ def make_points(tau: np.ndarray, n: int, seed: int) -> np.ndarray:
 
 
 def cpu_best(f, reps: int) -> float:
-    best = math.inf
-    for _ in range(reps):
-        t0 = time.process_time()
-        f()
-        best = min(best, time.process_time() - t0)
-    return best
+    return best_of(f, reps, clock=time.process_time)[0]
 
 
 def _acb_mat(a):
@@ -80,22 +74,6 @@ def flint_all(tau, z, prec, e=None):
         return np.array([complex((th[0, i] * s).mid()) for i in range(th.ncols())])
     finally:
         flint.ctx.prec = old
-
-
-def machine_info() -> str:
-    cpu = "unknown"
-    try:
-        with open("/proc/cpuinfo") as fh:
-            for line in fh:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:  # pragma: no cover
-        pass
-    fv = getattr(flint, "__version__", "absent") if flint else "absent"
-    return (f"CPU {cpu}, {os.cpu_count()} cores (shared with other jobs), Python {platform.python_version()}, "
-            f"numpy {np.__version__}, scipy {scipy.__version__}, python-flint {fv}, "
-            f"OPENBLAS_NUM_THREADS={os.environ.get('OPENBLAS_NUM_THREADS', 'unset')}")
 
 
 def bench_case(g, kind, npts, nref, nflint, reps, tols):
@@ -161,7 +139,7 @@ def main():
     nref = 8 if args.quick else 20
     tols = (1e-8, 1e-12, 1e-14)
     lines = ["# Benchmark: Riemann theta (thetasol vs FLINT acb_theta)", "",
-             f"Machine: {machine_info()}.", "",
+             f"Machine: {machine_info('flint')}.", "",
              f"Batch of {args.points} points per case (Im z = Im(tau) c, c uniform in [-0.7, 0.7]^g); "
              f"errors on {nref} points against acb_theta at 128 bits, relative to max(|theta|, exp(e)); "
              "CPU time per point, best of several runs.  FLINT computes all 2^(2g) characteristics "

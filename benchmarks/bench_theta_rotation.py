@@ -16,31 +16,15 @@ from __future__ import annotations
 import argparse
 import json
 import pathlib
-import platform
 import sys
-import time
 
 import numpy as np
 
 from thetasol import integrate_rotation, solve_rotation
 
+from _common import best_of, machine_info
+
 REFS = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "rotation" / "refs.json"
-
-
-def machine():
-    cpu = "unknown"
-    try:
-        for line in open("/proc/cpuinfo"):
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    import os
-
-    import scipy
-    return (f"{cpu}, {os.cpu_count()} cores, Python {platform.python_version()}, numpy {np.__version__}, "
-            f"scipy {scipy.__version__}")
 
 
 def have_heyoka():
@@ -56,47 +40,38 @@ def err(w, Q, ref):
     return float(max(np.abs(w - wr).max(), np.abs(Q - Qr).max()))
 
 
-def timed(f, repeat=1):
-    best, out = np.inf, None
-    for _ in range(repeat):
-        t0 = time.perf_counter()
-        out = f()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
-
-
 def bench_case(name, data, quick):
     J, a, Q0, w0 = (np.diag(data["J"]), np.array(data["a"]), np.array(data["Q0"]), np.array(data["omega0"]))
     rows = []
     t_dense = np.linspace(0.0, 1000.0, 2001)
     ref_dense = integrate_rotation(J, a, Q0, w0, t_dense, method="heyoka", dtype="ldbl", rtol=1e-19)
     # theta functions
-    ts, sol = timed(lambda: solve_rotation(J, a, Q0, w0))
-    te, (w, Q) = timed(lambda: sol(t_dense), repeat=3)
+    ts, sol = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=1)
+    te, (w, Q) = best_of(lambda: sol(t_dense), repeat=3)
     rows.append(("dense", f"theta ({sol.method})", ts, te, err(w, Q, ref_dense)))
     for rtol in ((1e-10, 1e-13) if quick else (1e-8, 1e-10, 1e-12, 1e-13)):
-        tt, (w, Q) = timed(lambda r=rtol: integrate_rotation(J, a, Q0, w0, t_dense, rtol=r))
+        tt, (w, Q) = best_of(lambda r=rtol: integrate_rotation(J, a, Q0, w0, t_dense, rtol=r), repeat=1)
         rows.append(("dense", f"DOP853 rtol {rtol:g}", 0.0, tt, err(w, Q, ref_dense)))
     if not quick:
-        tt, (w, Q) = timed(lambda: integrate_rotation(J, a, Q0, w0, t_dense, method="splitting", step=1e-2))
+        tt, (w, Q) = best_of(lambda: integrate_rotation(J, a, Q0, w0, t_dense, method="splitting", step=1e-2), repeat=1)
         rows.append(("dense", "splitting (order 6, h = 0.01)", 0.0, tt, err(w, Q, ref_dense)))
     if have_heyoka():
-        tc, _ = timed(lambda: integrate_rotation(J, a, Q0, w0, t_dense[:2], method="heyoka", rtol=1e-16))
-        tt, (w, Q) = timed(lambda: integrate_rotation(J, a, Q0, w0, t_dense, method="heyoka", rtol=1e-16))
+        tc, _ = best_of(lambda: integrate_rotation(J, a, Q0, w0, t_dense[:2], method="heyoka", rtol=1e-16), repeat=1)
+        tt, (w, Q) = best_of(lambda: integrate_rotation(J, a, Q0, w0, t_dense, method="heyoka", rtol=1e-16), repeat=1)
         rows.append(("dense", "heyoka float64 tol 1e-16", tc, tt, err(w, Q, ref_dense)))
     # single far-time queries
     for tf in (1e3, 1e4):
         tq = np.array([tf])
         ref = integrate_rotation(J, a, Q0, w0, tq, method="heyoka", dtype="ldbl", rtol=1e-19)
-        te, (w, Q) = timed(lambda: sol(tq), repeat=5)
+        te, (w, Q) = best_of(lambda: sol(tq), repeat=5)
         rows.append((f"t = {tf:g}", f"theta ({sol.method})", ts, te, err(w, Q, ref)))
-        tt, (w, Q) = timed(lambda: integrate_rotation(J, a, Q0, w0, tq, rtol=1e-13))
+        tt, (w, Q) = best_of(lambda: integrate_rotation(J, a, Q0, w0, tq, rtol=1e-13), repeat=1)
         rows.append((f"t = {tf:g}", "DOP853 rtol 1e-13", 0.0, tt, err(w, Q, ref)))
         if have_heyoka():
-            tt, (w, Q) = timed(lambda: integrate_rotation(J, a, Q0, w0, tq, method="heyoka", rtol=1e-16))
+            tt, (w, Q) = best_of(lambda: integrate_rotation(J, a, Q0, w0, tq, method="heyoka", rtol=1e-16), repeat=1)
             rows.append((f"t = {tf:g}", "heyoka float64 tol 1e-16", 0.0, tt, err(w, Q, ref)))
     tq = np.array([1e6])
-    te, (w, Q) = timed(lambda: sol(tq), repeat=5)
+    te, (w, Q) = best_of(lambda: sol(tq), repeat=5)
     rows.append(("t = 1e6", f"theta ({sol.method})", ts, te, float("nan")))
     return rows
 
@@ -108,7 +83,7 @@ def main(argv=None):
     ap.add_argument("--plot", default=None, help="write an error-against-cost plot (needs matplotlib)")
     args = ap.parse_args(argv)
     refs = json.loads(REFS.read_text())
-    print(f"machine: {machine()}")
+    print(f"machine: {machine_info('heyoka')}")
     print("errors: max over omega and Q against heyoka 80-bit (tol 1e-19); time in seconds (best of runs)\n")
     print("| case | query | method | set-up (s) | run (s) | per time (us) | max error |")
     print("|---|---|---|---|---|---|---|")
