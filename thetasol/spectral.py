@@ -77,10 +77,10 @@ def _exact_coefficients(J, M, u) -> list:
     equilibrium ``|M|^2 ~ 1e-6`` enters the ``E^2 w`` coefficient beside O(1) terms, and a few ulps there
     moved the flow velocity U by 3e-11 relative (1e-8 in the attitude at t = 4000).
     """
-    Jf = [[Fraction(float(v)) for v in row] for row in np.asarray(J, float)]
+    Jf = [[_fr(v) for v in row] for row in np.asarray(J, float)]
     J2 = [[sum(Jf[i][k] * Jf[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-    Mf = [[Fraction(float(v)) for v in row] for row in M]
-    uf = [[Fraction(float(v)) for v in row] for row in u]
+    Mf = [[_fr(v) for v in row] for row in M]
+    uf = [[_fr(v) for v in row] for row in u]
     # L as 3x3 polynomials in (E, w): dict {(k, l): Fraction}
     L = [[{} for _ in range(3)] for _ in range(3)]
     for i in range(3):
@@ -221,19 +221,16 @@ class SpectralCurve(PlaneCurve):
             u = lb * np.eye(3) + u_rank1
         else:
             Cx = _exact_coefficients(J, M, u)
-        C = np.array([[float(c) for c in row] for row in Cx])
-        scaleC = np.max(np.abs(C))
-        if np.max(np.abs(C[1::2])) > 1e-10 * scaleC:
+        odd = max(abs(float(c)) for kk in range(1, 7, 2) for c in Cx[kk])
+        if odd > 1e-10 * max(abs(float(c)) for row in Cx for c in row):
             raise ValueError("odd powers of E do not cancel: M is not skew or J, u not symmetric")
         # odd powers vanish for exactly skew M and symmetric u; the floats given are so only to rounding
         for kk in range(1, 7, 2):
             Cx[kk] = [Fraction(0)] * 4
-        C[1::2] = 0.0
         if node is not None:
             # the node at (E, w') = (0, 0): R(0, 0) = d_w' R(0, 0) = 0 exactly (d_E R vanishes by parity)
-            C[0, 0] = 0.0
-            C[0, 1] = 0.0
             Cx[0][0] = Cx[0][1] = Fraction(0)
+        C = np.array([[float(c) for c in row] for row in Cx])
         # exact rational coefficients of R(E, w) = sum C[k, l] E^k (w - shift)^l
         coef = {}
         for kk in range(C.shape[0]):

@@ -238,7 +238,7 @@ def _infinity_data(curve, J2, M):
     return places, np.array(Js), B
 
 
-def _kappa(curve, nums, places, Jinf) -> np.ndarray:
+def _velocity_at_infinity(curve, nums, places, Jinf) -> np.ndarray:
     """sum_j J_j omega_i / ds at the places over E = infinity (s = 1/E), omega_i = g_i dE / f_w.
 
     Distinct J_j: in closed form.  f = lc prod_l (w - w_l) with w_l = x_l E^2 + O(E), x_l = J_l^2, so
@@ -409,9 +409,12 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     def abel(points):
         return curve.abel_map(points, normalized=False) @ Ainv.T
 
+    def abel_sum(E, w):
+        return abel([(complex(x), complex(y)) for x, y in zip(E, w)]).sum(axis=0)
+
     Pinf, Jinf, B = _infinity_data(curve, curve.J2, M)
     Bc = B.conj()                                            # psi -> components: psi @ conj(B)
-    U = Ainv @ _kappa(curve, nums, Pinf, Jinf)
+    U = Ainv @ _velocity_at_infinity(curve, nums, Pinf, Jinf)
     scaleU = np.abs(U).max()
     if np.abs(U.imag).max() > 1e-10 * scaleU or np.abs(U[rdim:]).max() > 1e-10 * scaleU:
         raise RuntimeError("the flow velocity is not real in the adapted basis: inaccurate periods")
@@ -462,11 +465,12 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         # A(D0) does not depend on alpha (the pole divisors for two alphas differ by the divisor of
         # <alpha', v> / <alpha, v>): take it from an alpha whose divisor keeps away from the branch
         # points and from infinity, where Abel images lose accuracy.
-        Ea, wa = _abel_friendly_divisor(Jp, M, u, alpha, np.asarray(curve.branch_points))
-        AD0 = abel([(complex(x), complex(y)) for x, y in zip(Ea, wa)]).sum(axis=0)
+        AD0 = abel_sum(*_abel_friendly_divisor(Jp, M, u, alpha, np.asarray(curve.branch_points)))
     else:
-        AD0 = abel([(complex(x), complex(y)) for x, y in zip(Ed, wd)]).sum(axis=0)
+        AD0 = abel_sum(Ed, wd)
     AP0 = np.array([_reduce(v, tau) for v in abel(P0)])
+    # zeros of the eigenvector components v_k (alpha = e_k): the places where psi_k vanishes
+    comp_zeros = [eigenvector_poles(Jp, M, u, np.eye(3)[k]) for k in range(3)]
     if far:
         # psi_k vanishes at inf_j (j != k): div(psi_k) = Z_k + sum_{j != k} inf_j - D0 with Z_k the g
         # finite zeros of v_k, so e_k = A(Z_k) + K; and div(E) = sum P_s - sum inf_j turns
@@ -476,10 +480,9 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         # the place away from the cluster.
         e = np.empty((3, g), complex)
         R = float(np.abs(curve.branch_points).max())
-        for k in range(3):
-            Ez, wz = eigenvector_poles(Jp, M, u, np.eye(3)[k])
+        for k, (Ez, wz) in enumerate(comp_zeros):
             if len(Ez) == g and np.abs(Ez).max() <= 10.0 * R:
-                e[k] = _reduce(abel([(complex(x), complex(y)) for x, y in zip(Ez, wz)]).sum(axis=0) + K, tau)
+                e[k] = _reduce(abel_sum(Ez, wz) + K, tau)
             else:
                 e[k] = _reduce(AD0 - AP0.sum(axis=0) + abel([Pinf[k]])[0] + K, tau)
         d = np.repeat(_reduce(AP0.sum(axis=0) - AD0 - K, tau)[None, :], 3, axis=0)
@@ -489,8 +492,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         d = Ainf - e                                             # (3, g)
     ed_, vd_, gd_ = th.jet(d, order=1, separated=True)
     dlog_d = (gd_ @ U) / vd_
-    zeros = np.concatenate([eigenvector_poles(Jp, M, u, np.eye(3)[k])[0] for k in range(3)])
-    r = _radius(curve, Ed, zeros)
+    r = _radius(curve, Ed, np.concatenate([Ez for Ez, _ in comp_zeros]))
 
     def constants(radius):
         X0 = np.zeros((3, 3), complex)
