@@ -16,6 +16,8 @@ import mpmath
 import numpy as np
 import sympy as sp
 
+from ._theta_dd import two_prod, two_sum
+
 EPS = np.finfo(float).eps
 
 
@@ -361,43 +363,22 @@ def _mp_polyroots(coef, deg):
 # schemes (Graillat, Langlois, Louvet 2005): a polynomial value computed as if in twice the working
 # precision.  Used to polish the roots in y and to evaluate f_y where the sheets nearly coincide
 # (close branch points, nearly symmetric bodies at large |E|), which plain float64 loses to
-# cancellation; this avoids most multiprecision work.
-_SPLIT = 134217729.0  # 2^27 + 1
-
-
-def _two_sum(a, b):
-    s = a + b
-    z = s - a
-    return s, (a - (s - z)) + (b - z)
-
-
-def _split(a):
-    c = _SPLIT * a
-    h = c - (c - a)
-    return h, a - h
-
-
-def _two_prod(a, b):
-    p = a * b
-    ah, al = _split(a)
-    bh, bl = _split(b)
-    return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
-
-
+# cancellation; this avoids most multiprecision work.  The error-free transformations themselves
+# are those of :mod:`thetasol._theta_dd`.
 def _cmul_eft(a, b):
     """a * b = p + e with p = fl(a * b) (complex) and e its rounding error to first order."""
-    p1, e1 = _two_prod(a.real, b.real)
-    p2, e2 = _two_prod(a.imag, b.imag)
-    pr, e3 = _two_sum(p1, -p2)
-    p3, e4 = _two_prod(a.real, b.imag)
-    p4, e5 = _two_prod(a.imag, b.real)
-    pi, e6 = _two_sum(p3, p4)
+    p1, e1 = two_prod(a.real, b.real)
+    p2, e2 = two_prod(a.imag, b.imag)
+    pr, e3 = two_sum(p1, -p2)
+    p3, e4 = two_prod(a.real, b.imag)
+    p4, e5 = two_prod(a.imag, b.real)
+    pi, e6 = two_sum(p3, p4)
     return pr + 1j * pi, (e1 - e2 + e3) + 1j * (e4 + e5 + e6)
 
 
 def _cadd_eft(a, b):
-    sr, er = _two_sum(a.real, b.real)
-    si, ei = _two_sum(a.imag, b.imag)
+    sr, er = two_sum(a.real, b.real)
+    si, ei = two_sum(a.imag, b.imag)
     return sr + 1j * si, er + 1j * ei
 
 
@@ -451,8 +432,8 @@ def _polish_dd(self, Ahi, Alo, Y, iters=4):
 
 def _two_prod_c(a, k):
     """Complex array a times small integers k (exact in a double-double pair)."""
-    pr, er = _two_prod(a.real, k * 1.0)
-    pi, ei = _two_prod(a.imag, k * 1.0)
+    pr, er = two_prod(a.real, k * 1.0)
+    pi, ei = two_prod(a.imag, k * 1.0)
     return pr + 1j * pi, er + 1j * ei
 
 

@@ -1,7 +1,9 @@
 """Double-double helpers for the few O(g^2)-per-point steps of :mod:`thetasol.theta` whose
 float64 rounding is amplified: reduction of ``z`` modulo the period lattice (``z - tau k - j``
 with integers ``k`` up to ~100 for large ``Im z``), the quasi-periodicity phase
-``pi k.X.k`` taken modulo 2 pi, and the map ``u = M z`` into the reduced frame.
+``pi k.X.k`` taken modulo 2 pi, and the map ``u = M z`` into the reduced frame.  The
+error-free transformations are shared with the compensated Horner scheme of the curve engine
+(:mod:`thetasol._curve_poly`).
 
 Error-free transformations (Knuth two-sum, Dekker/Veltkamp two-product), vectorized with numpy;
 no FMA is assumed.
