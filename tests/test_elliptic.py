@@ -29,11 +29,16 @@ def _random_params(rng, n):
     return 1.0 - mc, mc
 
 
-def test_ellipj_against_mpmath_all_parameters():
-    rng = np.random.default_rng(0)
-    m, mc = _random_params(rng, 240)
+def _random_args(seed, n, lo, hi, kcap=np.inf):
+    """m, mc over every regime (_random_params), K and u uniform in [lo, hi] min(K, kcap)."""
+    rng = np.random.default_rng(seed)
+    m, mc = _random_params(rng, n)
     K = sp.ellipkm1(mc)
-    u = rng.uniform(-6, 6, m.size) * K
+    return m, mc, K, rng.uniform(lo, hi, n) * np.minimum(K, kcap)
+
+
+def test_ellipj_against_mpmath_all_parameters():
+    m, mc, _, u = _random_args(0, 240, -6, 6)
     sn, cn, dn, am = el.ellipj(u, m, mc)
     worst = np.zeros(4)
     for i in range(m.size):
@@ -46,14 +51,14 @@ def test_ellipj_against_mpmath_all_parameters():
 
 
 def test_ellipj_few_ulps_on_the_first_quarter_period():
-    rng = np.random.default_rng(1)
-    m, mc = _random_params(rng, 150)
-    K = sp.ellipkm1(mc)
-    u = rng.uniform(0, 1, m.size) * K
+    m, mc, _, u = _random_args(1, 150, 0, 1)
     sn, cn, dn, _ = el.ellipj(u, m, mc)
     for i in range(m.size):
         ref = _mp_jacobi(u[i], mc[i])
-        # relative accuracy, including cn and dn near their small values at u = K
+        # relative accuracy, including cn and dn near their small values at u = K.  (This bound
+        # holds for this seed only: next to u = K the rounding of K itself limits cn's relative
+        # accuracy to ~eps K / (K - u); seeds 3, 5, 7, 8 exceed it by 3-54x, e.g. 1.6e-13 at
+        # K - u = 1.3e-3.  test_ellipj_against_mpmath_all_parameters bounds the absolute error.)
         for got, r in zip((sn[i], cn[i], dn[i]), ref[:3]):
             assert abs(got - r) <= 8 * EPS * abs(r) + 2 * EPS * u[i] * 1e-3, (u[i], mc[i], got, r)
 
@@ -80,10 +85,7 @@ def test_ellipj_agrees_with_scipy_where_scipy_is_accurate():
 
 
 def test_identities_and_periods():
-    rng = np.random.default_rng(3)
-    m, mc = _random_params(rng, 3000)
-    K = sp.ellipkm1(mc)
-    u = rng.uniform(-50, 50, m.size) * np.minimum(K, 20.0)
+    m, mc, K, u = _random_args(3, 3000, -50, 50, kcap=20.0)
     sn, cn, dn, am = el.ellipj(u, m, mc)
     assert np.max(np.abs(sn ** 2 + cn ** 2 - 1)) < 4 * EPS
     assert np.max(np.abs(dn ** 2 + m * sn ** 2 - 1)) < 4 * EPS
@@ -108,10 +110,24 @@ def test_large_arguments_lose_only_the_arguments_resolution():
 def test_parameter_one_is_hyperbolic():
     u = np.linspace(-30, 30, 61)
     sn, cn, dn, am = el.ellipj(u, 1.0)
-    assert np.allclose(sn, np.tanh(u), atol=1e-16)
-    assert np.allclose(cn, 1 / np.cosh(u), rtol=1e-15)
-    assert np.allclose(dn, cn)
-    assert np.allclose(am, np.arctan(np.sinh(u)))
+    # (np.allclose's default rtol=1e-5 would hide any error: tolerances are explicit)
+    assert np.allclose(sn, np.tanh(u), rtol=0, atol=1e-16)
+    assert np.allclose(cn, 1 / np.cosh(u), rtol=1e-15, atol=0)
+    assert np.allclose(dn, cn, rtol=1e-15, atol=0)
+    assert np.allclose(am, np.arctan(np.sinh(u)), rtol=0, atol=4 * EPS)
+
+
+def test_incomplete_integrals_at_parameter_one():
+    """m = 1: F = asinh(tan phi) on |phi| < pi/2 (infinite beyond), E = sin(r) + 2 j for
+    phi = j pi + r (E(1) = 1)."""
+    phi = np.array([0.3, -1.2, 1.5707963, -1.5707963, 2.0, 4.0, -5.0, 7.0])
+    inside = np.abs(phi) < np.pi / 2
+    F = el.ellipf(phi, 1.0, 0.0)
+    assert np.allclose(F[inside], np.arcsinh(np.tan(phi[inside])), rtol=4 * EPS, atol=0)
+    assert np.array_equal(F[~inside], np.copysign(np.inf, phi[~inside]))
+    j = np.rint(phi / np.pi)
+    E = el.ellipeinc(phi, 1.0, 0.0)
+    assert np.allclose(E, np.sin(phi - j * np.pi) + 2 * j, rtol=0, atol=4 * EPS * (1 + np.abs(j)))
 
 
 @pytest.mark.parametrize("mc", [1.0, 0.5, 1e-3, 1e-12, 1e-100, 1e-300])
@@ -145,10 +161,7 @@ def test_incomplete_integrals_against_mpmath():
 
 
 def test_incomplete_first_kind_inverts_am():
-    rng = np.random.default_rng(5)
-    m, mc = _random_params(rng, 300)
-    K = sp.ellipkm1(mc)
-    u = rng.uniform(-3, 3, m.size) * np.minimum(K, 50)
+    m, mc, _, u = _random_args(5, 300, -3, 3, kcap=50.0)
     _, _, dn, am = el.ellipj(u, m, mc)
     back = el.ellipf(am, m, mc)
     # dF/dphi = 1/dn: the amplitude's rounding is magnified by 1/dn (up to 1/k'), so the
@@ -168,6 +181,13 @@ def test_dps_path():
     assert arr.dtype == object and arr.shape == (2,)
     assert mpmath.mp.dps == dps_before
     assert abs(float(el.ellippi(0.3, 0.6, dps=20)) - el.ellippi(0.3, 0.6)) < 1e-15
+    # the incomplete integrals' mpmath paths (mc given: m = 1 - mc exactly), against float64
+    phi, m, mc, n = 2.5, 1 - 2.0 ** -20, 2.0 ** -20, -0.7
+    for f, args in ((el.ellipf, (phi,)), (el.ellipeinc, (phi,)), (el.ellippiinc, (n, phi))):
+        hi = f(*args, m, mc, dps=30)
+        assert isinstance(hi, mpmath.mpf)
+        assert abs(float(hi) - f(*args, m, mc)) <= 8 * EPS * abs(float(hi)), f.__name__
+    assert mpmath.mp.dps == dps_before
 
 
 def test_bad_input():

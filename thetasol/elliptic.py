@@ -18,8 +18,12 @@ Method
         D = c^2 + s^2 d^2,  sn(2u) = 2 s c d / D,  cn(2u) = (c^4 - mc s^4) / D,
         dn(2u) = (mc + m c^4) / D
 
-    (the idea of Fukushima, Numer. Math. 2013, with our own variables).  Accuracy: a few
-    ulps for every ``m`` in [0, 1], including ``mc`` down to 1e-300.
+    (the idea of Fukushima, Numer. Math. 2013, with our own variables).  Accuracy (measured
+    against mpmath on 900 points of [0, K], ``mc`` from 1e-300 to 1): absolute error at most
+    1.5 eps, ``sn`` within 2 eps relative; the relative accuracy of ``cn`` and ``dn`` where they
+    are small (next to ``u = K``) is limited by the rounding of ``K`` itself (``K - u`` is
+    formed from the float ``K``: 1.6e-13 relative was seen at ``K - u = 1.3e-3``).  On
+    ``[-6K, 6K]`` the error is within 4 eps ``(4 + |u|)``, the argument's own resolution.
 ``ellipk``, ``ellipe``, ``ellipf``, ``ellipeinc``, ``ellippi``, ``ellippiinc``:
     Carlson's symmetric forms (DLMF 19.25) evaluated with :func:`scipy.special.elliprf`,
     ``elliprd``, ``elliprj``, ``elliprg``, written with ``mc`` so that no term cancels, and
@@ -160,6 +164,18 @@ def _K(mc):
     return _sp.ellipkm1(mc)
 
 
+def _E(mc):
+    """E from the complementary parameter, ``2 R_G(0, mc, 1)`` (DLMF 19.25.1)."""
+    return 2.0 * _sp.elliprg(0.0, mc, 1.0)
+
+
+def _Pi(n, mc):
+    """Pi(n | 1 - mc) = K + (n/3) R_J(0, mc, 1, 1 - n) (DLMF 19.25.2), for n < 1."""
+    with np.errstate(invalid="ignore"):
+        out = _K(mc) + n / 3.0 * _sp.elliprj(0.0, mc, 1.0, 1.0 - n)
+    return np.where(n == 0, _K(mc), out)
+
+
 def ellipk(m, mc=None, *, dps: int | None = None):
     """Complete elliptic integral of the first kind ``K(m)``.
 
@@ -188,7 +204,7 @@ def ellipe(m, mc=None, *, dps: int | None = None):
     if dps is not None:
         return _mp_apply(lambda mp, m_, mc_: mp.ellipe(m_), dps, m=m, mc=mc)
     m, mc = _params(m, mc)
-    return _out(2.0 * _sp.elliprg(0.0, mc, 1.0))
+    return _out(_E(mc))
 
 
 def ellippi(n, m, mc=None, *, dps: int | None = None):
@@ -205,19 +221,20 @@ def ellippi(n, m, mc=None, *, dps: int | None = None):
         raise ValueError("ellippi: the characteristic must satisfy n < 1 (no principal values)")
     m, mc = _params(m, mc)
     n, m, mc = np.broadcast_arrays(n, m, mc)
-    with np.errstate(invalid="ignore"):
-        out = _K(mc) + n / 3.0 * _sp.elliprj(0.0, mc, 1.0, 1.0 - n)
-    out = np.where(n == 0, _K(mc), out)
-    return _out(out)
+    return _out(_Pi(n, mc))
 
 
 # -- incomplete integrals ----------------------------------------------------------------------
 
-def _amplitude_split(phi):
-    """phi = j pi + r with r in [-pi/2, pi/2]: returns (j, r)."""
+def _amplitude_args(phi, m, mc, *extra):
+    """Checked and broadcast ``phi, m, mc, *extra``, and ``phi = j pi + r`` with ``r`` in
+    [-pi/2, pi/2]: returns ``(j, sin r, cos r, m, mc, *extra)``."""
+    phi = _finite(phi, "phi")
+    m, mc = _params(m, mc)
+    phi, m, mc, *extra = np.broadcast_arrays(phi, m, mc, *extra)
     j = np.rint(phi / np.pi)
     r = phi - j * np.pi  # exact enough: pi*j rounding is below the data's own resolution
-    return j, r
+    return (j, np.sin(r), np.cos(r), m, mc, *extra)
 
 
 def ellipf(phi, m, mc=None, *, dps: int | None = None):
@@ -229,11 +246,7 @@ def ellipf(phi, m, mc=None, *, dps: int | None = None):
     """
     if dps is not None:
         return _mp_apply(lambda mp, m_, mc_, p_: mp.ellipf(p_, m_), dps, m=m, mc=mc, extra=(phi,))
-    phi = _finite(phi, "phi")
-    m, mc = _params(m, mc)
-    phi, m, mc = np.broadcast_arrays(phi, m, mc)
-    j, r = _amplitude_split(phi)
-    s, c = np.sin(r), np.cos(r)
+    j, s, c, m, mc = _amplitude_args(phi, m, mc)
     with np.errstate(invalid="ignore", divide="ignore"):
         base = s * _sp.elliprf(c * c, c * c + mc * s * s, 1.0)
         out = np.where(j != 0, 2.0 * j * _K(mc), 0.0) + base
@@ -250,11 +263,7 @@ def ellipeinc(phi, m, mc=None, *, dps: int | None = None):
     """
     if dps is not None:
         return _mp_apply(lambda mp, m_, mc_, p_: mp.ellipe(p_, m_), dps, m=m, mc=mc, extra=(phi,))
-    phi = _finite(phi, "phi")
-    m, mc = _params(m, mc)
-    phi, m, mc = np.broadcast_arrays(phi, m, mc)
-    j, r = _amplitude_split(phi)
-    s, c = np.sin(r), np.cos(r)
+    j, s, c, m, mc = _amplitude_args(phi, m, mc)
     c = np.abs(c)
     d2 = c * c + mc * s * s
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -263,8 +272,7 @@ def ellipeinc(phi, m, mc=None, *, dps: int | None = None):
         last = np.where(d2 > 0, m * s * c / np.sqrt(d2), 0.0)
         base = mc * s * np.where(mc > 0, rf, 0.0) + (m * mc / 3.0) * s ** 3 * np.where(mc > 0, rd, 0.0) + last
         base = np.where(mc == 0, s, base)  # E(phi | 1) = sin(phi) on |phi| <= pi/2
-        Ec = 2.0 * _sp.elliprg(0.0, mc, 1.0)
-        out = np.where(j != 0, 2.0 * j * Ec, 0.0) + base
+        out = np.where(j != 0, 2.0 * j * _E(mc), 0.0) + base
     return _out(out)
 
 
@@ -279,22 +287,16 @@ def ellippiinc(n, phi, m, mc=None, *, dps: int | None = None):
         return _mp_apply(lambda mp, m_, mc_, n_, p_: mp.ellippi(n_, p_, m_), dps, m=m, mc=mc,
                          extra=(n, phi))
     n = _finite(n, "n")
-    phi = _finite(phi, "phi")
     if np.any(n >= 1):
         raise ValueError("ellippiinc: the characteristic must satisfy n < 1 (no principal values)")
-    m, mc = _params(m, mc)
-    n, phi, m, mc = np.broadcast_arrays(n, phi, m, mc)
-    j, r = _amplitude_split(phi)
-    s, c = np.sin(r), np.cos(r)
+    j, s, c, m, mc, n = _amplitude_args(phi, m, mc, n)
     c2 = c * c
     d2 = c2 + mc * s * s
     with np.errstate(invalid="ignore", divide="ignore"):
         F = s * _sp.elliprf(c2, d2, 1.0)
         base = F + n / 3.0 * s ** 3 * _sp.elliprj(c2, d2, 1.0, 1.0 - n * s * s)
         base = np.where(n == 0, F, base)
-        Pc = _K(mc) + n / 3.0 * _sp.elliprj(0.0, mc, 1.0, 1.0 - n)
-        Pc = np.where(n == 0, _K(mc), Pc)
-        out = np.where(j != 0, 2.0 * j * Pc, 0.0) + base
+        out = np.where(j != 0, 2.0 * j * _Pi(n, mc), 0.0) + base
     return _out(out)
 
 
