@@ -1,8 +1,8 @@
 """Algebra of the Lax matrix L(E) = J^2 E^2 + M E + u of (4.11) at t = 0.
 
 Everything the Baker-Akhiezer reconstruction needs that does not involve periods:
-eigenvectors at places, the pole divisor of the normalized eigenvector, and Taylor
-expansions at the places over E = infinity.  J is diagonal (principal frame).
+eigenvectors at places and the pole divisor of the normalized eigenvector.  J is diagonal
+(principal frame).
 
 The pole divisor.  With psi(P) the eigenvector of L(E) at P = (E, w) normalized by
 <alpha, psi> = 1, its poles are the points where alpha^T v(P) = 0 for the right eigenvector
@@ -91,28 +91,3 @@ def eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.nda
     ok = np.abs(den) > 0
     w[ok] = num[ok] / den[ok]
     return E, w
-
-
-def branch_series_at_infinity(J: np.ndarray, M: np.ndarray, u: np.ndarray, order: int = 12,
-                              radius: float | None = None):
-    """Taylor coefficients in s = 1/E of w_j(E) / E^2 on the sheet w/E^2 -> J_j^2.
-
-    Computed as Cauchy integrals of the eigenvalues of J^2 + s M + s^2 u over a circle in s
-    (the trapezoidal rule converges geometrically).  Returns ``(coef, radius)`` with ``coef``
-    of shape ``(3, order)``: ``w_j / E^2 = sum_n coef[j, n] s^n``.
-    """
-    J2 = J * J
-    gap = min(abs(J2[i] - J2[j]) for i in range(3) for j in range(i))
-    scale = np.linalg.norm(M, 2) + np.sqrt(np.linalg.norm(u, 2) * 1.0)
-    if radius is None:
-        radius = 0.25 * gap / max(scale, 1e-300)
-        radius = min(radius, 0.25 * np.sqrt(gap / max(np.linalg.norm(u, 2), 1e-300)))
-    N = max(2 * order, 32)
-    s = radius * np.exp(2j * np.pi * np.arange(N) / N)
-    lam = np.linalg.eigvals(np.diag(J2) + s[:, None, None] * M + (s * s)[:, None, None] * u)
-    # Follow each sheet by nearest J_j^2 (the circle is small enough to keep them apart).
-    idx = np.argmin(np.abs(lam[:, :, None] - J2[None, None, :]), axis=1)
-    vals = np.take_along_axis(lam, idx, axis=1)  # (N, 3)
-    coef = np.fft.fft(vals, axis=0) / N
-    coef = coef[:order].T / radius ** np.arange(order)
-    return coef, radius

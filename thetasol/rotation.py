@@ -180,9 +180,16 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     ------
     ValueError
         Non-finite, wrongly shaped or unphysical data.
-    NotImplementedError
-        A potential with torque on a symmetric body (two equal principal moments), or ``dps``
-        with a potential.
+    ClosedFormUnavailable
+        (a ``NotImplementedError``) A potential with torque on a symmetric body (two equal
+        principal moments), ``dps`` with a potential, or nearly degenerate data for which the curve
+        computations cannot reach the solution's accuracy; the message says which.
+
+    Warns
+    -----
+    RuntimeWarning
+        The theta-function set-up lost accuracy (``|Im Phi(0, t)|`` above 1e-8 at ``t = 1000``,
+        the size is stated): errors of that size are to be expected.
 
     Examples
     --------
