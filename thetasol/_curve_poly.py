@@ -11,6 +11,7 @@ exactly instead of appearing as clusters of nearly equal floating roots.
 from __future__ import annotations
 
 from fractions import Fraction
+from math import comb
 
 import mpmath
 import numpy as np
@@ -152,31 +153,17 @@ class CurvePoly:
     # ------------------------------------------------------------------ numerics
     def coeff_polys(self, x):
         """a_j(x) for a 1-D complex array x: shape (K, n + 1)."""
-        x = np.asarray(x, dtype=complex)
-        A = np.broadcast_to(self.C[-1], x.shape + (self.n + 1,)).copy()
-        for i in range(self.dx - 1, -1, -1):
-            A *= x[..., None]
-            A += self.C[i]
-        return A
+        return _horner_x(self.C, np.asarray(x, dtype=complex))
 
     def coeff_polys_dx(self, x):
         x = np.asarray(x, dtype=complex)
         if self.dx == 0:
             return np.zeros(x.shape + (self.n + 1,), complex)
-        Cx = self.Cx
-        A = np.broadcast_to(Cx[-1], x.shape + (self.n + 1,)).copy()
-        for i in range(Cx.shape[0] - 2, -1, -1):
-            A *= x[..., None]
-            A += Cx[i]
-        return A
+        return _horner_x(self.Cx, x)
 
     def abs_coeff_polys(self, ax):
         """sum_i |c_ij| |x|^i: for rounding-error bounds; ax = |x|."""
-        A = np.broadcast_to(self.absC[-1], ax.shape + (self.n + 1,)).copy()
-        for i in range(self.dx - 1, -1, -1):
-            A *= ax[..., None]
-            A += self.absC[i]
-        return A
+        return _horner_x(self.absC, ax)
 
     def roots(self, x, polish: int = 2):
         """All n roots in y of f(x, y) at each x (1-D array): shape (K, n), unordered.
@@ -237,6 +224,91 @@ class CurvePoly:
             s = s * aY + absA[:, j:j + 1]
         return 4 * self.n * EPS * s / np.maximum(np.abs(fy), 1e-300)
 
+    # ------------------------------------------------------------------ compensated (double-double)
+    def coeff_polys_dd(self, x):
+        """a_j(x) in double-double: (hi, lo) arrays (K, n + 1), x exact floats."""
+        x = np.asarray(x, dtype=complex)
+        C = self.C  # (dx + 1, n + 1): coefficient of x^i y^j
+        chi = np.broadcast_to(C.T[None, :, :], (len(x),) + C.T.shape)  # (K, n+1, dx+1)
+        zeros = np.zeros_like(chi)
+        hi, lo = comp_horner(chi, zeros, np.broadcast_to(x[:, None], (len(x), self.n + 1)))
+        return hi, lo
+
+    def polish_dd(self, Ahi, Alo, Y, iters=4):
+        """Newton steps on the roots Y (K, m) with compensated residuals; returns (Y, f_y)."""
+        n = self.n
+        jj = np.arange(1, n + 1)
+        # derivative coefficients (j a_j) in double-double
+        dhi, dlo = _two_prod_c(Ahi[:, 1:], jj)
+        dlo = dlo + Alo[:, 1:] * jj
+        for _ in range(iters):
+            rh, rl = comp_horner(Ahi[:, None, :], Alo[:, None, :], Y)
+            fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
+            fy = fh + fl
+            with np.errstate(divide="ignore", invalid="ignore"):
+                step = (rh + rl) / fy
+            ok = np.isfinite(step) & (np.abs(step) < 0.1 * (np.abs(Y) + 1e-300) + 1e-300)
+            Y = np.where(ok, Y - step, Y)
+            if not np.any(ok & (np.abs(step) > 1e-17 * np.abs(Y))):
+                break
+        fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
+        return Y, fh + fl
+
+    def shifted_dd(self, b):
+        """Coefficients of F(xi, y) = f(b + xi, y) in double-double: (hi, lo), arrays (dx + 1, n + 1).
+
+        The shift is exact (rational arithmetic; b is the exact binary value of a float), so F is
+        evaluated accurately for small xi even where |b| is large against |xi| (a local chart at b).
+        """
+        b = complex(b)
+        br, bi = Fraction(b.real), Fraction(b.imag)
+        # powers of b as exact complex fractions
+        pw = [(Fraction(1), Fraction(0))]
+        for _ in range(self.dx):
+            r, i = pw[-1]
+            pw.append((r * br - i * bi, r * bi + i * br))
+        hi = np.zeros((self.dx + 1, self.n + 1), complex)
+        lo = np.zeros_like(hi)
+        for j in range(self.n + 1):
+            for i in range(self.dx + 1):
+                sr, si = Fraction(0), Fraction(0)
+                for k in range(i, self.dx + 1):
+                    c = self.exact.get((k, j))
+                    if c is None:
+                        continue
+                    cr, ci = c
+                    pr, pi = pw[k - i]
+                    m = comb(k, i)
+                    sr += m * (cr * pr - ci * pi)
+                    si += m * (cr * pi + ci * pr)
+                h = complex(float(sr), float(si))
+                hi[i, j] = h
+                lo[i, j] = complex(float(sr - Fraction(h.real)), float(si - Fraction(h.imag)))
+        return hi, lo
+
+    def coeff_polys_dd_local(self, xi, Chi, Clo):
+        """a_j(b + xi) in double-double from the shifted coefficients of :meth:`shifted_dd`."""
+        xi = np.asarray(xi, dtype=complex)
+        K = len(xi)
+        chi = np.broadcast_to(Chi.T[None, :, :], (K,) + Chi.T.shape)
+        clo = np.broadcast_to(Clo.T[None, :, :], (K,) + Clo.T.shape)
+        return comp_horner(chi, clo, np.broadcast_to(xi[:, None], (K, self.n + 1)))
+
+    def second_derivatives(self, x, Y):
+        """f_xx, f_xy, f_yy at (x[k], Y[k, s]) (plain float64; used only for step control)."""
+        x = np.asarray(x, dtype=complex)
+        n, dx = self.n, self.dx
+        C = self.C
+        ii = np.arange(dx + 1)
+        A0 = self.coeff_polys(x)
+        A1 = self.coeff_polys_dx(x)
+        A2 = _horner_x((C * (ii * (ii - 1))[:, None])[2:], x) if dx >= 2 else np.zeros(x.shape + (n + 1,), complex)
+        jj = np.arange(n + 1)
+        fxx, _ = self.horner_y(A2, Y)
+        fxy, _ = self.horner_y(A1[:, 1:] * jj[1:], Y) if n >= 1 else (np.zeros_like(Y), None)
+        fyy, _ = self.horner_y(A0[:, 2:] * (jj[2:] * (jj[2:] - 1)), Y) if n >= 2 else (np.zeros_like(Y), None)
+        return fxx, fxy, fyy
+
     # ------------------------------------------------------------------ Newton polygon
     def newton_polygon(self):
         pts = sorted(set(self.exact))
@@ -256,6 +328,15 @@ class CurvePoly:
                     out.append((i, j))
         out.sort(key=lambda p: (p[1], p[0]))
         return out
+
+
+def _horner_x(coef, x):
+    """sum_i coef[i] x^i (coef rows indexed by the power of x) at every x: shape x.shape + coef.shape[1:]."""
+    A = np.broadcast_to(coef[-1], x.shape + coef.shape[1:]).copy()
+    for i in range(coef.shape[0] - 2, -1, -1):
+        A *= x[..., None]
+        A += coef[i]
+    return A
 
 
 def _cross(o, a, b):
@@ -399,119 +480,8 @@ def comp_horner(chi, clo, z):
     return hi, lo
 
 
-def _coeff_polys_dd(self, x):
-    """a_j(x) in double-double: (hi, lo) arrays (K, n + 1), x exact floats."""
-    x = np.asarray(x, dtype=complex)
-    C = self.C  # (dx + 1, n + 1): coefficient of x^i y^j
-    chi = np.broadcast_to(C.T[None, :, :], (len(x),) + C.T.shape)  # (K, n+1, dx+1)
-    zeros = np.zeros_like(chi)
-    hi, lo = comp_horner(chi, zeros, np.broadcast_to(x[:, None], (len(x), self.n + 1)))
-    return hi, lo
-
-
-def _polish_dd(self, Ahi, Alo, Y, iters=4):
-    """Newton steps on the roots Y (K, m) with compensated residuals; returns (Y, f_y)."""
-    n = self.n
-    jj = np.arange(1, n + 1)
-    # derivative coefficients (j a_j) in double-double
-    dhi, dlo = _two_prod_c(Ahi[:, 1:], jj)
-    dlo = dlo + Alo[:, 1:] * jj
-    for _ in range(iters):
-        rh, rl = comp_horner(Ahi[:, None, :], Alo[:, None, :], Y)
-        fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
-        fy = fh + fl
-        with np.errstate(divide="ignore", invalid="ignore"):
-            step = (rh + rl) / fy
-        ok = np.isfinite(step) & (np.abs(step) < 0.1 * (np.abs(Y) + 1e-300) + 1e-300)
-        Y = np.where(ok, Y - step, Y)
-        if not np.any(ok & (np.abs(step) > 1e-17 * np.abs(Y))):
-            break
-    fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
-    return Y, fh + fl
-
-
 def _two_prod_c(a, k):
     """Complex array a times small integers k (exact in a double-double pair)."""
     pr, er = two_prod(a.real, k * 1.0)
     pi, ei = two_prod(a.imag, k * 1.0)
     return pr + 1j * pi, er + 1j * ei
-
-
-CurvePoly.coeff_polys_dd = _coeff_polys_dd
-CurvePoly.polish_dd = _polish_dd
-
-
-def _shifted_dd(self, b):
-    """Coefficients of F(xi, y) = f(b + xi, y) in double-double: (hi, lo), arrays (dx + 1, n + 1).
-
-    The shift is exact (rational arithmetic; b is the exact binary value of a float), so F is
-    evaluated accurately for small xi even where |b| is large against |xi| (a local chart at b).
-    """
-    from math import comb
-    b = complex(b)
-    br, bi = Fraction(b.real), Fraction(b.imag)
-    # powers of b as exact complex fractions
-    pw = [(Fraction(1), Fraction(0))]
-    for _ in range(self.dx):
-        r, i = pw[-1]
-        pw.append((r * br - i * bi, r * bi + i * br))
-    hi = np.zeros((self.dx + 1, self.n + 1), complex)
-    lo = np.zeros_like(hi)
-    for j in range(self.n + 1):
-        for i in range(self.dx + 1):
-            sr, si = Fraction(0), Fraction(0)
-            for k in range(i, self.dx + 1):
-                c = self.exact.get((k, j))
-                if c is None:
-                    continue
-                cr, ci = c
-                pr, pi = pw[k - i]
-                m = comb(k, i)
-                sr += m * (cr * pr - ci * pi)
-                si += m * (cr * pi + ci * pr)
-            h = complex(float(sr), float(si))
-            hi[i, j] = h
-            lo[i, j] = complex(float(sr - Fraction(h.real)), float(si - Fraction(h.imag)))
-    return hi, lo
-
-
-def _coeff_polys_dd_local(self, xi, Chi, Clo):
-    """a_j(b + xi) in double-double from the shifted coefficients of :meth:`shifted_dd`."""
-    xi = np.asarray(xi, dtype=complex)
-    K = len(xi)
-    chi = np.broadcast_to(Chi.T[None, :, :], (K,) + Chi.T.shape)
-    clo = np.broadcast_to(Clo.T[None, :, :], (K,) + Clo.T.shape)
-    return comp_horner(chi, clo, np.broadcast_to(xi[:, None], (K, self.n + 1)))
-
-
-CurvePoly.shifted_dd = _shifted_dd
-CurvePoly.coeff_polys_dd_local = _coeff_polys_dd_local
-
-
-def _second_derivatives(self, x, Y):
-    """f_xx, f_xy, f_yy at (x[k], Y[k, s]) (plain float64; used only for step control)."""
-    x = np.asarray(x, dtype=complex)
-    n, dx = self.n, self.dx
-    C = self.C
-    ii = np.arange(dx + 1)
-
-    def cpoly(coef):
-        A = np.broadcast_to(coef[-1], x.shape + (n + 1,)).copy()
-        for i in range(coef.shape[0] - 2, -1, -1):
-            A *= x[..., None]
-            A += coef[i]
-        return A
-
-    Cx = C * ii[:, None]
-    Cxx = C * (ii * (ii - 1))[:, None]
-    A0 = cpoly(C)
-    A1 = cpoly(Cx[1:]) if dx >= 1 else np.zeros(x.shape + (n + 1,), complex)
-    A2 = cpoly(Cxx[2:]) if dx >= 2 else np.zeros(x.shape + (n + 1,), complex)
-    jj = np.arange(n + 1)
-    fxx, _ = self.horner_y(A2, Y)
-    fxy, _ = self.horner_y(A1[:, 1:] * jj[1:], Y) if n >= 1 else (np.zeros_like(Y), None)
-    fyy, _ = self.horner_y(A0[:, 2:] * (jj[2:] * (jj[2:] - 1)), Y) if n >= 2 else (np.zeros_like(Y), None)
-    return fxx, fxy, fyy
-
-
-CurvePoly.second_derivatives = _second_derivatives
