@@ -110,6 +110,15 @@ def test_initial_values_are_reproduced():
         assert np.max(np.abs(Q - Q0)) <= 4e-15, name
 
 
+def test_omega_alone_is_the_same_evaluation():
+    """sol.omega(t) skips the attitude but must give the bits of sol(t)[0] (the separatrix used
+    to form its argument with a different rounding)."""
+    t = np.concatenate([np.linspace(-30, 30, 101), [1e3, -1e5 + 0.3]])
+    for name, (J, Q0, w0) in REGIMES.items():
+        sol = solve_rotation(J, Z, Q0, w0)
+        assert np.array_equal(sol.omega(t), sol(t)[0]), name
+
+
 def test_tensor_input_equals_principal_input():
     J, Q0, w0 = REGIMES["tensor"]
     ev, R = np.linalg.eigh(J)

@@ -57,6 +57,7 @@ import numpy as np
 from scipy import special as _sp
 
 from . import elliptic as _el
+from ._so3 import hat, rotation_about
 from .rotation import RotationSolution
 
 __all__ = ["EulerTopSolution"]
@@ -177,7 +178,7 @@ class _Consts:
     rho: object = 0.0         # separatrix: A_a / (1 + A_c)
     period: object = 0.0
     symmetric: bool = False
-    extra: dict = field(default_factory=dict)
+    P0: object = 0.0          # periodic part of psi at t = 0
 
 
 def _setup(Jp, mvec, X) -> _Consts:
@@ -331,34 +332,61 @@ def _angle_mod_2pi(rate, t, extra):
     return r + extra
 
 
-def _eval_float(c: _Consts, t):
-    """Working-frame momentum (n, 3) and precession angle (n,) at flat times t (float64)."""
+def _rot_about(axis, ang):
+    """Rotations about a fixed unit ``axis`` by the angles ``ang`` (n,) (Rodrigues), (n, 3, 3)."""
+    K = hat(axis)
+    return (np.eye(3) + np.sin(ang)[:, None, None] * K
+            + (1.0 - np.cos(ang))[:, None, None] * (K @ K))
+
+
+def _uniform_rotation(Q0, w0, t):
+    """(omega, Q) of a constant body angular velocity ``w0`` (steady rotation or rest)."""
+    n = t.size
+    wn = _norm(w0)
+    if wn == 0:
+        return np.zeros((n, 3)), np.broadcast_to(Q0, (n, 3, 3)).copy()
+    ang = _angle_mod_2pi(wn, t, 0.0)
+    return np.broadcast_to(w0, (n, 3)).copy(), Q0 @ _rot_about(w0 / wn, ang)
+
+
+def _attitude(S, psi, v, P):
+    """``S R_3(psi) B(v) P^T``: the attitude from the precession angle and the momentum ``v``
+    (in the frame whose third axis is the pole), ``B`` the minimal rotation to ``e_3``."""
+    return S @ rotation_about(2, psi) @ _minimal_rotation(_unit(v)) @ P.T
+
+
+def _momentum_float(c: _Consts, t):
+    """Working-frame momentum (n, 3) at flat times t (float64), and what the precession angle
+    needs: ``tau`` on the separatrix, else ``(x, sn, cn, dn, sgn)`` at the reduced argument."""
     G = c.G
     Aa, Ab, Ac = c.A
-    if c.kind == "separatrix":
-        p, e = _el._two_prod(c.lam, t)
-        tau_hi, tau_e = _el._two_sum(p, c.u0)
-        tau = tau_hi + (tau_e + e)
-        with np.errstate(over="ignore"):
-            sech = 1.0 / np.cosh(tau)
-        th = np.tanh(tau)
-        mw = G * np.stack([Aa * sech, th, Ac * sech], -1)
-        per = np.arctan(c.rho * np.tanh(0.5 * tau)) - math.atan(c.rho * math.tanh(0.5 * c.u0))
-        psi = _angle_mod_2pi(c.nu, t, -c.kappa * per)
-        return mw, psi
     p, e = _el._two_prod(c.lam, t)
     hi, e2 = _el._two_sum(p, c.u0)
-    K2 = 2.0 * c.K
-    r, nper = _el._reduce(hi, e + e2, K2)
+    if c.kind == "separatrix":
+        tau = hi + (e2 + e)
+        with np.errstate(over="ignore"):
+            sech = 1.0 / np.cosh(tau)
+        return G * np.stack([Aa * sech, np.tanh(tau), Ac * sech], -1), tau
+    r, nper = _el._reduce(hi, e + e2, 2.0 * c.K)
     r = np.clip(r, -c.K, c.K)
     x = np.abs(r)
     sn, cn, dn = _el._sncndn_0K(x, c.m, c.mc, c.K)
     sgn = np.where(r < 0, -1.0, 1.0)
     par = np.where(np.fmod(np.abs(nper), 2.0) == 1.0, -1.0, 1.0)
     mw = G * np.stack([Aa * par * cn, Ab * par * sgn * sn, Ac * dn], -1)
+    return mw, (x, sn, cn, dn, sgn)
+
+
+def _eval_float(c: _Consts, t):
+    """Working-frame momentum (n, 3) and precession angle (n,) at flat times t (float64)."""
+    mw, aux = _momentum_float(c, t)
+    if c.kind == "separatrix":
+        tau = aux
+        per = np.arctan(c.rho * np.tanh(0.5 * tau)) - math.atan(c.rho * math.tanh(0.5 * c.u0))
+        return mw, _angle_mod_2pi(c.nu, t, -c.kappa * per)
+    x, sn, cn, dn, sgn = aux
     per = _periodic(c, x, sn, cn, dn) * sgn
-    psi = _angle_mod_2pi(c.nu, t, c.kappa * (per - c.extra["P0"]))
-    return mw, psi
+    return mw, _angle_mod_2pi(c.nu, t, c.kappa * (per - c.P0))
 
 
 def _periodic(c: _Consts, x, sn, cn, dn):
@@ -376,17 +404,14 @@ def _periodic(c: _Consts, x, sn, cn, dn):
 
 # -- mpmath evaluation -------------------------------------------------------------------------
 
-def _eval_mp(c: _Consts, tval, mp):
-    """Working-frame momentum (3 mpf) and precession angle at one time (mpmath)."""
+def _momentum_mp(c: _Consts, t, mp):
+    """:func:`_momentum_float` at one mpmath time (mpmath)."""
     G = c.G
     Aa, Ab, Ac = c.A
-    t = mp.mpf(tval)
     tau = c.lam * t + c.u0
     if c.kind == "separatrix":
         sech = mp.sech(tau)
-        mw = [G * Aa * sech, G * mp.tanh(tau), G * Ac * sech]
-        per = mp.atan(c.rho * mp.tanh(tau / 2)) - mp.atan(c.rho * mp.tanh(c.u0 / 2))
-        return mw, c.nu * t - c.kappa * per
+        return [G * Aa * sech, G * mp.tanh(tau), G * Ac * sech], tau
     nper = mp.nint(tau / (2 * c.K))
     r = tau - 2 * c.K * nper
     x = abs(r)
@@ -395,16 +420,29 @@ def _eval_mp(c: _Consts, tval, mp):
     dn = mp.ellipfun("dn", x, m=c.m)
     sgn = -1 if r < 0 else 1
     par = -1 if int(nper) % 2 else 1
-    mw = [G * Aa * par * cn, G * Ab * par * sgn * sn, G * Ac * dn]
+    return [G * Aa * par * cn, G * Ab * par * sgn * sn, G * Ac * dn], (x, sn, cn, dn, sgn)
+
+
+def _periodic_mp(c: _Consts, x, sn, cn, dn, sgn, mp):
+    """:func:`_periodic` (times the sign of the reduced argument) in mpmath."""
     if c.N == 0 or c.symmetric:
-        per = 0
-    else:
-        kp = c.kp
-        s1 = min((1 + kp) * sn / (1 + dn), mp.mpf(1))
-        xx = 2 * (1 + kp) * cn * cn / ((1 + dn) * (dn + kp))
-        yy = xx + c.k1p2 * s1 * s1
-        per = sgn * (s1 ** 3 * mp.elliprj(xx, yy, 1, 1 - c.N * s1 * s1) - x * c.RJc / c.K)
-    return mw, c.nu * t + c.kappa * (per - c.extra["P0"])
+        return 0
+    kp = c.kp
+    s1 = min((1 + kp) * sn / (1 + dn), mp.mpf(1))
+    xx = 2 * (1 + kp) * cn * cn / ((1 + dn) * (dn + kp))
+    yy = xx + c.k1p2 * s1 * s1
+    return sgn * (s1 ** 3 * mp.elliprj(xx, yy, 1, 1 - c.N * s1 * s1) - x * c.RJc / c.K)
+
+
+def _eval_mp(c: _Consts, tval, mp):
+    """Working-frame momentum (3 mpf) and precession angle at one time (mpmath)."""
+    t = mp.mpf(tval)
+    mw, aux = _momentum_mp(c, t, mp)
+    if c.kind == "separatrix":
+        tau = aux
+        per = mp.atan(c.rho * mp.tanh(tau / 2)) - mp.atan(c.rho * mp.tanh(c.u0 / 2))
+        return mw, c.nu * t - c.kappa * per
+    return mw, c.nu * t + c.kappa * (_periodic_mp(c, *aux, mp) - c.P0)
 
 
 def _mp_minimal_rotation(nv, mp):
@@ -435,36 +473,15 @@ class EulerTopSolution(RotationSolution):
                 return om.astype(float), Q.astype(float)
             return om, Q
         c = self._c
-        n = t.size
-        if c.kind == "rest":
-            return np.zeros((n, 3)), np.broadcast_to(self.Q0, (n, 3, 3)).copy()
-        if c.kind == "steady":
-            w = self.omega0
-            wn = _norm(w)
-            ax = w / wn
-            ang = _angle_mod_2pi(wn, t, 0.0)
-            K = np.array([[0, -ax[2], ax[1]], [ax[2], 0, -ax[0]], [-ax[1], ax[0], 0]])
-            R = (np.eye(3) + np.sin(ang)[:, None, None] * K
-                 + (1.0 - np.cos(ang))[:, None, None] * (K @ K))
-            return np.broadcast_to(w, (n, 3)).copy(), self.Q0 @ R
+        if c.kind in ("rest", "steady"):
+            return _uniform_rotation(self.Q0, self.omega0 if c.kind == "steady" else np.zeros(3), t)
         mw, psi = _eval_float(c, t)
-        nv = _unit(mw)
-        B = _minimal_rotation(nv)
-        cp, sp = np.cos(psi), np.sin(psi)
-        R3 = np.zeros((n, 3, 3))
-        R3[:, 0, 0] = cp
-        R3[:, 0, 1] = -sp
-        R3[:, 1, 0] = sp
-        R3[:, 1, 1] = cp
-        R3[:, 2, 2] = 1.0
-        Q = self._S @ R3 @ B @ self._P.T
-        omega = (mw / self._Iw) @ self._P.T
-        return omega, Q
+        return (mw / self._Iw) @ self._P.T, _attitude(self._S, psi, mw, self._P)
 
     def _omega(self, t):
         if self._mp is not None or self._c.kind in ("rest", "steady"):
             return self._evaluate(t)[0]
-        mw, _ = _eval_float_momentum_only(self._c, t)
+        mw, _ = _momentum_float(self._c, t)
         return (mw / self._Iw) @ self._P.T
 
     # mpmath -------------------------------------------------------------------------------
@@ -503,27 +520,6 @@ class EulerTopSolution(RotationSolution):
                     for j in range(3):
                         Qo[i, k, j] = +Q[k, j]
         return om, Qo
-
-
-def _eval_float_momentum_only(c, t):
-    """Working-frame momentum without the precession angle (cheaper)."""
-    G = c.G
-    Aa, Ab, Ac = c.A
-    if c.kind == "separatrix":
-        p, e = _el._two_prod(c.lam, t)
-        tau = p + (c.u0 + e)
-        with np.errstate(over="ignore"):
-            sech = 1.0 / np.cosh(tau)
-        return G * np.stack([Aa * sech, np.tanh(tau), Ac * sech], -1), None
-    p, e = _el._two_prod(c.lam, t)
-    hi, e2 = _el._two_sum(p, c.u0)
-    r, nper = _el._reduce(hi, e + e2, 2.0 * c.K)
-    r = np.clip(r, -c.K, c.K)
-    x = np.abs(r)
-    sn, cn, dn = _el._sncndn_0K(x, c.m, c.mc, c.K)
-    sgn = np.where(r < 0, -1.0, 1.0)
-    par = np.where(np.fmod(np.abs(nper), 2.0) == 1.0, -1.0, 1.0)
-    return G * np.stack([Aa * par * cn, Ab * par * sgn * sn, Ac * dn], -1), None
 
 
 def _principal_frame(Jm):
@@ -577,13 +573,10 @@ def _solve_euler_top(Jm, am, Q0, omega0, dps=None) -> EulerTopSolution:
     inv.update(period=float(c.period), precession_rate=float(c.nu), m=float(c.m))
     P = R @ c.W
     Iw = np.array([float(v) for v in c.Iw])
-    c.extra["P0"] = 0.0
+    mw0, aux = _momentum_float(c, np.zeros(1))
     if c.kind == "elliptic":
-        r0 = float(_el._reduce(np.array([c.u0]), np.zeros(1), 2 * c.K)[0][0])
-        x0 = np.array([min(abs(r0), c.K)])
-        sn, cn, dn = _el._sncndn_0K(x0, c.m, c.mc, c.K)
-        c.extra["P0"] = float(_periodic(c, x0, sn, cn, dn)[0]) * (-1.0 if r0 < 0 else 1.0)
-    mw0, _ = _eval_float(c, np.zeros(1))
+        x0, sn, cn, dn, sgn = aux
+        c.P0 = float(_periodic(c, x0, sn, cn, dn)[0] * sgn[0])
     n0 = _unit(mw0)[0]
     S = Q0 @ P @ _minimal_rotation(n0).T
     return EulerTopSolution(Jm, am, Q0, omega0, method, inv, None, _c=c, _P=P, _S=S, _Iw=Iw)
@@ -633,11 +626,8 @@ def _solve_mp(Jm, am, Q0, omega0, dps, inv, float_output=False):
         inv.update(period=float(c.period), precession_rate=float(c.nu), m=float(c.m))
         Wm = mp.matrix(c.W.tolist())
         P = R * Wm
-        c.extra["P0"] = 0
-        mw0, _ = _eval_mp(c, 0, mp)
-        if c.kind == "elliptic" and not (c.N == 0 or c.symmetric):
-            # P0 = periodic part at u0 (the evaluation above used P0 = 0)
-            c.extra["P0"] = _eval_mp(c, 0, mp)[1] / c.kappa if c.kappa != 0 else 0
+        mw0, aux = _momentum_mp(c, mp.mpf(0), mp)
+        c.P0 = _periodic_mp(c, *aux, mp) if c.kind == "elliptic" else 0
         G = mp.sqrt(mw0[0] ** 2 + mw0[1] ** 2 + mw0[2] ** 2)
         B0 = _mp_minimal_rotation([v / G for v in mw0], mp)
         S = Q0m * P * B0.T
