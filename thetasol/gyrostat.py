@@ -96,7 +96,8 @@ import numpy as np
 
 from . import _validate as V
 from . import elliptic as _el
-from .euler_top import _angle_mod_2pi, _minimal_rotation, _norm, _principal_frame, _unit
+from .euler_top import (_angle_mod_2pi, _attitude, _minimal_rotation, _norm, _principal_frame,
+                        _rot_about, _uniform_rotation, _unit)
 from .rotation import RotationSolution, solve_rotation
 
 __all__ = ["GyrostatSolution", "solve_gyrostat"]
@@ -127,13 +128,6 @@ class GyrostatSolution(RotationSolution):
 
 
 # -- helpers ----------------------------------------------------------------------------------
-
-def _rot_about(axis, ang):
-    """Rotation matrices about a fixed unit axis by angles ``ang`` (n,), shape (n, 3, 3)."""
-    K = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    return (np.eye(3) + np.sin(ang)[:, None, None] * K
-            + (1.0 - np.cos(ang))[:, None, None] * (K @ K))
-
 
 def _frame_with_e3(p):
     """A rotation P with P e_3 = p (columns: an orthonormal frame ending with p)."""
@@ -695,17 +689,13 @@ class _Elliptic:
         hw = np.sum(h * w, -1)
         return (hw + self.G * (w @ self.p)) / (self.G + h @ self.p)
 
-    def _psidot(self, t):
-        d = self._dW(t)[0]
-        return self._psidot_d(d), self.h0 + d
-
     def _fourier(self):
         """Fourier coefficients of psi' over one period, doubling the sampling until the tail
         reaches round-off or stops decreasing (the samples' own rounding noise)."""
         n, prev = 64, np.inf
         while True:
             ts = np.arange(n) * (self.T / n)
-            f, _ = self._psidot(ts)
+            f = self._psidot_d(self._dW(ts)[0])
             c = np.fft.rfft(f) / n
             scale = np.max(np.abs(c))
             tail = np.max(np.abs(c[3 * len(c) // 4:]))
@@ -780,18 +770,8 @@ class _Elliptic:
 
     def evaluate(self, t):
         d = self._dW(t)[0]
-        h = self.h0 + d
         w = self.a * (self.m0 + d)
-        psi = self.psi(t)
-        B = _minimal_rotation(_unit(h @ self.Pw))
-        R3 = np.zeros(t.shape + (3, 3))
-        cp, sp = np.cos(psi), np.sin(psi)
-        R3[..., 0, 0] = cp
-        R3[..., 0, 1] = -sp
-        R3[..., 1, 0] = sp
-        R3[..., 1, 1] = cp
-        R3[..., 2, 2] = 1.0
-        Qp = self.S @ R3 @ B @ self.Pw.T
+        Qp = _attitude(self.S, self.psi(t), (self.h0 + d) @ self.Pw, self.Pw)
         return w @ self.P.T, Qp @ self.P.T
 
     def omega(self, t):
@@ -812,12 +792,7 @@ class _Steady:
         self.Q0, self.w0 = Q0, w0
 
     def evaluate(self, t):
-        n = t.size
-        wn = _norm(self.w0)
-        if wn == 0:
-            return np.zeros((n, 3)), np.broadcast_to(self.Q0, (n, 3, 3)).copy()
-        ang = _angle_mod_2pi(wn, t, 0.0)
-        return np.broadcast_to(self.w0, (n, 3)).copy(), self.Q0 @ _rot_about(self.w0 / wn, ang)
+        return _uniform_rotation(self.Q0, self.w0, t)
 
     def omega(self, t):
         return np.broadcast_to(self.w0, (t.size, 3)).copy()
@@ -886,17 +861,8 @@ class _Axisymmetric:
 
     def evaluate(self, t):
         m = self._m(t)
-        h = m + self.n
         psi = _angle_mod_2pi(self.psidot, t, 0.0)
-        B = _minimal_rotation(_unit(h @ self.Pw))
-        R3 = np.zeros(t.shape + (3, 3))
-        cp, sp = np.cos(psi), np.sin(psi)
-        R3[..., 0, 0] = cp
-        R3[..., 0, 1] = -sp
-        R3[..., 1, 0] = sp
-        R3[..., 1, 1] = cp
-        R3[..., 2, 2] = 1.0
-        Qp = self.S @ R3 @ B @ self.Pw.T
+        Qp = _attitude(self.S, psi, (m + self.n) @ self.Pw, self.Pw)
         return (m / self.Ip) @ self.P.T, Qp @ self.P.T
 
     def omega(self, t):
