@@ -785,10 +785,11 @@ class PlaneCurve:
             # D' = (g - 1) * base point: theta(K) = 0; keep the few smallest, then random D'
             keep = np.argsort(vals)[:min(len(vals), 8)]
             cands = cands[keep]
-            tests = [vals[keep]]
+            score = vals[keep]
             if g > 1:
                 rng = np.random.default_rng(12345)
                 G = self._graph
+                ADs = []
                 for _ in range(3):
                     pts = []
                     for _ in range(g - 1):
@@ -797,9 +798,10 @@ class PlaneCurve:
                             x0 += 0.01 * G.H
                         R, _ = self._poly.roots(np.array([x0]))
                         pts.append((x0, R[0, rng.integers(self.n)]))
-                    AD = self.abel_map(pts).sum(axis=0)
-                    tests.append(theta_normalized_abs(cands + AD[None, :], tau, tol=1e-15))
-            score = np.max(np.array(tests), axis=0)
+                    ADs.append(self.abel_map(pts).sum(axis=0))
+                z = cands[None, :, :] + np.array(ADs)[:, None, :]  # one theta set-up for all D'
+                score = np.maximum(score, theta_normalized_abs(z.reshape(-1, g), tau, tol=1e-15)
+                                   .reshape(len(ADs), -1).max(axis=0))
             order = np.argsort(score)
             best, second = score[order[0]], score[order[1]] if len(order) > 1 else np.inf
             # theta at the right candidate vanishes to rounding level; on a nearly degenerate curve
