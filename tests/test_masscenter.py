@@ -122,11 +122,12 @@ def test_mpmath_path():
     a = matrix_with_eigenvalues([0.9, -0.2, 0.0], rng.normal(size=3))
     b, q0, v0 = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
     before = mpmath.mp.dps
-    q, v = mass_center(a, b, q0, v0, np.array([0.5, 4.0]), dps=35)
+    t = [0.0, 0.5, 4.0]  # t = 0 with a hyperbolic mode: sinh(x)/x at x = 0
+    q, v = mass_center(a, b, q0, v0, np.array(t), dps=35)
     assert mpmath.mp.dps == before
-    assert q.shape == (2, 3) and isinstance(q[0, 0], mpmath.mpf)
-    ref = expm_reference(a, b, q0, v0, [0.5, 4.0], dps=45)
-    for k in range(2):
+    assert q.shape == (3, 3) and isinstance(q[0, 0], mpmath.mpf)
+    ref = expm_reference(a, b, q0, v0, t, dps=45)
+    for k in range(3):
         for i in range(3):
             assert abs(q[k, i] - ref[k][i]) < mpmath.mpf(10) ** -30
             assert abs(v[k, i] - ref[k][3 + i]) < mpmath.mpf(10) ** -30

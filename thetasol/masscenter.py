@@ -179,12 +179,11 @@ class MassCenterMotion:
                 for k in range(3):
                     lk = lam[k]
                     x = mp.sqrt(abs(lk)) * abs(t)
-                    if lk >= 0:
-                        C = mp.cos(x)
-                        S = mp.sin(x) / x if x else mp.mpf(1)
-                        S2 = mp.sin(x / 2) / (x / 2) if x else mp.mpf(1)
-                    else:
-                        C, S, S2 = mp.cosh(x), mp.sinh(x) / x, mp.sinh(x / 2) / (x / 2)
+                    cos, sin = (mp.cos, mp.sin) if lk >= 0 else (mp.cosh, mp.sinh)
+                    C = cos(x)
+                    # x = 0 (t = 0 or lam = 0) in both branches: sin x / x -> 1
+                    S = sin(x) / x if x else mp.mpf(1)
+                    S2 = sin(x / 2) / (x / 2) if x else mp.mpf(1)
                     P = S2 * S2 / 2
                     y.append(C * y0[k] + t * S * w0[k] - t * t * P * beta[k])
                     yd.append(-lk * t * S * y0[k] + C * w0[k] - t * S * beta[k])
