@@ -7,17 +7,9 @@ import pytest
 from thetasol import integrate_rotation, solve_rotation
 from thetasol._so3 import hat
 
+from conftest import inertia, rand_Q
+
 Z = np.zeros((3, 3))
-
-
-def rand_Q(rng):
-    Q = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-    return Q * np.linalg.det(Q)
-
-
-def inertia(J):
-    J = np.diag(J) if np.ndim(J) == 1 else np.asarray(J)
-    return np.trace(J) * np.eye(3) - J
 
 
 def omega_from_m(J, m):
@@ -207,33 +199,21 @@ def test_mpmath_path_matches_float(name):
     assert np.max(np.abs(Q - Qr.astype(float))) < tol
 
 
-def test_heyoka_reference_generic():
+@pytest.mark.parametrize("seed, n, Jlo, Jhi, scaled, npts, dtype, rtol", [
+    pytest.param(7, 2, 0.5, 2.0, False, 51, "ldbl", 1e-19, id="extended"),
+    pytest.param(8, 6, 0.3, 3.0, True, 21, "f128", 1e-32, id="quadruple", marks=pytest.mark.slow),
+])
+def test_heyoka_reference(seed, n, Jlo, Jhi, scaled, npts, dtype, rtol):
+    """Random bodies against heyoka in extended (80-bit) or, slow, quadruple precision."""
     pytest.importorskip("heyoka")
-    rng = np.random.default_rng(7)
-    for _ in range(2):
-        J = rng.uniform(0.5, 2.0, 3)
+    rng = np.random.default_rng(seed)
+    for _ in range(n):
+        J = rng.uniform(Jlo, Jhi, 3)
         Q0 = rand_Q(rng)
-        w0 = rng.normal(size=3)
+        w0 = rng.normal(size=3) * (rng.uniform(0.3, 3) if scaled else 1.0)
         sol = solve_rotation(J, Z, Q0, w0)
-        t = np.concatenate([np.linspace(0.0, 100.0, 51), [4000.0]])
-        wr, Qr = integrate_rotation(J, Z, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19)
-        w, Q = sol(t)
-        err = np.maximum(np.abs(w - wr).max(-1), np.abs(Q - Qr).max((-1, -2)))
-        assert err[:-1].max() <= 1e-12
-        assert err[-1] <= 1e-10
-
-
-@pytest.mark.slow
-def test_heyoka_quadruple_reference_many():
-    pytest.importorskip("heyoka")
-    rng = np.random.default_rng(8)
-    for _ in range(6):
-        J = rng.uniform(0.3, 3.0, 3)
-        Q0 = rand_Q(rng)
-        w0 = rng.normal(size=3) * rng.uniform(0.3, 3)
-        sol = solve_rotation(J, Z, Q0, w0)
-        t = np.concatenate([np.linspace(0.0, 100.0, 21), [4000.0]])
-        wr, Qr = integrate_rotation(J, Z, Q0, w0, t, method="heyoka", dtype="f128", rtol=1e-32)
+        t = np.concatenate([np.linspace(0.0, 100.0, npts), [4000.0]])
+        wr, Qr = integrate_rotation(J, Z, Q0, w0, t, method="heyoka", dtype=dtype, rtol=rtol)
         w, Q = sol(t)
         err = np.maximum(np.abs(w - wr).max(-1), np.abs(Q - Qr).max((-1, -2)))
         assert err[:-1].max() <= 1e-12

@@ -8,6 +8,8 @@ from hypothesis import strategies as st
 
 from thetasol import solve_rotation
 
+from conftest import rand_Q
+
 Z = np.zeros((3, 3))
 EPS = np.finfo(float).eps
 
@@ -53,8 +55,7 @@ def body_and_momentum(draw):
 def test_invariants_and_orthogonality(data, seed):
     J, I, m0 = data
     rng = np.random.default_rng(seed)
-    Q0 = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-    Q0 *= np.linalg.det(Q0)
+    Q0 = rand_Q(rng)
     w0 = m0 / I
     sol = solve_rotation(J, Z, Q0, w0)
     G0 = math.hypot(*m0)  # no underflow of tiny squares

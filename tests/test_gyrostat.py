@@ -10,15 +10,7 @@ from scipy.integrate import solve_ivp
 from thetasol import RotationSolution, solve_gyrostat, solve_rotation
 from thetasol._so3 import hat
 
-
-def rand_Q(rng):
-    Q = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-    return Q * np.linalg.det(Q)
-
-
-def inertia(J):
-    J = np.diag(J) if np.ndim(J) == 1 else np.asarray(J)
-    return np.trace(J) * np.eye(3) - J
+from conftest import inertia, rand_Q
 
 
 def dop853(J, N, Q0, w0, t):
@@ -373,24 +365,20 @@ def test_property_failure_and_nearby_against_dop853(k):
     assert np.max(np.abs(w - wr)) < 1e-12 * s and np.max(np.abs(Q - Qr)) < 1e-12
 
 
-@pytest.mark.parametrize("k", range(3))
-def test_property_failure_and_nearby_against_heyoka_to_t100(k):
-    J, N, w0 = _nearby(PROPERTY_FAILURE, k)
-    Q0 = rand_Q(np.random.default_rng(8))
-    sol = solve_gyrostat(J, N, Q0, w0)
-    t = np.linspace(0.0, 100.0, 401)
-    w, Q = sol(t)
-    wr, Qr = heyoka_ref(J, N, Q0, w0, t)
-    s = max(1.0, np.abs(wr).max())
-    assert np.max(np.abs(w - wr)) < 1e-12 * s and np.max(np.abs(Q - Qr)) < 1e-12
+# (data, seed of Q0, start of the time span ending at t = 100)
+_HEYOKA_T100 = ([pytest.param(_nearby(PROPERTY_FAILURE, k), 8, 0.0, id=f"property-failure-{k}")
+                 for k in range(3)]
+                + [pytest.param(tuple(np.array(x) for x in c), 9, -100.0, id=f"common-zero-{i}")
+                   for i, c in enumerate(COMMON_ZERO_CASES)])
 
 
-@pytest.mark.parametrize("case", range(len(COMMON_ZERO_CASES)))
-def test_common_zero_cases_against_heyoka_to_t100(case):
-    J, N, w0 = (np.array(x) for x in COMMON_ZERO_CASES[case])
-    Q0 = rand_Q(np.random.default_rng(9))
+@pytest.mark.parametrize("data, seed, t0", _HEYOKA_T100)
+def test_hard_cases_against_heyoka_to_t100(data, seed, t0):
+    """The property failure, data next to it and the common-zero cases against heyoka (80-bit)."""
+    J, N, w0 = data
+    Q0 = rand_Q(np.random.default_rng(seed))
     sol = solve_gyrostat(J, N, Q0, w0)
-    t = np.linspace(-100.0, 100.0, 401)
+    t = np.linspace(t0, 100.0, 401)
     w, Q = sol(t)
     wr, Qr = heyoka_ref(J, N, Q0, w0, t)
     s = max(1.0, np.abs(wr).max())

@@ -19,6 +19,8 @@ from scipy.optimize import brentq
 from thetasol import solve_gyrostat
 from thetasol._so3 import hat
 
+from conftest import rand_Q
+
 EPS = np.finfo(float).eps
 vec = st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3)
 
@@ -48,8 +50,7 @@ _FAILURE = (np.array([4.5, 2.0, 3.5]), np.array([0.0, -1.75, 1.421875]), np.arra
 def test_conservation_and_orthogonality(data, seed):
     J, N, w0 = data
     rng = np.random.default_rng(seed)
-    Q0 = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-    Q0 *= np.linalg.det(Q0)
+    Q0 = rand_Q(rng)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", RuntimeWarning)
         try:
@@ -176,8 +177,7 @@ def test_near_separatrix_invariants_and_flow(data, seed):
     closed-form state at t1 over a short step lands on the closed form at t1 + dt."""
     J, N, w0 = data
     rng = np.random.default_rng(seed)
-    Q0 = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-    Q0 *= np.linalg.det(Q0)
+    Q0 = rand_Q(rng)
     sol = _solve(J, N, Q0, w0)
     if sol is None:
         return
@@ -229,8 +229,7 @@ def test_near_separatrix_error_estimate_bounds_the_error(data, seed):
 
     J, N, w0 = data
     rng = np.random.default_rng(seed)
-    Q0 = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-    Q0 *= np.linalg.det(Q0)
+    Q0 = rand_Q(rng)
     sol = _solve(J, N, Q0, w0)
     if sol is None or sol.method not in ("gyrostat/elliptic", "gyrostat/separatrix"):
         return
