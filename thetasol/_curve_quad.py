@@ -112,7 +112,6 @@ class Piece:
             sites = sites[sites != self.b]
             w = (sites - self.b) / (self.a - self.b)
         else:
-            sites = sites[sites != self.b] if False else sites
             with np.errstate(divide="ignore", invalid="ignore"):
                 w = (self.a - self.b) / (sites - self.b)
             w = w[np.isfinite(w)]
@@ -125,13 +124,17 @@ class Piece:
         return (1.0 - roots).ravel()
 
 
+def _ellipse_params(sings, lo, hi):
+    """Parameter rho of the Bernstein ellipse of [lo, hi] through each singularity."""
+    t = (2 * sings - (lo + hi)) / (hi - lo)
+    s = np.sqrt(t - 1) * np.sqrt(t + 1)
+    return np.maximum(np.abs(t + s), np.abs(t - s))
+
+
 def _rho(sings, lo, hi):
     if len(sings) == 0:
         return np.inf
-    t = (2 * sings - (lo + hi)) / (hi - lo)
-    s = np.sqrt(t - 1) * np.sqrt(t + 1)
-    r = np.maximum(np.abs(t + s), np.abs(t - s))
-    return float(np.min(r))
+    return float(np.min(_ellipse_params(sings, lo, hi)))
 
 
 def plan(piece: Piece, sites, tol: float, rho_target: float = RHO_TARGET, max_intervals: int = 4000):
@@ -149,10 +152,7 @@ def plan(piece: Piece, sites, tol: float, rho_target: float = RHO_TARGET, max_in
             continue
         # split at the projection of the nearest singularity, kept inside the middle half
         L = hi - lo
-        t = (2 * sings - (lo + hi)) / L
-        s = np.sqrt(t - 1) * np.sqrt(t + 1)
-        r = np.maximum(np.abs(t + s), np.abs(t - s))
-        z = sings[int(np.argmin(r))]
+        z = sings[int(np.argmin(_ellipse_params(sings, lo, hi)))]
         m = min(max(z.real, lo + 0.25 * L), hi - 0.25 * L)
         stack.append((m, hi))
         stack.append((lo, m))
@@ -556,7 +556,7 @@ class Tracked:
         or the second 1e-13, of the largest piece mass.
         """
         out = []
-        eps = np.finfo(float).eps
+        eps = EPS
         offs = self.nodes.offsets
         total = max(float(mass[offs[p]:offs[p + 1]].sum()) for p in range(len(self.pieces))) if self.pieces else 0.0
         thr = 1e-14 * total

@@ -45,6 +45,15 @@ def _ncycles(perm):
     return c
 
 
+def _shaped(raw, weights, shape):
+    """Rows of integrals (N, nd) in the form the input had (see PlaneCurve._parse_targets)."""
+    if shape == "single":
+        return raw[0]
+    if shape == "divisor":
+        return weights @ raw
+    return raw
+
+
 class _Numerators(np.ndarray):
     """Complex coefficient array (nd, I, J) of differential numerators carrying their exact form."""
 
@@ -240,8 +249,6 @@ class PlaneCurve:
         around the cell, and back) ends on sheet j.
         """
         G = self._graph
-        L = self._lifted
-        n = self.n
         out = []
         for k, s in enumerate(self._sites):
             v = G.cell_vertices[k][0]
@@ -355,14 +362,6 @@ class PlaneCurve:
         ints = self._edge_tracks.integrate(P)
         return np.concatenate(ints, axis=0)  # (ne * n, nd), row e * n + s
 
-    def _numerators_exact(self, exprs):
-        from ._curve_poly import _to_fraction_pair
-        out = []
-        for g in exprs:
-            p = sp.Poly(sp.sympify(g), self.x, self.y)
-            out.append({(int(i), int(j)): _to_fraction_pair(c) for (i, j), c in p.terms()})
-        return out
-
     def _period_matrix_mp(self, diffs, dps):
         import mpmath
         from ._curve_mp import integrate_mp
@@ -377,7 +376,7 @@ class PlaneCurve:
             p = np.argmin(np.abs(tr.ends[e][:, None] - self._vroots[b][None, :]), axis=1)
             if not np.array_equal(p, self._perms[e]):
                 raise RuntimeError("the dps path found a different sheet permutation (internal error)")
-        res = integrate_mp(tr, self._exact, self._numerators_exact(diffs), dps)
+        res = integrate_mp(tr, self._exact, self._numerators(diffs).exact, dps)
         A, B, _ = self._homology()
         g, nd, n = self.genus, len(diffs), self.n
         with mpmath.workdps(dps + 10):
@@ -725,15 +724,11 @@ class PlaneCurve:
         P = self._holo_arrays()
         raw = self._abel_raw(targets, P, "holo")
         if base is not None:
-            braw = self._abel_raw([self._as_target(base) if not isinstance(base, Place) else base], P, "holo")[0]
+            braw = self._abel_raw([self._as_target(base)], P, "holo")[0]
             raw = raw - braw[None, :]
         if normalized:
             raw = raw @ self.normalization().T
-        if shape == "single":
-            return raw[0]
-        if shape == "divisor":
-            return weights @ raw
-        return raw
+        return _shaped(raw, weights, shape)
 
     def integrate(self, numerators, points, base=None) -> np.ndarray:
         """Integrals of the differentials p dx / f_y (p polynomials) from the base to the points.
@@ -748,12 +743,8 @@ class PlaneCurve:
         key = tuple(map(str, numerators))
         raw = self._abel_raw(targets, P, key)
         if base is not None:
-            raw = raw - self._abel_raw([self._as_target(base) if not isinstance(base, Place) else base], P, key)[0]
-        if shape == "single":
-            return raw[0]
-        if shape == "divisor":
-            return weights @ raw
-        return raw
+            raw = raw - self._abel_raw([self._as_target(base)], P, key)[0]
+        return _shaped(raw, weights, shape)
 
     # ------------------------------------------------------------------ Riemann constant
     def canonical_divisor(self) -> dict:
