@@ -6,9 +6,10 @@ output times.  :func:`solve_configuration` applies Theorem 2 (3.1):
 
 * the system mass centre ``q(t)`` in closed form (:mod:`thetasol.masscenter`);
 * every effective body (2.15), (3.7) rotates independently in ``1/2 x^T a x`` (3.3):
-  ``thetasol.rotation.solve_rotation`` where a closed form exists (elliptic for
-  ``a = c 1``; theta functions as they land), otherwise the numerical reference
-  :func:`thetasol.integrate_rotation`.  Which one was used is recorded per body;
+  ``thetasol.rotation.solve_rotation`` where a closed form exists (elliptic functions for
+  ``a = c 1`` and pendulum motions, theta functions otherwise), else (a symmetric body in a
+  potential, data it refuses) the numerical reference :func:`thetasol.integrate_rotation`.
+  Which one was used, and why, is recorded per body;
 * every physical body follows down the tree (:meth:`Configuration.place`).
 
 :func:`run` adds the report: effective bodies, models, and the exact parts against the
@@ -65,13 +66,9 @@ def rotation_kind(a) -> str:
 
 
 def _closed_form_rotation(J, a, Q0, w0):
-    """``solve_rotation`` result, or None and the reason when no closed form is available yet."""
-    try:
-        from .rotation import solve_rotation
-    except ModuleNotFoundError as exc:
-        if exc.name != f"{__package__}.rotation":
-            raise
-        return None, "thetasol.rotation is not installed"
+    """``solve_rotation`` result, or None and the reason when no closed form applies to these data."""
+    from .rotation import solve_rotation  # lazy: the theta machinery is not needed for numerical scenes
+
     try:
         return solve_rotation(J, a, Q0, w0), ""
     except NotImplementedError as exc:
@@ -237,7 +234,7 @@ def demo_scene_path() -> Path:
     return Path(__file__).with_name("data") / "station.toml"
 
 
-def _table(d, key, where, required=True):
+def _table(d, key, required=True):
     if key not in d:
         if required:
             raise ValueError(f"missing [{key}]")
@@ -326,10 +323,10 @@ def _build_scene(d):
     name = d.get("name", "")
     desc = d.get("description", "")
     if not isinstance(name, str) or not isinstance(desc, str):
-        raise ValueError(f"'name' and 'description' must be strings")
+        raise ValueError("'name' and 'description' must be strings")
     bl = d.get("bodies")
     if not isinstance(bl, list) or not bl:
-        raise ValueError(f"needs at least one [[bodies]] entry")
+        raise ValueError("needs at least one [[bodies]] entry")
     bodies = [_body(b, i) for i, b in enumerate(bl)]
     byname = {}
     for b in bodies:
@@ -338,7 +335,7 @@ def _build_scene(d):
         byname[b.name] = b
     jl = d.get("joints", [])
     if not isinstance(jl, list):
-        raise ValueError(f"'joints' must be an array of tables [[joints]]")
+        raise ValueError("'joints' must be an array of tables [[joints]]")
     raw_joints = []
     for i, j in enumerate(jl):
         where = f"joints[{i}]"
@@ -361,8 +358,8 @@ def _build_scene(d):
         else:
             cp = _array(cp, f"{where}: child_point", (3,))
         raw_joints.append((j["parent"], j["child"], pp, cp))
-    solver = dict(_table(d, "solver", "scene", required=False))
-    _unknown(solver, _SOLVER_KEYS, f"[solver]")
+    solver = dict(_table(d, "solver", required=False))
+    _unknown(solver, _SOLVER_KEYS, "[solver]")
     # "central" child points need the effective bodies: build once with zeros, then fill in.
     joints = [Joint(p, c, pp, np.zeros(3) if isinstance(cp, str) else cp) for p, c, pp, cp in raw_joints]
     config = Configuration(bodies, joints)
@@ -372,22 +369,22 @@ def _build_scene(d):
         config = Configuration(bodies, joints)
     make_central = solver.get("make_central", False)
     if not isinstance(make_central, bool):
-        raise ValueError(f"[solver] make_central must be true or false")
+        raise ValueError("[solver] make_central must be true or false")
     if make_central:
         config = config.make_central()
     config.check_central()
 
-    pot = _table(d, "potential", "scene")
-    _unknown(pot, {"a", "b"}, f"[potential]")
+    pot = _table(d, "potential")
+    _unknown(pot, {"a", "b"}, "[potential]")
     if "a" not in pot:
-        raise ValueError(f"[potential] needs 'a' (3x3 symmetric)")
-    a = V.symmetric_matrix(_array(pot["a"], f"potential.a", (3, 3)), f"potential.a")
-    b = _array(pot.get("b", [0.0, 0.0, 0.0]), f"potential.b", (3,))
+        raise ValueError("[potential] needs 'a' (3x3 symmetric)")
+    a = V.symmetric_matrix(_array(pot["a"], "potential.a", (3, 3)), "potential.a")
+    b = _array(pot.get("b", [0.0, 0.0, 0.0]), "potential.b", (3,))
 
-    ini = _table(d, "initial", "scene", required=False)
-    _unknown(ini, {"q", "v", "attitude", "omega"}, f"[initial]")
-    q0 = _array(ini.get("q", [0.0, 0.0, 0.0]), f"initial.q", (3,))
-    v0 = _array(ini.get("v", [0.0, 0.0, 0.0]), f"initial.v", (3,))
+    ini = _table(d, "initial", required=False)
+    _unknown(ini, {"q", "v", "attitude", "omega"}, "[initial]")
+    q0 = _array(ini.get("q", [0.0, 0.0, 0.0]), "initial.q", (3,))
+    v0 = _array(ini.get("v", [0.0, 0.0, 0.0]), "initial.v", (3,))
     Q0, w0 = {}, {}
     for key, dest in (("attitude", Q0), ("omega", w0)):
         tab = ini.get(key, {})
@@ -401,24 +398,24 @@ def _build_scene(d):
     Q0 = {n: Q0.get(n, np.eye(3)) for n in config.order}
     w0 = {n: w0.get(n, np.zeros(3)) for n in config.order}
 
-    out = _table(d, "output", "scene")
-    _unknown(out, {"t_end", "samples", "times"}, f"[output]")
+    out = _table(d, "output")
+    _unknown(out, {"t_end", "samples", "times"}, "[output]")
     if "times" in out:
         if set(out) & {"t_end", "samples"}:
-            raise ValueError(f"[output] gives either 'times' or 't_end' and 'samples'")
-        t = _array(out["times"], f"output.times")
+            raise ValueError("[output] gives either 'times' or 't_end' and 'samples'")
+        t = _array(out["times"], "output.times")
         if t.ndim != 1 or t.size == 0:
-            raise ValueError(f"output.times must be a non-empty list of numbers")
+            raise ValueError("output.times must be a non-empty list of numbers")
     else:
         if "t_end" not in out:
-            raise ValueError(f"[output] needs 't_end' (and optionally 'samples') or 'times'")
-        t_end = _number(out["t_end"], f"output.t_end", positive=True)
+            raise ValueError("[output] needs 't_end' (and optionally 'samples') or 'times'")
+        t_end = _number(out["t_end"], "output.t_end", positive=True)
         n = out.get("samples", 201)
         if isinstance(n, bool) or not isinstance(n, int) or not 2 <= n <= 10**7:
             raise ValueError(f"output.samples must be an integer in [2, 1e7], got {n!r}")
         t = np.linspace(0.0, t_end, n)
     if t[0] < 0 or np.any(np.diff(t) <= 0):
-        raise ValueError(f"output times must be >= 0 and strictly increasing")
+        raise ValueError("output times must be >= 0 and strictly increasing")
 
     s = {"rtol": 1e-12, "method": "DOP853", "rotation": "auto", "check_multibody": True,
          "check_t_end": float(t[-1]), "check_rtol": 1e-12}
@@ -428,18 +425,18 @@ def _build_scene(d):
             if s[k] >= 1:
                 raise ValueError(f"solver.{k} must be below 1")
     if "check_t_end" in solver:
-        s["check_t_end"] = _number(solver["check_t_end"], f"solver.check_t_end", positive=True)
+        s["check_t_end"] = _number(solver["check_t_end"], "solver.check_t_end", positive=True)
     if "method" in solver:
         if solver["method"] not in ("DOP853", "RK45", "RK23", "splitting", "heyoka"):
-            raise ValueError(f"solver.method must be DOP853, RK45, RK23, splitting or heyoka")
+            raise ValueError("solver.method must be DOP853, RK45, RK23, splitting or heyoka")
         s["method"] = solver["method"]
     if "rotation" in solver:
         if solver["rotation"] not in ("auto", "numerical"):
-            raise ValueError(f"solver.rotation must be 'auto' or 'numerical'")
+            raise ValueError("solver.rotation must be 'auto' or 'numerical'")
         s["rotation"] = solver["rotation"]
     if "check_multibody" in solver:
         if not isinstance(solver["check_multibody"], bool):
-            raise ValueError(f"solver.check_multibody must be true or false")
+            raise ValueError("solver.check_multibody must be true or false")
         s["check_multibody"] = solver["check_multibody"]
     s["make_central"] = make_central
     return Scene(config=config, a=a, b=b, q0=q0, v0=v0, Q0=Q0, omega0=w0, t=t, name=name, description=desc,
@@ -558,7 +555,7 @@ def run(scene: Scene, check: bool = True, out=None) -> tuple[Trajectories, str, 
     for c in checks:
         say(f"  {c.what}: {c.deviation:.2e} (tolerance {c.tolerance:.1e}) [{c.seconds}]  {'ok' if c.ok else 'FAILED'}")
     if not any(r["closed_form"] for r in traj.info["rotations"].values()):
-        say("  rotations: no closed form available for this potential yet; they ARE the numerical reference")
+        say("  rotations: no closed form applies to these data; they ARE the numerical reference")
 
     say()
     say("first integrals of each effective rotation along the solution (max relative drift):")
