@@ -26,21 +26,26 @@ def make_tree(seed, central=True, edges=TREE):
     return (cfg.make_central() if central else cfg), clouds
 
 
-def forward_points(cfg, clouds, origin_root, Q):
-    """Space positions of every point mass: frame origins propagated joint by joint."""
-    O = {cfg.root: origin_root}
-    pts = {}
+def forward_states(cfg, clouds, origin, origin_dot, Q, W):
+    """Point-mass positions and velocities by forward kinematics of the frame origins (joints hold)."""
+    O, Od = {cfg.root: origin}, {cfg.root: origin_dot}
+    x, v, m = [], [], []
     for n in cfg.order:
         if n != cfg.root:
             j = cfg.joints[n]
-            O[n] = O[j.parent] + Q[j.parent] @ j.parent_point - Q[n] @ j.child_point
-        pts[n] = O[n] + clouds[n][1] @ Q[n].T
-    return pts
+            p = j.parent
+            O[n] = O[p] + Q[p] @ j.parent_point - Q[n] @ j.child_point
+            Od[n] = Od[p] + Q[p] @ np.cross(W[p], j.parent_point) - Q[n] @ np.cross(W[n], j.child_point)
+        r = clouds[n][1]
+        x.append(O[n] + r @ Q[n].T)
+        v.append(Od[n] + np.cross(W[n], r) @ Q[n].T)
+        m.append(clouds[n][0])
+    return np.concatenate(m), np.concatenate(x), np.concatenate(v)
 
 
-def system_mass_centre(clouds, pts):
-    m = np.concatenate([clouds[n][0] for n in pts])
-    x = np.concatenate([pts[n] for n in pts])
+def system_mass_centre(cfg, clouds, origin, Q):
+    """The system mass centre summed over the point masses placed by forward kinematics."""
+    m, x, _ = forward_states(cfg, clouds, origin, np.zeros(3), Q, {n: np.zeros(3) for n in cfg.order})
     return m @ x / m.sum()
 
 
@@ -139,7 +144,7 @@ def test_central_means_the_mass_centre_stays_put(seed):
     for _ in range(4):
         Q = random_rotations(rng, cfg.order)
         Q[cfg.root] = Qroot
-        centres.append(system_mass_centre(clouds, forward_points(cfg, clouds, origin, Q)))
+        centres.append(system_mass_centre(cfg, clouds, origin, Q))
     expected = origin + Qroot @ cfg.effective_body(cfg.root).center
     assert np.allclose(centres, expected, atol=1e-12)
 
@@ -160,9 +165,9 @@ def test_non_central_tree_moves_and_is_reported():
         bad.check_central()
     # The mass centre now moves when C turns about its joint (by about m_C |shift|).
     Q = {n: np.eye(3) for n in bad.order}
-    c0 = system_mass_centre(clouds, forward_points(bad, clouds, np.zeros(3), Q))
+    c0 = system_mass_centre(bad, clouds, np.zeros(3), Q)
     Q["C"] = rodrigues(np.array([0.0, 0.0, np.pi]))
-    c1 = system_mass_centre(clouds, forward_points(bad, clouds, np.zeros(3), Q))
+    c1 = system_mass_centre(bad, clouds, np.zeros(3), Q)
     assert np.linalg.norm(c1 - c0) > 1e-4
     # make_central restores it and gives the opposite shift.
     fixed = bad.make_central()
@@ -173,23 +178,6 @@ def test_non_central_tree_moves_and_is_reported():
 
 
 # -- the split kinematics and Lagrangian (3.1) --------------------------------------------------------
-
-def forward_states(cfg, clouds, origin, origin_dot, Q, W):
-    """Point-mass positions and velocities by forward kinematics of the frame origins (joints hold)."""
-    O, Od = {cfg.root: origin}, {cfg.root: origin_dot}
-    x, v, m = [], [], []
-    for n in cfg.order:
-        if n != cfg.root:
-            j = cfg.joints[n]
-            p = j.parent
-            O[n] = O[p] + Q[p] @ j.parent_point - Q[n] @ j.child_point
-            Od[n] = Od[p] + Q[p] @ np.cross(W[p], j.parent_point) - Q[n] @ np.cross(W[n], j.child_point)
-        r = clouds[n][1]
-        x.append(O[n] + r @ Q[n].T)
-        v.append(Od[n] + np.cross(W[n], r) @ Q[n].T)
-        m.append(clouds[n][0])
-    return np.concatenate(m), np.concatenate(x), np.concatenate(v)
-
 
 @pytest.mark.parametrize("central", [True, False])
 def test_lagrangian_splits_exactly_when_central(central):

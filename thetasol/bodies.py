@@ -16,6 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import _validate as V
+from .equations import inertia_from_moments
 
 __all__ = ["Body", "principal_axes"]
 
@@ -106,7 +107,7 @@ class Body:
         object.__setattr__(self, "mass", float(m))
         object.__setattr__(self, "J", J)
         object.__setattr__(self, "center", c)
-        Imat = np.trace(J) * np.eye(3) - J
+        Imat = inertia_from_moments(J)
         Imat.flags.writeable = False
         object.__setattr__(self, "I", Imat)
         object.__setattr__(self, "name", str(self.name))

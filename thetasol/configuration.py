@@ -32,6 +32,7 @@ import numpy as np
 from . import _validate as V
 from ._so3 import hat
 from .bodies import Body, principal_axes
+from .equations import inertia_from_moments
 
 __all__ = ["Joint", "EffectiveBody", "JointViolation", "Configuration"]
 
@@ -87,7 +88,7 @@ class EffectiveBody:
     axes: np.ndarray = field(init=False)
 
     def __post_init__(self):
-        object.__setattr__(self, "I", np.trace(self.J) * np.eye(3) - self.J)
+        object.__setattr__(self, "I", inertia_from_moments(self.J))
         vals, axes = principal_axes(self.J)
         object.__setattr__(self, "principal_moments", vals)
         object.__setattr__(self, "axes", axes)
@@ -398,5 +399,5 @@ def _find_cycle(parent_of: Mapping[str, Joint]) -> str:
             n = parent_of[n].parent
         if n in seen:
             cyc = seen[seen.index(n):]
-            return " -> ".join(reversed(cyc + [n])) if cyc else ""
+            return " -> ".join(reversed(cyc + [n]))
     return ""
