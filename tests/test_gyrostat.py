@@ -179,7 +179,7 @@ def test_physics_over_long_times(case):
     L = np.einsum("nij,nj->ni", Q, h)
     assert np.max(np.abs(L - Q0 @ h0)) < 5e-14 * G
     # consistency with sol.h and the protocol
-    assert np.allclose(sol.h(t), h, atol=1e-15 * G)
+    assert np.allclose(sol.h(t), h, rtol=0, atol=1e-15 * G)
     assert isinstance(sol, RotationSolution)
 
 
@@ -216,9 +216,9 @@ def test_invariants_of_8_40():
     Nh = hat(N)
     H = 0.5 * np.trace(M @ W, axis1=-2, axis2=-1)
     H2 = np.trace((M + Nh) @ (M + Nh), axis1=-2, axis2=-1)
-    assert np.allclose(H, sol.invariants["H"], rtol=1e-13)
-    assert np.allclose(H2, sol.invariants["H2"], rtol=1e-13)
-    assert sol.invariants["H"] == pytest.approx(-2 * sol.invariants["energy"])
+    assert np.allclose(H, sol.invariants["H"], rtol=1e-13, atol=0)
+    assert np.allclose(H2, sol.invariants["H2"], rtol=1e-13, atol=0)
+    assert sol.invariants["H"] == pytest.approx(-2 * sol.invariants["energy"], rel=1e-15)
 
 
 @pytest.mark.parametrize("eps", [1e-4, 1e-8, 1e-12])
@@ -414,7 +414,7 @@ SINGULAR_PERIODIC = (np.array([0.25, 0.75, 1.75]), np.array([0.0, 0.0, 2.0]), np
 
 def test_separatrix_closed_form_against_quad_heyoka():
     J, N, w0 = SEPARATRIX
-    assert np.allclose(inertia(J).diagonal(), [1.5, 2.0, 1.0])
+    assert np.array_equal(inertia(J).diagonal(), [1.5, 2.0, 1.0])
     Q0 = rand_Q(np.random.default_rng(11))
     sol = solve_gyrostat(J, N, Q0, w0)
     assert sol.method == "gyrostat/separatrix"
