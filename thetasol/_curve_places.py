@@ -34,7 +34,7 @@ class LocalData:
         self.xs = xs  # (M,)
         self.ys = ys  # (n, M) indexed by reference labels
         self.perm = perm
-        self.cycles = _cycles(perm)
+        self.cycles = perm_cycles(perm)
 
     def place_samples(self, cycle):
         """(t samples, x samples, y samples) of length e*M for the place of this cycle."""
@@ -51,7 +51,8 @@ class LocalData:
         return t, x, y
 
 
-def _cycles(perm):
+def perm_cycles(perm):
+    """Cycles of a permutation (array perm[i] = image of i), as tuples in order of first element."""
     seen = np.zeros(len(perm), bool)
     out = []
     for i in range(len(perm)):

@@ -77,16 +77,6 @@ class LiftedGraph:
                         items.append((e * n + sp, -1))
                 self.lstar.append(items)
 
-    def path_to_root(self, vid):
-        """Integer vector over lifted edges of the tree path root -> vid."""
-        vec = np.zeros(self.ne * self.n, dtype=np.int64)
-        u = vid
-        while self.parent[u] >= 0:
-            le, sg = self.parent[u], self.psign[u]
-            vec[le] += sg
-            u = self.ltail[le] if sg == 1 else self.lhead[le]
-        return vec
-
     def fundamental_cycles(self):
         """Integer matrix (m, ne*n): one cycle per non-tree lifted edge."""
         L = self.ne * self.n

@@ -22,6 +22,7 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
+from ._curve_places import perm_cycles
 from ._curve_poly import CurvePoly, polynomial_roots
 from ._curve_quad import Piece, Tracker
 from ._homology import LiftedGraph, symplectic_basis
@@ -30,19 +31,6 @@ from ._paths import CellGraph
 __all__ = ["PlaneCurve", "Place"]
 
 INF = complex("inf")
-
-
-def _ncycles(perm):
-    seen = np.zeros(len(perm), bool)
-    c = 0
-    for i in range(len(perm)):
-        if not seen[i]:
-            c += 1
-            j = i
-            while not seen[j]:
-                seen[j] = True
-                j = perm[j]
-    return c
 
 
 def _shaped(raw, weights, shape):
@@ -203,7 +191,7 @@ class PlaneCurve:
         # local monodromies
         self._site_perm = [self._walk(seq) for seq in G.cells]
         self._inf_perm = self._walk(G.outer)
-        chi = -2 * n + sum(n - _ncycles(p) for p in self._site_perm) + (n - _ncycles(self._inf_perm))
+        chi = -2 * n + sum(n - len(perm_cycles(p)) for p in self._site_perm + [self._inf_perm])
         if chi % 2:
             raise RuntimeError("Riemann-Hurwitz gives an odd Euler characteristic (internal error)")
         self._genus = chi // 2 + 1
