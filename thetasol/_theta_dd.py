@@ -28,7 +28,15 @@ def _split(a):
 
 
 def two_prod(a, b):
+    """``a*b = p + e`` exactly, for any finite a, b whose product does not overflow.
+
+    Factors beyond 1e150 are first rebalanced by a power of two (``a 2^-s``, ``b 2^s``: the product
+    is unchanged) so that Veltkamp's split cannot overflow (the elliptic argument reduction meets them).
+    """
     p = a * b
+    if np.max(np.abs(a), initial=0.0) > 1e150 or np.max(np.abs(b), initial=0.0) > 1e150:
+        sh = (np.frexp(a)[1] - np.frexp(b)[1]) // 2
+        a, b = np.ldexp(a, -sh), np.ldexp(b, sh)
     ah, al = _split(a)
     bh, bl = _split(b)
     return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl

@@ -50,6 +50,8 @@ import math
 import numpy as np
 from scipy import special as _sp
 
+from ._theta_dd import two_prod, two_sum
+
 __all__ = ["ellipj", "ellipk", "ellipe", "ellipf", "ellipeinc", "ellippi", "ellippiinc"]
 
 _EPS = np.finfo(float).eps
@@ -106,37 +108,8 @@ def _out(x):
 
 # -- compensated arithmetic used for argument reduction ------------------------------------
 
-_SPLIT = 134217729.0  # 2**27 + 1
-
-
-def _two_prod(a, b):
-    """``a*b = p + e`` exactly (Dekker), for any finite a, b whose product does not overflow.
-
-    The factors are first rebalanced by a power of two (``a 2^-s``, ``b 2^s``: the product is
-    unchanged) so that Veltkamp's split cannot overflow for huge ``|a|`` or ``|b|``.
-    """
-    p = a * b
-    if np.max(np.abs(a), initial=0.0) > 1e150 or np.max(np.abs(b), initial=0.0) > 1e150:
-        ea = np.frexp(a)[1]
-        eb = np.frexp(b)[1]
-        sh = (ea - eb) // 2
-        a = np.ldexp(a, -sh)
-        b = np.ldexp(b, sh)
-    a1 = _SPLIT * a
-    ah = a1 - (a1 - a)
-    al = a - ah
-    b1 = _SPLIT * b
-    bh = b1 - (b1 - b)
-    bl = b - bh
-    e = ((ah * bh - p) + ah * bl + al * bh) + al * bl
-    return p, e
-
-
-def _two_sum(a, b):
-    s = a + b
-    bb = s - a
-    e = (a - (s - bb)) + (b - bb)
-    return s, e
+# the error-free transformations are shared with the theta engine (overflow-safe two-product)
+_two_prod, _two_sum = two_prod, two_sum
 
 
 def _reduce(hi, lo, period):
