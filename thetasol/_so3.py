@@ -7,17 +7,19 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["hat", "vee", "rotation_about", "rodrigues", "polar_orthonormalize"]
+__all__ = ["hat", "vee", "cross", "rotation_about", "rodrigues", "polar_orthonormalize"]
 
 
 def hat(v: np.ndarray) -> np.ndarray:
     """Skew matrix of a vector: ``hat(v) @ w = v x w``; shape ``(..., 3) -> (..., 3, 3)``."""
     v = np.asarray(v)
-    z = np.zeros_like(v[..., 0])
     x, y, w = v[..., 0], v[..., 1], v[..., 2]
-    return np.stack(
-        [np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2
-    )
+    # filled in place: nested np.stack cost 5x more on the single vectors of right-hand sides
+    S = np.zeros(v.shape[:-1] + (3, 3), dtype=v.dtype)
+    S[..., 0, 1], S[..., 0, 2] = -w, y
+    S[..., 1, 0], S[..., 1, 2] = w, -x
+    S[..., 2, 0], S[..., 2, 1] = -y, x
+    return S
 
 
 def vee(S: np.ndarray) -> np.ndarray:
@@ -26,6 +28,14 @@ def vee(S: np.ndarray) -> np.ndarray:
     return 0.5 * np.stack(
         [S[..., 2, 1] - S[..., 1, 2], S[..., 0, 2] - S[..., 2, 0], S[..., 1, 0] - S[..., 0, 1]], -1
     )
+
+
+def cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """``np.cross`` of ``(..., 3)`` arrays with the same floating-point operations, minus its axis
+    handling (which dominates for the few vectors of a right-hand side: ~5x cheaper there)."""
+    u0, u1, u2 = u[..., 0], u[..., 1], u[..., 2]
+    v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack([u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0], -1)
 
 
 def rodrigues(phi: np.ndarray) -> np.ndarray:

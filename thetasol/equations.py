@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ._so3 import hat, vee
+from ._so3 import cross, hat, vee
 
 __all__ = [
     "inertia_from_moments",
@@ -55,7 +55,7 @@ def rotation_rhs(J: np.ndarray, I_inv: np.ndarray, a: np.ndarray, m: np.ndarray,
     Returns ``(mdot, Qdot)`` where ``mdot = m x omega + tau`` and ``omega = I^{-1} m``.
     """
     omega = m @ I_inv.T
-    mdot = np.cross(m, omega) + torque(J, a, Q)
+    mdot = cross(m, omega) + torque(J, a, Q)
     return mdot, Q @ hat(omega)
 
 

