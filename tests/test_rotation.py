@@ -18,6 +18,15 @@ def test_dispatch_free_and_isotropic():
     assert isinstance(solve_rotation(J, Z, np.eye(3), W0), RotationSolution)
 
 
+def test_spherical_body_in_a_potential_feels_no_torque():
+    a = np.array([[1.0, 0.3, 0.0], [0.3, -0.5, 0.2], [0.0, 0.2, 0.4]])
+    sol = solve_rotation([0.8, 0.8, 0.8], a, np.eye(3), W0)
+    assert sol.method.startswith("euler-top/")
+    w, Q = sol(np.array([3.0, 17.0]))
+    wr, Qr = integrate_rotation([0.8, 0.8, 0.8], a, np.eye(3), W0, np.array([3.0, 17.0]), rtol=1e-13)
+    assert np.abs(w - wr).max() <= 1e-12 and np.abs(Q - Qr).max() <= 1e-11
+
+
 def test_potential_with_torque_uses_theta_functions():
     rng = np.random.default_rng(3)
     a = rng.normal(size=(3, 3))
@@ -27,6 +36,10 @@ def test_potential_with_torque_uses_theta_functions():
     g = np.array([0.3, -0.5, 0.81])
     sol = solve_rotation(J, -3.0 * np.outer(g, g) / (g @ g), np.eye(3), W0)
     assert sol.method == "theta/nodal-genus-3"
+    # a symmetric body: the node over E = infinity, genus 3; with the rank-one a as well, genus 2
+    assert solve_rotation([0.7, 0.7, 1.9], a + a.T, np.eye(3), W0).method == "theta/symmetric-genus-3"
+    sol = solve_rotation([0.7, 0.7, 1.9], -3.0 * np.outer(g, g) / (g @ g), np.eye(3), W0)
+    assert sol.method == "theta/symmetric-nodal-genus-2"
 
 
 def test_shapes_and_protocol():

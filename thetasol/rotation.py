@@ -8,14 +8,14 @@ elliptic function evaluations per time (no time stepping).
 
 Dispatch (one small function per branch, tried in order, see ``_BRANCHES``):
 
-* ``a = c 1`` (zero or isotropic: no torque, Section 4 I): the Euler top of
+* ``a = c 1`` (zero or isotropic) or a spherical body (no torque, Section 4 I): the Euler top of
   :mod:`thetasol.euler_top` in Jacobi elliptic functions;
 * angular velocity along a principal axis that is also an eigenvector of ``Q0^T a Q0``: the
   body keeps turning about that axis, a planar pendulum in elliptic functions
   (:mod:`thetasol.pendulum`; the spectral curve is reducible), uniform rotation or rest included;
 * any other ``a`` (Section 4 II): the Baker-Akhiezer theta-function solution of
-  :mod:`thetasol.theta_rotation` (genus 4, or genus 3 for a potential with a repeated
-  eigenvalue); symmetric bodies raise :class:`NotImplementedError`.
+  :mod:`thetasol.theta_rotation` (genus 4; genus 3 for a potential with a repeated eigenvalue
+  or for a symmetric body, genus 2 for both).
 
 The free gyrostat (8.39)-(8.40) has its own entry point, :func:`thetasol.solve_gyrostat`,
 and returns an object with the same protocol.
@@ -127,7 +127,8 @@ def _isotropic(a: np.ndarray) -> bool:
 
 
 def _free_branch(J, a, Q0, omega0, dps):
-    if not _isotropic(a):
+    # a spherical body feels no torque either ([u, J] = 0)
+    if not (_isotropic(a) or _isotropic(J)):
         return None
     from .euler_top import _solve_euler_top
 
@@ -181,9 +182,10 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     ValueError
         Non-finite, wrongly shaped or unphysical data.
     ClosedFormUnavailable
-        (a ``NotImplementedError``) A potential with torque on a symmetric body (two equal
-        principal moments), ``dps`` with a potential, or nearly degenerate data for which the curve
-        computations cannot reach the solution's accuracy; the message says which.
+        (a ``NotImplementedError``) A symmetric body (two equal principal moments) with no or
+        little spin about its symmetry axis in a potential with torque, ``dps`` with a potential,
+        or nearly degenerate data for which the curve computations cannot reach the solution's
+        accuracy; the message says which.
 
     Warns
     -----

@@ -39,7 +39,15 @@ Degenerate data (only what the scene needs)
   ``E = 0`` and the same construction runs on its genus-3 normalization, the node's two branches
   taking the place of two of the points over ``E = 0``.
 * ``a`` isotropic or zero: no torque; :func:`thetasol.solve_rotation` uses the Euler top instead.
-* a symmetric body (two equal ``J_i``): not handled here (NotImplementedError).
+* a symmetric body (two equal ``J_i``): the spin about the symmetry axis is an integral and the
+  curve has a node over ``E = infinity``.  In the frame turning at ``-spin`` about the axis
+  (``Q~ = Q R(t)``, ``omega~ = R^T omega - spin e``) the Lax equation keeps its form and ``omega~``
+  has no axial part, so the Baker-Akhiezer function has no third-kind singularity at the node's
+  branches: the construction runs on the genus-3 normalization (genus 2 with a rank-one ``a``)
+  with ``B`` the eigenvectors ``(e1 +- i e2) / sqrt 2`` of ``M`` at the node, and
+  ``Q = Q~ R(t)^T``, ``omega = R omega~ + spin e``.  Without axial spin the branches touch
+  (a tacnode; the axis moves as in Neumann's problem): not handled (ClosedFormUnavailable), and
+  the set-up fails for small axial spin.
 """
 from __future__ import annotations
 
@@ -90,7 +98,7 @@ def _choose_alpha(X: np.ndarray) -> np.ndarray:
     return best
 
 
-def _abel_friendly_divisor(Jp, M, u, alpha, bp):
+def _abel_friendly_divisor(Jp, M, u, alpha, bp, degree):
     """Pole divisor (E, w) of the eigenvector for the normalization vector, among alpha and random
     ones, whose points are farthest from the branch points and all within 10 |bp|max of E = 0."""
     R = float(np.abs(bp).max())
@@ -98,7 +106,7 @@ def _abel_friendly_divisor(Jp, M, u, alpha, bp):
     best, score = None, -np.inf
     for c in [alpha] + [rng.normal(size=3) for _ in range(24)]:
         E, w = eigenvector_poles(Jp, M, u, c)
-        if len(E) != 6 or not np.all(np.isfinite(w)):
+        if len(E) != degree or not np.all(np.isfinite(w)):
             continue
         sc = np.min(np.abs(E[:, None] - bp[None, :])) / R if np.abs(E).max() <= 10.0 * R else -1.0
         if sc > score:
@@ -179,6 +187,18 @@ class ThetaRotation(RotationSolution):
         Phi_r = Phi.real
         Qp = polar_orthonormalize(self._c["Q0p"] @ np.swapaxes(Phi_r, -1, -2))
         wp = vee(-Phidot.real @ np.swapaxes(Phi_r, -1, -2))
+        if self._c["axis"] is not None:
+            # back from the frame turning at -spin about the symmetry axis: Q = Q~ R^T, omega = R omega~ + spin e
+            ax, spin = self._c["axis"], self._c["spin"]
+            i, j = [k for k in range(3) if k != ax]
+            ang = spin * t
+            c, s = np.cos(ang), np.sin(ang)
+            R = np.zeros(t.shape + (3, 3))
+            R[..., ax, ax] = 1.0
+            R[..., i, i], R[..., j, j], R[..., i, j], R[..., j, i] = c, c, s, -s   # R(t) = exp(-spin t hat(e))
+            Qp = Qp @ np.swapaxes(R, -1, -2)
+            wp = np.einsum("nij,nj->ni", R, wp)
+            wp[..., ax] += spin
         P = self._c["P"]
         return wp @ P.T, Qp @ P.T
 
@@ -382,19 +402,37 @@ def _fit_exponents(nu, nub, X0, nu_aux, h_aux):
     return x[:3][:, None] - x[nF:][None, :], float(resid)
 
 
+def _symmetry_axis(Jp: np.ndarray):
+    """Index of the symmetry axis of a symmetric body (two equal ascending Jp), else None."""
+    if np.min(np.diff(Jp)) > SNAP_TOL * Jp[-1]:
+        return None
+    if Jp[-1] - Jp[0] <= SNAP_TOL * Jp[-1]:
+        raise ClosedFormUnavailable(f"nearly spherical body (principal second moments {Jp} equal to "
+                                    f"{SNAP_TOL:g}): use thetasol.integrate_rotation")
+    return 2 if Jp[1] - Jp[0] <= SNAP_TOL * Jp[-1] else 0
+
+
 def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     Jp, P = _principal_frame(Jm)
     Q0p = Q0 @ P
     w0p = P.T @ omega0
     Ip = inertia_from_moments(np.diag(Jp))
-    if np.min(np.diff(Jp)) <= SNAP_TOL * Jp[-1]:
-        raise ClosedFormUnavailable(
-            f"symmetric body (principal second moments {Jp}): the places of the spectral curve over "
-            "E = infinity are singular and the theta-function solution for two equal J_i is not "
-            "implemented; use thetasol.integrate_rotation")
+    spin, axis = 0.0, _symmetry_axis(Jp)
+    if axis is not None:
+        # Symmetric body: omega along the symmetry axis is an integral.  In the frame turning
+        # about that axis at -spin relative to the body, omega has no axial part, so A(E) has no
+        # E^0 term at the node over E = infinity and the Baker-Akhiezer function has no
+        # third-kind singularity there (docs/theta_rotation.md).
+        spin = float(w0p[axis])
+        scale = np.linalg.norm(w0p) + np.sqrt(np.abs(np.linalg.eigvalsh(a)).max())
+        if abs(spin) <= SNAP_TOL * scale:
+            raise ClosedFormUnavailable(
+                "symmetric body without spin about its symmetry axis: the two places over E = infinity "
+                "touch (a tacnode; the axis moves as in Neumann's problem, genus 2), which is not "
+                "implemented; use thetasol.integrate_rotation")
     curve = spectral_curve(np.diag(Jp), hat(Ip @ w0p), -(Q0p.T @ a @ Q0p), tol=SNAP_TOL)
     M, u = curve.M, curve.u
-    W0 = hat(w0p)
+    W0 = hat(w0p - spin * np.eye(3)[axis]) if axis is not None else hat(w0p)
     g = curve.genus
     nums = curve.holomorphic_differentials()
     nums_arr = curve._numerators(nums)
@@ -465,19 +503,22 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         # A(D0) does not depend on alpha (the pole divisors for two alphas differ by the divisor of
         # <alpha', v> / <alpha, v>): take it from an alpha whose divisor keeps away from the branch
         # points and from infinity, where Abel images lose accuracy.
-        AD0 = abel_sum(*_abel_friendly_divisor(Jp, M, u, alpha, np.asarray(curve.branch_points)))
+        AD0 = abel_sum(*_abel_friendly_divisor(Jp, M, u, alpha, np.asarray(curve.branch_points), g + 2))
     else:
         AD0 = abel_sum(Ed, wd)
     AP0 = np.array([_reduce(v, tau) for v in abel(P0)])
-    # zeros of the eigenvector components v_k (alpha = e_k): the places where psi_k vanishes
-    comp_zeros = [eigenvector_poles(Jp, M, u, np.eye(3)[k]) for k in range(3)]
-    if far:
+    # zeros of the eigenvector components v_k (alpha = e_k; for a symmetric body the components in
+    # B, alpha = conj(b_k)): the places where psi_k vanishes
+    comp_zeros = [eigenvector_poles(Jp, M, u, Bc[:, k] if curve.symmetric_body else np.eye(3)[k])
+                  for k in range(3)]
+    if curve.node is None:
         # psi_k vanishes at inf_j (j != k): div(psi_k) = Z_k + sum_{j != k} inf_j - D0 with Z_k the g
         # finite zeros of v_k, so e_k = A(Z_k) + K; and div(E) = sum P_s - sum inf_j turns
         # d_k = A(inf_k) - e_k into sum_s A(P_s) - A(D0) - K.  No Abel image at infinity is needed.
         # Where a zero of v_k runs off towards infinity (v_3 of a nearly symmetric body has one at
         # E ~ 1 / (J_2 - J_1)) use e_k = A(D0) - sum_s A(P_s) + A(inf_k) + K instead: inf_k is then
-        # the place away from the cluster.
+        # the place away from the cluster.  The same holds on the normalization of a symmetric
+        # body's curve (its node over E = infinity; measured 1.5-2.5x closer to the references).
         e = np.empty((3, g), complex)
         R = float(np.abs(curve.branch_points).max())
         for k, (Ez, wz) in enumerate(comp_zeros):
@@ -547,8 +588,9 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     flow = FlowTheta(tau, U[:rdim], np.concatenate([b, d]))
     eb = flow.e[:9].reshape(3, 3)
     amp = rho * np.exp(eb - flow.e[9:][None, :])             # rho theta(d) exp(e_b - e_d)
-    consts = {"flow": flow, "nu": nu_fit, "amp": amp, "X0inv": np.linalg.inv(X0), "Q0p": Q0p, "P": P, "B": B,
-              "Ainv": Ainv, "G": G}
+    consts = {"flow": flow, "nu": nu_fit, "amp": amp, "X0inv": np.linalg.inv(B @ X0), "Q0p": Q0p, "P": P, "B": B,
+              "Ainv": Ainv, "G": G,
+              "spin": spin, "axis": axis}
     diag = {
         "nu_real_part": float(np.abs(nu.real).max()),
         "nu_fit_residual": resid,
@@ -568,7 +610,8 @@ def _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d, Bc):
     Returns (nu (n, 3), relative component sizes |psi_k| / |psi| (n, 3)).
     """
     bp = np.asarray(curve.branch_points)
-    R = float(np.abs(bp).min())
+    scale = float(np.abs(bp).max())
+    R = float(np.abs(bp)[np.abs(bp) > 1e-8 * scale].min())   # a branch point may sit at E = 0 (rank-one a)
     trial = [0.35 * R * np.exp(1j * ang) for ang in (0.3, 1.1, 1.9, 2.7)]
     # Far branch points (|E| ~ 1/(J_2 - J_1) for nearly symmetric bodies) are where L ~ J^2 E^2 and
     # eigenvectors lose accuracy: use the core of the set only.
@@ -576,6 +619,8 @@ def _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d, Bc):
     for b in core:
         sep = np.abs(bp - b)
         sep = min(sep[sep > 0].min(), abs(b))
+        if sep <= 1e-8 * scale:
+            continue                        # a branch point at E = 0 (rank-one a): a singular point
         trial += [b + 0.25 * sep * np.exp(1j * ang) for ang in (0.4, 2.5, 4.6)]
     cands = {}
     for E in trial:
@@ -663,14 +708,21 @@ def _solve_theta_rotation(J, a, Q0, omega0, dps=None) -> ThetaRotation:
         raise ClosedFormUnavailable("dps= is not available for the theta-function solution")
     try:
         curve, tau, U, AD0, alpha, consts, diag = _setup(J, a, Q0, omega0)
+    except ClosedFormUnavailable:
+        raise
     except (ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
         # the data were validated by solve_rotation: a failure here is the curve's, not the input's
-        raise ClosedFormUnavailable(f"theta-function solution unavailable for these data: {exc}") from exc
+        msg = f"theta-function solution unavailable for these data: {exc}"
+        if _symmetry_axis(_principal_frame(J)[0]) is not None:
+            msg += ("; a symmetric body with little spin about its symmetry axis has a spectral curve "
+                    "near a tacnode over E = infinity (Neumann's problem), where the set-up fails")
+        raise ClosedFormUnavailable(msg) from exc
     inv = _invariants(J, a, Q0, omega0)
     inv = {k: (float(v) if np.ndim(v) == 0 else v) for k, v in inv.items()}
     inv.update(diag)
     inv["genus"] = curve.genus
-    method = "theta/genus-4" if curve.node is None else "theta/nodal-genus-3"
+    kind = ("symmetric-" if consts["axis"] is not None else "") + ("nodal-" if curve.node is not None else "")
+    method = f"theta/{kind}genus-{curve.genus}"
     sol = ThetaRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=method, invariants=inv,
                         curve=curve, basis=consts["G"], riemann_matrix=tau, U=U, abel_divisor=AD0,
                         alpha=alpha, _c=consts)

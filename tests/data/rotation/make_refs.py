@@ -3,7 +3,8 @@
 Each case is integrated with heyoka's Taylor method in extended precision (80-bit long
 double, tolerance 1e-19); the sample times are those of issue 6.  Agreement with the
 quadruple-precision integrator (dtype="f128") is checked at t <= 102 and stored as
-``ref_error``.  Run:  python tests/data/rotation/make_refs.py   (needs thetasol[bench]).
+``ref_error``.  Run:  python tests/data/rotation/make_refs.py [NAME ...]   (needs thetasol[bench];
+with names only those cases are regenerated).
 """
 import json
 import pathlib
@@ -51,13 +52,23 @@ def cases():
     kick = rodrigues(np.array([1e-3, -2e-3, 1.5e-3]))
     out["near_stable_equilibrium"] = (J, a_eq, Q_stable @ kick, np.array([1e-3, 2e-3, -1e-3]))
     out["near_unstable_equilibrium"] = (J, a_eq, Q_unstable @ kick, np.array([1e-3, 2e-3, -1e-3]))
+    # Symmetric bodies (two equal J_i; the axial spin is an integral): oblate and prolate, a saddle
+    # potential, fast spin, and a rank-one potential (two nodes: genus 2).
+    out["symmetric_oblate"] = ([1.0, 1.0, 1.7], a_gen, Q0, w0)
+    out["symmetric_prolate_saddle"] = ([0.6, 1.7, 1.7], R @ np.diag([-1.0, 0.4, 1.5]) @ R.T, Q0, w0)
+    out["symmetric_fast_spin"] = ([1.0, 1.0, 1.7], a_gen, Q0, 12.0 * w0 / np.linalg.norm(w0))
+    out["symmetric_rank_one"] = ([1.0, 1.0, 1.7], -3.0 * np.outer(gamma, gamma), Q0, w0)
     return out
 
 
-def main():
-    data = {}
+def main(only=None):
+    """Regenerate all cases, or only the named ones (the others are kept as stored)."""
+    path = pathlib.Path(__file__).with_name("refs.json")
+    data = json.loads(path.read_text()) if only else {}
     t = np.array(TIMES)
     for name, (J, a, Q0, w0) in cases().items():
+        if only and name not in only:
+            continue
         w, Q = integrate_rotation(J, a, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19)
         wq, Qq = integrate_rotation(J, a, Q0, w0, t[:4], method="heyoka", dtype="f128", rtol=1e-28)
         err = max(np.abs(Qq - Q[:4]).max(), np.abs(wq - w[:4]).max())
@@ -65,9 +76,10 @@ def main():
                       "omega0": np.asarray(w0).tolist(), "t": TIMES, "omega": w.tolist(), "Q": Q.tolist(),
                       "ref_error": float(err)}
         print(f"{name:28s} ldbl vs f128 (t <= 102): {err:.2e}", flush=True)
-    path = pathlib.Path(__file__).with_name("refs.json")
     path.write_text(json.dumps(data, indent=1))
 
 
 if __name__ == "__main__":
-    main()
+    import sys
+
+    main(sys.argv[1:] or None)
