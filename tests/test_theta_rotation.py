@@ -274,3 +274,23 @@ def test_nearly_symmetric_body_keeps_its_accuracy_or_warns():
         if dl == 1e-3:
             assert err <= 1e-9 and not warned, err
         assert err <= 1e-9 or warned, (dl, err)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_random_symmetric_bodies_against_dop853(seed):
+    """Random symmetric bodies (either axis, random a, attitude, spin): measured worst 3.7e-11 on 16
+    such cases at t <= 40 against DOP853 at rtol 1e-13, whose own error is of that size."""
+    from thetasol._so3 import rodrigues
+
+    rng = np.random.default_rng([2026, seed])
+    j = rng.uniform(0.3, 1.5, 2)
+    J = np.array([j[0], j[0], j[1]])[rng.permutation(3)]
+    r = rng.normal(size=(3, 3))
+    a = (r + r.T) * rng.uniform(0.2, 2.0)
+    Q0, w0 = rodrigues(rng.normal(size=3)), rng.normal(size=3) * rng.uniform(0.2, 3.0)
+    sol = solve_rotation(J, a, Q0, w0)
+    assert sol.method == "theta/symmetric-genus-3"
+    t = np.array([0.0, 1.3, 7.7, 40.0])
+    w, Q = sol(t)
+    wr, Qr = integrate_rotation(J, a, Q0, w0, t, rtol=1e-13)
+    assert max(np.abs(w - wr).max(), np.abs(Q - Qr).max()) <= 1e-9
