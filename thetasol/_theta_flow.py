@@ -15,7 +15,6 @@ what t = 1 costs and need no quasi-periodicity factors.
 """
 from __future__ import annotations
 
-import itertools
 import math
 
 import numpy as np
@@ -36,31 +35,26 @@ class FlowTheta:
         S = shifts.shape[0]
         R2 = math.log(1.0 / tol) + 2.0 * math.log(10.0)
         self.e = np.empty(S)
-        groups = []
+        keys, terms, rows = [], [], []
         for j, s in enumerate(shifts):
             y = s.imag
             c = Yinv @ y
             self.e[j] = math.pi * y @ Yinv @ y
             half = np.sqrt(R2 / math.pi * np.diag(Yinv))
             ranges = [np.arange(math.floor(-c[i] - half[i]), math.ceil(-c[i] + half[i]) + 1) for i in range(g)]
-            m = np.array(list(itertools.product(*ranges)), dtype=float)
+            m = np.stack(np.meshgrid(*ranges, indexing="ij"), axis=-1).reshape(-1, g).astype(float)
             d = m + c
             keep = math.pi * np.einsum("ni,ij,nj->n", d, Y, d) <= R2
             m = m[keep]
             expo = 1j * math.pi * np.einsum("ni,ij,nj->n", m, tau, m) + 2j * math.pi * m @ s - self.e[j]
-            terms = np.exp(expo)
-            key = [tuple(int(v) for v in row[:r]) for row in m]
-            acc: dict = {}
-            for k, v in zip(key, terms):
-                acc[k] = acc.get(k, 0.0) + v
-            groups.append(acc)
-        modes = sorted(set().union(*groups))
-        index = {k: i for i, k in enumerate(modes)}
+            keys.append(m[:, :r].astype(np.int64))
+            terms.append(np.exp(expo))
+            rows.append(np.full(len(m), j))
+        # group the terms by their first r indices (the Fourier mode), in one pass for all shifts
+        modes, inv = np.unique(np.concatenate(keys), axis=0, return_inverse=True)
         D = np.zeros((S, len(modes)), complex)
-        for j, acc in enumerate(groups):
-            for k, v in acc.items():
-                D[j, index[k]] = v
-        self.modes = np.array(modes, dtype=np.int64).reshape(len(modes), r)
+        np.add.at(D, (np.concatenate(rows), inv.ravel()), np.concatenate(terms))
+        self.modes = modes.reshape(len(modes), r)
         self.lo = self.modes.min(axis=0)
         self.span = self.modes.max(axis=0) - self.lo + 1
         self.D = D

@@ -447,9 +447,6 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     def abel(points):
         return curve.abel_map(points, normalized=False) @ Ainv.T
 
-    def abel_sum(E, w):
-        return abel([(complex(x), complex(y)) for x, y in zip(E, w)]).sum(axis=0)
-
     Pinf, Jinf, B = _infinity_data(curve, curve.J2, M)
     Bc = B.conj()                                            # psi -> components: psi @ conj(B)
     U = Ainv @ _velocity_at_infinity(curve, nums, Pinf, Jinf)
@@ -503,14 +500,28 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         # A(D0) does not depend on alpha (the pole divisors for two alphas differ by the divisor of
         # <alpha', v> / <alpha, v>): take it from an alpha whose divisor keeps away from the branch
         # points and from infinity, where Abel images lose accuracy.
-        AD0 = abel_sum(*_abel_friendly_divisor(Jp, M, u, alpha, np.asarray(curve.branch_points), g + 2))
+        D_E, D_w = _abel_friendly_divisor(Jp, M, u, alpha, np.asarray(curve.branch_points), g + 2)
     else:
-        AD0 = abel_sum(Ed, wd)
-    AP0 = np.array([_reduce(v, tau) for v in abel(P0)])
+        D_E, D_w = Ed, wd
     # zeros of the eigenvector components v_k (alpha = e_k; for a symmetric body the components in
     # B, alpha = conj(b_k)): the places where psi_k vanishes
     comp_zeros = [eigenvector_poles(Jp, M, u, Bc[:, k] if curve.symmetric_body else np.eye(3)[k])
                   for k in range(3)]
+    R = float(np.abs(curve.branch_points).max())
+    use_zeros = [curve.node is None and len(Ez) == g and np.abs(Ez).max() <= 10.0 * R for Ez, _ in comp_zeros]
+    # one Abel-map call for D0, the places over E = 0 and the zeros used (the paths are planned together)
+    batch = [(complex(x), complex(y)) for x, y in zip(D_E, D_w)] + list(P0)
+    for (Ez, wz), use in zip(comp_zeros, use_zeros):
+        if use:
+            batch += [(complex(x), complex(y)) for x, y in zip(Ez, wz)]
+    A_all = abel(batch)
+    nD = len(D_E)
+    AD0 = A_all[:nD].sum(axis=0)
+    AP0 = np.array([_reduce(v, tau) for v in A_all[nD:nD + 3]])
+    AZ, pos = {}, nD + 3
+    for k, use in enumerate(use_zeros):
+        if use:
+            AZ[k], pos = A_all[pos:pos + g].sum(axis=0), pos + g
     if curve.node is None:
         # psi_k vanishes at inf_j (j != k): div(psi_k) = Z_k + sum_{j != k} inf_j - D0 with Z_k the g
         # finite zeros of v_k, so e_k = A(Z_k) + K; and div(E) = sum P_s - sum inf_j turns
@@ -520,10 +531,9 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         # the place away from the cluster.  The same holds on the normalization of a symmetric
         # body's curve (its node over E = infinity; measured 1.5-2.5x closer to the references).
         e = np.empty((3, g), complex)
-        R = float(np.abs(curve.branch_points).max())
-        for k, (Ez, wz) in enumerate(comp_zeros):
-            if len(Ez) == g and np.abs(Ez).max() <= 10.0 * R:
-                e[k] = _reduce(abel_sum(Ez, wz) + K, tau)
+        for k in range(3):
+            if use_zeros[k]:
+                e[k] = _reduce(AZ[k] + K, tau)
             else:
                 e[k] = _reduce(AD0 - AP0.sum(axis=0) + abel([Pinf[k]])[0] + K, tau)
         d = np.repeat(_reduce(AP0.sum(axis=0) - AD0 - K, tau)[None, :], 3, axis=0)
@@ -655,19 +665,19 @@ def _riemann_constant(abel, th, canon, Jp, M, u, curve) -> np.ndarray:
     g = th.g
     tau = th.tau
     places = list(canon)
-    AC = np.array([canon[P] for P in places], float) @ abel(places)
+    rng = np.random.default_rng(7)
+    scale = float(np.abs(np.asarray(curve.branch_points)).max())
+    pts = []
+    for _ in range(3 * (g - 1)):                     # three random effective divisors of degree g - 1
+        E = scale * (0.3 + 0.5 * rng.random()) * np.exp(2j * np.pi * rng.random())
+        pts.append((E, rng.choice(np.linalg.eigvals(lax_matrix(Jp, M, u, E)))))
+    A_all = abel(places + pts)                       # one call: the paths are planned together
+    AC = np.array([canon[P] for P in places], float) @ A_all[:len(places)]
     bits = (np.arange(2 ** g)[:, None] >> np.arange(g)[None, :]) & 1
     a_, b_ = np.repeat(bits, 2 ** g, axis=0), np.tile(bits, (2 ** g, 1))
     cands = -0.5 * AC + 0.5 * a_ + 0.5 * (b_ @ tau.T)
-    rng = np.random.default_rng(7)
-    scale = float(np.abs(np.asarray(curve.branch_points)).max())
     score = np.zeros(len(cands))
-    for _ in range(3):
-        pts = []
-        for _ in range(g - 1):
-            E = scale * (0.3 + 0.5 * rng.random()) * np.exp(2j * np.pi * rng.random())
-            pts.append((E, rng.choice(np.linalg.eigvals(lax_matrix(Jp, M, u, E)))))
-        AD = abel(pts).sum(axis=0)
+    for AD in A_all[len(places):].reshape(3, g - 1, g).sum(axis=1):
         _, v = th(cands + AD[None, :], separated=True)
         score = np.maximum(score, np.abs(v))
     order = np.argsort(score)
