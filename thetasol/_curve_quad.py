@@ -234,6 +234,7 @@ class Tracker:
         self.mp_fallback = mp_fallback
         self.n_refined_steps = 0
         self.n_mp_nodes = 0
+        self._curve_cdd = None  # f's exact coefficients as double-double pairs (lazy)
 
     # -------------------------------------------------------------- node evaluation
     def _eval_nodes(self, x, dx, precise=True, ddx=None):
@@ -616,7 +617,29 @@ class Tracked:
             out.append(W[rows[None, :], ch].sum(axis=1))
             pos += m
         if crit:
-            out = self._add_mp(out, exact, crit)
+            out = self._add_dd(out, exact, crit)
+        return out
+
+    def _add_dd(self, out, exact, crit):
+        """Add the double-double sums of the critical intervals (:mod:`thetasol._curve_dd`)."""
+        from ._curve_dd import exact_to_cdd, intervals_dd, numerators_to_cdd
+        tr = self.tracker
+        if tr._curve_cdd is None:
+            tr._curve_cdd = exact_to_cdd(tr.poly.exact, (tr.poly.n + 1, tr.poly.dx + 1))
+        circ = [c for c in crit if self.pieces[c[0]].kind not in ("line", "point", "inf")]
+        if circ:  # no double-double parametrization (never planned for quadrature so far)
+            out = self._add_mp(out, exact, circ)
+            crit = [c for c in crit if self.pieces[c[0]].kind in ("line", "point", "inf")]
+        tstart = np.concatenate([[0], np.cumsum([len(pc.y0) for pc in self.pieces])])
+        seeds = []
+        for p, k, (lo, hi, N) in crit:
+            m = len(self.pieces[p].y0)
+            rows = np.arange(k, k + N)
+            ch = self.choice[tstart[p]:tstart[p] + m, rows - self.nodes.offsets[p]]
+            seeds.append(self.R[rows[None, :], ch])
+        parts = intervals_dd(self.pieces, crit, seeds, tr._curve_cdd, numerators_to_cdd(exact))
+        for (p, k, _), part in zip(crit, parts):
+            out[p] = out[p] + part
         return out
 
     def _add_mp(self, out, exact, crit):
