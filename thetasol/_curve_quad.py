@@ -15,7 +15,8 @@ compensated double-double residuals), then matched node to node with a Hermite t
 from both ends must meet at the midpoint far closer than the roots are to each other), a
 gap-closing-time test and a tangent-turn test.  Failed steps are subdivided in vectorized rounds;
 roots that float64 cannot separate are recomputed with mpmath from the exact coefficients, and
-intervals whose float64 sum is not accurate enough are summed in mpmath (nearly singular curves).
+intervals whose float64 sum is not accurate enough are re-summed in double-double from the exact
+coefficients (:mod:`thetasol._curve_dd`, vectorized over all nodes and tracks; nearly singular curves).
 This is written by hand rather than with a homotopy-continuation library because none of the
 allowed dependencies offers vectorized polynomial root tracking.
 """
@@ -553,7 +554,7 @@ class Tracked:
         |weight * integrand|): the rounding of the node positions (relative jitter eps |x| / length,
         large for intervals shorter than ~1e-3 |x| next to close critical values) and the remaining
         error of the (compensated) roots relative to the gap between sheets (at least the rounding of
-        y to float64, eps |y| / gap).  An interval is summed in mpmath when the first exceeds 1e-14,
+        y to float64, eps |y| / gap).  An interval is re-summed in double-double when the first exceeds 1e-14,
         or the second 1e-13, of the largest piece mass.
         """
         out = []
@@ -581,7 +582,8 @@ class Tracked:
         numerators: complex array (ndiff, I, J), p = sum P[i, j] x^i y^j.
         exact: the same numerators as exact dicts {(i, j): (Fraction, Fraction)} (default: the
         ``exact`` attribute of ``numerators``); when available, intervals whose float64 sum is not
-        accurate enough (:meth:`critical_intervals`) are summed in mpmath at exact node positions.
+        accurate enough (:meth:`critical_intervals`) are re-summed in double-double at exact node
+        positions (:meth:`_add_dd`).
         Returns a list over pieces of arrays (len(y0), ndiff).
         """
         if not self.pieces:
@@ -643,6 +645,7 @@ class Tracked:
         return out
 
     def _add_mp(self, out, exact, crit):
+        """mpmath (20 digits) version of :meth:`_add_dd`: the reference of tests and benchmarks."""
         import mpmath
 
         from ._curve_mp import interval_mp, numerators_mp
