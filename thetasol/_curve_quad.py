@@ -15,7 +15,8 @@ compensated double-double residuals), then matched node to node with a Hermite t
 from both ends must meet at the midpoint far closer than the roots are to each other), a
 gap-closing-time test and a tangent-turn test.  Failed steps are subdivided in vectorized rounds;
 roots that float64 cannot separate are recomputed with mpmath from the exact coefficients, and
-intervals whose float64 sum is not accurate enough are summed in mpmath (nearly singular curves).
+intervals whose float64 sum is not accurate enough are re-summed in double-double from the exact
+coefficients (:mod:`thetasol._curve_dd`, vectorized over all nodes and tracks; nearly singular curves).
 This is written by hand rather than with a homotopy-continuation library because none of the
 allowed dependencies offers vectorized polynomial root tracking.
 """
@@ -234,6 +235,7 @@ class Tracker:
         self.mp_fallback = mp_fallback
         self.n_refined_steps = 0
         self.n_mp_nodes = 0
+        self._curve_cdd = None  # f's exact coefficients as double-double pairs (lazy)
 
     # -------------------------------------------------------------- node evaluation
     def _eval_nodes(self, x, dx, precise=True, ddx=None):
@@ -552,7 +554,7 @@ class Tracked:
         |weight * integrand|): the rounding of the node positions (relative jitter eps |x| / length,
         large for intervals shorter than ~1e-3 |x| next to close critical values) and the remaining
         error of the (compensated) roots relative to the gap between sheets (at least the rounding of
-        y to float64, eps |y| / gap).  An interval is summed in mpmath when the first exceeds 1e-14,
+        y to float64, eps |y| / gap).  An interval is re-summed in double-double when the first exceeds 1e-14,
         or the second 1e-13, of the largest piece mass.
         """
         out = []
@@ -580,7 +582,8 @@ class Tracked:
         numerators: complex array (ndiff, I, J), p = sum P[i, j] x^i y^j.
         exact: the same numerators as exact dicts {(i, j): (Fraction, Fraction)} (default: the
         ``exact`` attribute of ``numerators``); when available, intervals whose float64 sum is not
-        accurate enough (:meth:`critical_intervals`) are summed in mpmath at exact node positions.
+        accurate enough (:meth:`critical_intervals`) are re-summed in double-double at exact node
+        positions (:meth:`_add_dd`).
         Returns a list over pieces of arrays (len(y0), ndiff).
         """
         if not self.pieces:
@@ -616,10 +619,33 @@ class Tracked:
             out.append(W[rows[None, :], ch].sum(axis=1))
             pos += m
         if crit:
-            out = self._add_mp(out, exact, crit)
+            out = self._add_dd(out, exact, crit)
+        return out
+
+    def _add_dd(self, out, exact, crit):
+        """Add the double-double sums of the critical intervals (:mod:`thetasol._curve_dd`)."""
+        from ._curve_dd import exact_to_cdd, intervals_dd, numerators_to_cdd
+        tr = self.tracker
+        if tr._curve_cdd is None:
+            tr._curve_cdd = exact_to_cdd(tr.poly.exact, (tr.poly.n + 1, tr.poly.dx + 1))
+        circ = [c for c in crit if self.pieces[c[0]].kind not in ("line", "point", "inf")]
+        if circ:  # no double-double parametrization (never planned for quadrature so far)
+            out = self._add_mp(out, exact, circ)
+            crit = [c for c in crit if self.pieces[c[0]].kind in ("line", "point", "inf")]
+        tstart = np.concatenate([[0], np.cumsum([len(pc.y0) for pc in self.pieces])])
+        seeds = []
+        for p, k, (lo, hi, N) in crit:
+            m = len(self.pieces[p].y0)
+            rows = np.arange(k, k + N)
+            ch = self.choice[tstart[p]:tstart[p] + m, rows - self.nodes.offsets[p]]
+            seeds.append(self.R[rows[None, :], ch])
+        parts = intervals_dd(self.pieces, crit, seeds, tr._curve_cdd, numerators_to_cdd(exact))
+        for (p, k, _), part in zip(crit, parts):
+            out[p] = out[p] + part
         return out
 
     def _add_mp(self, out, exact, crit):
+        """mpmath (20 digits) version of :meth:`_add_dd`: the reference of tests and benchmarks."""
         import mpmath
 
         from ._curve_mp import interval_mp, numerators_mp

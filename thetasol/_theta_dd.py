@@ -122,3 +122,81 @@ def dd_matvec(A_hi, A_lo, x: "DD") -> "DD":
     xh = DD(x.hi[:, None, :], x.lo[:, None, :])  # [j, ., p]
     prod = xh.mul(A_hi.T[:, :, None]) + DD(x.hi[:, None, :] * A_lo.T[:, :, None])  # [j, i, p]
     return dd_sum(prod)
+
+
+# ---------------------------------------------------------------------- double-double arithmetic on
+# (hi, lo) float pairs and complex double-double 4-tuples (re_hi, re_lo, im_hi, im_lo); used by the
+# curve engine's vectorized fallback quadrature (:mod:`thetasol._curve_dd`).  Errors ~2^-104 of the
+# operands' magnitudes (IEEE-style addition, so cancellations stay accurate).
+def quick_two_sum(a, b):
+    """``a + b = s + e`` exactly when ``|a| >= |b|`` (or a = 0)."""
+    s = a + b
+    return s, b - (s - a)
+
+
+def dd_add(ah, al, bh, bl):
+    """Double-double sum of ``ah + al`` and ``bh + bl``."""
+    s, e = two_sum(ah, bh)
+    t, f = two_sum(al, bl)
+    s, e = quick_two_sum(s, e + t)
+    return quick_two_sum(s, e + f)
+
+
+def dd_mul(ah, al, bh, bl):
+    """Double-double product of ``ah + al`` and ``bh + bl``."""
+    p, e = two_prod(ah, bh)
+    return quick_two_sum(p, e + (ah * bl + al * bh))
+
+
+def dd_div(ah, al, bh, bl):
+    """Double-double quotient ``(ah + al) / (bh + bl)`` (three float quotient digits)."""
+    q1 = ah / bh
+    ph, pl = dd_mul(bh, bl, q1, 0.0)
+    rh, rl = dd_add(ah, al, -ph, -pl)
+    q2 = rh / bh
+    ph, pl = dd_mul(bh, bl, q2, 0.0)
+    rh, rl = dd_add(rh, rl, -ph, -pl)
+    q3 = rh / bh
+    s, e = quick_two_sum(q1, q2)
+    return dd_add(s, e, q3, 0.0)
+
+
+def cdd(z):
+    """Complex float array -> complex double-double 4-tuple."""
+    z = np.asarray(z, dtype=complex)
+    zero = np.zeros(z.shape)
+    return (z.real.copy(), zero, z.imag.copy(), zero)
+
+
+def cdd_value(a):
+    """Complex double-double 4-tuple -> complex128 (rounded)."""
+    return (a[0] + a[1]) + 1j * (a[2] + a[3])
+
+
+def cdd_add(a, b):
+    return dd_add(a[0], a[1], b[0], b[1]) + dd_add(a[2], a[3], b[2], b[3])
+
+
+def cdd_sub(a, b):
+    return dd_add(a[0], a[1], -b[0], -b[1]) + dd_add(a[2], a[3], -b[2], -b[3])
+
+
+def cdd_mul(a, b):
+    rh, rl = dd_add(*dd_mul(a[0], a[1], b[0], b[1]), *(-v for v in dd_mul(a[2], a[3], b[2], b[3])))
+    ih, il = dd_add(*dd_mul(a[0], a[1], b[2], b[3]), *dd_mul(a[2], a[3], b[0], b[1]))
+    return rh, rl, ih, il
+
+
+def cdd_scale(a, rh, rl=0.0):
+    """Complex double-double times the real double-double ``rh + rl``."""
+    return dd_mul(a[0], a[1], rh, rl) + dd_mul(a[2], a[3], rh, rl)
+
+
+def cdd_div(a, b):
+    """Complex double-double quotient: float quotient, then two corrections from dd residuals."""
+    bz = cdd_value(b)
+    q = cdd(cdd_value(a) / bz)
+    for _ in range(2):
+        r = cdd_sub(a, cdd_mul(b, q))
+        q = cdd_add(q, cdd(cdd_value(r) / bz))
+    return q

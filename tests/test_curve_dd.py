@@ -1,0 +1,111 @@
+"""Double-double fallback quadrature of the curve engine (thetasol._curve_dd).
+
+References: the mpmath version of the same sums (thetasol._curve_mp.interval_mp, 30 digits) on the
+critical intervals of a real spectral curve, and exact rational arithmetic for the primitives.
+"""
+import json
+import pathlib
+from fractions import Fraction
+
+import mpmath
+import numpy as np
+import pytest
+
+from thetasol import _curve_quad, solve_rotation
+from thetasol._curve_dd import exact_to_cdd, intervals_dd, numerators_to_cdd
+from thetasol._curve_mp import interval_mp, numerators_mp
+from thetasol._theta_dd import cdd_div, cdd_mul, dd_div
+
+REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
+
+
+def _fr(h, l):
+    return Fraction(float(h)) + Fraction(float(l))
+
+
+def test_dd_primitives_against_fractions():
+    rng = np.random.default_rng(7)
+    K = 200
+    a = tuple(v * s for v, s in zip(rng.standard_normal((4, K)), (1.0, 1e-17, 1.0, 1e-17)))
+    b = tuple(v * s for v, s in zip(rng.standard_normal((4, K)), (1.0, 1e-17, 1.0, 1e-17)))
+    m = cdd_mul(a, b)
+    q = cdd_div(a, b)
+    rq = dd_div(a[0], a[1], b[0], b[1])
+    for k in range(K):
+        ar, ai = _fr(a[0][k], a[1][k]), _fr(a[2][k], a[3][k])
+        br, bi = _fr(b[0][k], b[1][k]), _fr(b[2][k], b[3][k])
+        mr, mi = ar * br - ai * bi, ar * bi + ai * br
+        scale = abs(float(ar)) * abs(float(br)) + abs(float(ai)) * abs(float(bi)) + \
+            abs(float(ar)) * abs(float(bi)) + abs(float(ai)) * abs(float(br))
+        assert abs(float(_fr(m[0][k], m[1][k]) - mr)) <= 1e-30 * scale
+        assert abs(float(_fr(m[2][k], m[3][k]) - mi)) <= 1e-30 * scale
+        den = br * br + bi * bi
+        qr, qi = (ar * br + ai * bi) / den, (ai * br - ar * bi) / den
+        qs = abs(complex(float(qr), float(qi)))
+        assert abs(float(_fr(q[0][k], q[1][k]) - qr)) <= 1e-30 * qs
+        assert abs(float(_fr(q[2][k], q[3][k]) - qi)) <= 1e-30 * qs
+        assert abs(float(_fr(rq[0][k], rq[1][k]) - ar / br)) <= 1e-31 * abs(float(ar / br))
+
+
+@pytest.fixture(scope="module")
+def critical_call():
+    """(tracked, exact numerators, critical intervals) of the first critical call in a fast-spin set-up."""
+    calls = []
+    orig = _curve_quad.Tracked._add_dd
+
+    def spy(self, out, exact, crit):
+        if not calls:
+            calls.append((self, exact, list(crit)))
+        return orig(self, out, exact, crit)
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(_curve_quad.Tracked, "_add_dd", spy)
+    try:
+        r = REFS["symmetric_fast_spin"]
+        solve_rotation(np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"]))
+    finally:
+        mp.undo()
+    assert calls, "no critical interval in this set-up: the test case no longer exercises the fallback"
+    return calls[0]
+
+
+def _seeds(tr, crit):
+    tstart = np.concatenate([[0], np.cumsum([len(pc.y0) for pc in tr.pieces])])
+    out = []
+    for p, k, (lo, hi, N) in crit:
+        m = len(tr.pieces[p].y0)
+        rows = np.arange(k, k + N)
+        out.append(tr.R[rows[None, :], tr.choice[tstart[p]:tstart[p] + m, rows - tr.nodes.offsets[p]]])
+    return out
+
+
+def test_dd_interval_sums_match_mpmath(critical_call):
+    """Unrounded double-double sums equal 30-digit mpmath sums to 1e-25 relative, interval by interval."""
+    tr, exact, crit = critical_call
+    poly = tr.tracker.poly
+    seeds = _seeds(tr, crit)
+    dd = intervals_dd(tr.pieces, crit, seeds, exact_to_cdd(poly.exact, (poly.n + 1, poly.dx + 1)),
+                      numerators_to_cdd(exact), rounded=False)
+    worst = 0.0
+    with mpmath.workdps(40):
+        nums = numerators_mp(exact, 40)
+        for (p, k, (lo, hi, N)), s, (rh, rl, ih, il) in zip(crit, seeds, dd):
+            ref = interval_mp(tr.pieces[p], lo, hi, N, s, tr.tracker.exact, nums, 30)
+            for t, row in enumerate(ref):
+                scale = max(abs(v) for v in row)
+                assert scale > 0
+                for d, v in enumerate(row):
+                    err = abs(mpmath.mpc(mpmath.mpf(rh[t, d]) + mpmath.mpf(rl[t, d]),
+                                         mpmath.mpf(ih[t, d]) + mpmath.mpf(il[t, d])) - v)
+                    worst = max(worst, float(err / scale))
+    assert worst <= 1e-25
+
+
+def test_dd_root_leaving_its_sheet_is_refused(critical_call):
+    tr, exact, crit = critical_call
+    poly = tr.tracker.poly
+    seeds = _seeds(tr, crit[:1])
+    seeds[0] = seeds[0] * (1 + 1e-2)
+    with pytest.raises(ValueError, match="moved away from its sheet"):
+        intervals_dd(tr.pieces, crit[:1], seeds, exact_to_cdd(poly.exact, (poly.n + 1, poly.dx + 1)),
+                     numerators_to_cdd(exact))
