@@ -19,6 +19,7 @@ from ._curve_quad import Piece
 
 M_SITE = 64
 M_INF = 128
+INNER = 0.25  # radius (relative to the sampling circle) where tails into places are summed
 
 
 class LocalData:
@@ -35,6 +36,8 @@ class LocalData:
         self.ys = ys  # (n, M) indexed by reference labels
         self.perm = perm
         self.cycles = perm_cycles(perm)
+        self.center_lo = 0j  # the exact critical value is center + center_lo
+        self.xi0 = x1 - center  # first sample minus the exact critical value
 
     def place_samples(self, cycle):
         """(t samples, x samples, y samples) of length e*M for the place of this cycle."""
@@ -46,7 +49,7 @@ class LocalData:
         if self.kind == "infinity":
             t0 = self.x1 ** (-1.0 / e)
         else:
-            t0 = (self.x1 - self.center) ** (1.0 / e)
+            t0 = self.xi0 ** (1.0 / e)
         t = t0 * np.exp(2j * np.pi * m / (e * M))
         return t, x, y
 
@@ -118,19 +121,32 @@ def local_data(curve):
         ld.index = p
         rel = tr2.rel[tr2.nodes.offsets[p]:tr2.nodes.offsets[p] + M] if tr2.rel is not None else None
         xi = None
+        blo = 0j
         if kind == "critical":
-            # the FFT assumes samples exactly at b + xi_m, xi_m = (x1 - b) exp(2 pi i m / M)
-            xi = (x1 - b) * np.exp(2j * np.pi * np.arange(M) / M)
-            ld.xs = b + xi
+            # the FFT assumes samples exactly at b + xi_m, xi_m = xi_0 exp(2 pi i m / M), b the exact
+            # critical value (float b plus its low part: the float alone is off by ~eps |b|, which a
+            # close neighbour at distance d turns into errors ~eps |b| / d in the series)
+            blo = complex(curve._sites_lo[k]) if getattr(curve, "_sites_lo", None) is not None else 0j
+            ld.center_lo = blo
+            ld.xi0 = (x1 - b) - blo
+            xi = ld.xi0 * np.exp(2j * np.pi * np.arange(M) / M)
+            ld.xs = b + (blo + xi)
         ld.ys, ld.fys = _accurate_samples(curve, ld.xs, ld.ys, rel, center=b if kind == "critical" else None,
-                                          xi=xi)
+                                          xi=xi, center_lo=blo)
         out.append(ld)
+    # the tail of an Abel integral into a place is summed from its series at |x - b| = INNER r, not
+    # at the sampling circle: next to a close pair of branch points the series in t converges only
+    # like 2^(-k/2) on that circle, and truncating it at k = M/2 would cost ~1e-11; the segment from
+    # the circle to INNER r goes to the quadrature (geometric refinement towards b)
+    inner = [Piece("line", ld.x1, ld.center + INNER * (ld.x1 - ld.center), y1)
+             for ld, y1 in zip(out, tr1.ends) if ld.kind == "critical"]
     curve._cache["local"] = out
     curve._cache["local_lines"] = tr1
+    curve._cache["local_inner"] = curve._tracker.track(inner)
     return out
 
 
-def _accurate_samples(curve, xs, ys, rel, center=None, xi=None):
+def _accurate_samples(curve, xs, ys, rel, center=None, xi=None, center_lo=0j):
     """Sample values and f_y at them, with compensated (double-double) Newton steps.
 
     With ``center`` b, the samples are taken at exactly b + (xs - b) evaluated through the exactly
@@ -140,8 +156,8 @@ def _accurate_samples(curve, xs, ys, rel, center=None, xi=None):
     """
     poly = curve._poly
     if center is not None:
-        if np.finfo(float).eps * abs(center) > 1e-14 * np.min(np.abs(xi)):
-            Chi, Clo = poly.shifted_dd(center)
+        if np.finfo(float).eps * abs(center) > 1e-16 * np.min(np.abs(xi)) or center_lo != 0:
+            Chi, Clo = poly.shifted_dd(center, center_lo)
             Ahi, Alo = poly.coeff_polys_dd_local(xi, Chi, Clo)
             Y, fy = poly.polish_dd(Ahi, Alo, ys.T.copy())
             return Y.T.copy(), fy.T.copy()

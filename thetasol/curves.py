@@ -23,7 +23,7 @@ import numpy as np
 import sympy as sp
 
 from ._curve_places import perm_cycles
-from ._curve_poly import CurvePoly, polynomial_roots
+from ._curve_poly import CurvePoly, polynomial_roots, root_corrections
 from ._curve_quad import Piece, Tracker
 from ._homology import LiftedGraph, symplectic_basis
 from ._paths import CellGraph
@@ -157,6 +157,7 @@ class PlaneCurve:
         F, disc_factors, disc = self._poly.critical_polynomial()
         self._disc_factors = disc_factors
         self._sites = polynomial_roots(F)
+        self._sites_lo = root_corrections(F, self._sites)  # exact critical value = _sites + _sites_lo
         self._graph = CellGraph(self._sites, _extra_sites)
         from ._curve_mp import ExactEvaluator
         self._exact = ExactEvaluator(self._poly)
@@ -586,13 +587,22 @@ class PlaneCurve:
         ld = lds[place._site] if place.kind == "critical" else lds[-1]
         ck = ("lines", key)
         if ck not in self._cache:
-            self._cache[ck] = self._cache["local_lines"].integrate(P)
-        lines = self._cache[ck]
+            # critical sites come first in local_data, so their index is also the inner piece's
+            self._cache[ck] = (self._cache["local_lines"].integrate(P), self._cache["local_inner"].integrate(P))
+        lines, inner = self._cache[ck]
         phi = self._potentials(P, key)
-        from ._curve_places import noise_level
+        from ._curve_places import INNER, noise_level
         k, t0, Fy, Fh = self._place_data(place, P, key)
-        tail = series_integral(k, t0, Fh, t0, noise=noise_level(ld))
-        return phi[ld.ref * self.n + place._label] + lines[ld.index][place._label] - tail
+        val = phi[ld.ref * self.n + place._label] + lines[ld.index][place._label]
+        t1 = t0
+        if place.kind == "critical":
+            # quadrature to INNER r along the ray into b, the series from there; t1 is the local
+            # parameter of the float end point itself (rounding it costs eps |b| |omega|, 1e-13 here)
+            val = val + inner[ld.index][place._label]
+            xq = self._cache["local_inner"].pieces[ld.index].b
+            t1 = t0 * INNER ** (1.0 / place.e)
+            t1 = t1 * (((xq - ld.center) - ld.center_lo) / ld.xi0 / INNER) ** (1.0 / place.e)
+        return val - series_integral(k, t0, Fh, t1, noise=noise_level(ld))
 
     def _near_place(self, x0, y0):
         """If (x0, y0) is inside the disc where a local series converges fast: (place, t)."""
@@ -615,7 +625,7 @@ class PlaneCurve:
         for P in cands:
             k, t0, Fy, _ = self._place_data(P, None, None)
             e = P.e
-            base_t = x0 ** (-1.0 / e) if ld.kind == "infinity" else (x0 - ld.center) ** (1.0 / e)
+            base_t = x0 ** (-1.0 / e) if ld.kind == "infinity" else ((x0 - ld.center) - ld.center_lo) ** (1.0 / e)
             for j in range(e):
                 t = base_t * np.exp(2j * np.pi * j / e)
                 yv = series_eval(k, t0, Fy, t)
