@@ -9,6 +9,14 @@ and an FFT gives Laurent-Puiseux coefficients of any function or differential th
 numerical tool replaces symbolic Puiseux expansions: it gives the limits of y at every place, the
 local expansions the Baker-Akhiezer construction needs, and the adjoint conditions (no negative
 powers of t in g/f_y dx/dt) that select the holomorphic differentials of a singular curve.
+
+Accuracy next to close critical values (motions near relative equilibria: pairs 1e-4 apart relative
+to their size).  The chart is centred at the exact critical value (its float64 value plus the low part
+from :func:`~thetasol._curve_poly.root_corrections`), the samples are evaluated through the exactly
+shifted polynomial, and f_y is taken at the exact roots (:meth:`CurvePoly.polish_dd`): each of these
+three roundings alone moved the series by ~eps |b| / r, i.e. 1e-12 relative next to a pair.  M = 128
+samples per turn keep the truncation of the series at the sampling circle, where tails of Abel
+integrals into places are summed, below 1e-19 (64 left 2e-10 of the largest term).
 """
 from __future__ import annotations
 
@@ -17,9 +25,12 @@ import sympy as sp
 
 from ._curve_quad import Piece
 
-M_SITE = 64
+# samples per turn.  The circle has radius half the distance to the next critical value, so in the
+# local parameter the series converges like 2^(-k/e) there and the FFT keeps e M / 2 terms: the
+# truncation is ~2^(-M/2) of the largest term.  That is what tails into places are summed with
+# (at t0 itself); M = 64 left ~2e-10 (1e-13 in Abel images of places, 3e-11 next to close pairs).
+M_SITE = 128
 M_INF = 128
-INNER = 0.25  # radius (relative to the sampling circle) where tails into places are summed
 
 
 class LocalData:
@@ -134,15 +145,8 @@ def local_data(curve):
         ld.ys, ld.fys = _accurate_samples(curve, ld.xs, ld.ys, rel, center=b if kind == "critical" else None,
                                           xi=xi, center_lo=blo)
         out.append(ld)
-    # the tail of an Abel integral into a place is summed from its series at |x - b| = INNER r, not
-    # at the sampling circle: next to a close pair of branch points the series in t converges only
-    # like 2^(-k/2) on that circle, and truncating it at k = M/2 would cost ~1e-11; the segment from
-    # the circle to INNER r goes to the quadrature (geometric refinement towards b)
-    inner = [Piece("line", ld.x1, ld.center + INNER * (ld.x1 - ld.center), y1)
-             for ld, y1 in zip(out, tr1.ends) if ld.kind == "critical"]
     curve._cache["local"] = out
     curve._cache["local_lines"] = tr1
-    curve._cache["local_inner"] = curve._tracker.track(inner)
     return out
 
 
@@ -156,7 +160,8 @@ def _accurate_samples(curve, xs, ys, rel, center=None, xi=None, center_lo=0j):
     """
     poly = curve._poly
     if center is not None:
-        if np.finfo(float).eps * abs(center) > 1e-16 * np.min(np.abs(xi)) or center_lo != 0:
+        # (float sample positions b + xi are off by eps |b|: spurious terms ~eps |b| / |xi| in the series)
+        if np.finfo(float).eps * abs(center) > 1e-15 * np.min(np.abs(xi)):
             Chi, Clo = poly.shifted_dd(center, center_lo)
             Ahi, Alo = poly.coeff_polys_dd_local(xi, Chi, Clo)
             Y, fy = poly.polish_dd(Ahi, Alo, ys.T.copy())

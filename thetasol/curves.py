@@ -587,22 +587,15 @@ class PlaneCurve:
         ld = lds[place._site] if place.kind == "critical" else lds[-1]
         ck = ("lines", key)
         if ck not in self._cache:
-            # critical sites come first in local_data, so their index is also the inner piece's
-            self._cache[ck] = (self._cache["local_lines"].integrate(P), self._cache["local_inner"].integrate(P))
-        lines, inner = self._cache[ck]
+            self._cache[ck] = self._cache["local_lines"].integrate(P)
+        lines = self._cache[ck]
         phi = self._potentials(P, key)
-        from ._curve_places import INNER, noise_level
+        from ._curve_places import noise_level
         k, t0, Fy, Fh = self._place_data(place, P, key)
-        val = phi[ld.ref * self.n + place._label] + lines[ld.index][place._label]
-        t1 = t0
-        if place.kind == "critical":
-            # quadrature to INNER r along the ray into b, the series from there; t1 is the local
-            # parameter of the float end point itself (rounding it costs eps |b| |omega|, 1e-13 here)
-            val = val + inner[ld.index][place._label]
-            xq = self._cache["local_inner"].pieces[ld.index].b
-            t1 = t0 * INNER ** (1.0 / place.e)
-            t1 = t1 * (((xq - ld.center) - ld.center_lo) / ld.xi0 / INNER) ** (1.0 / place.e)
-        return val - series_integral(k, t0, Fh, t1, noise=noise_level(ld))
+        # the approach line ends at the float x1 = b + xi0 exactly (xi0 is measured from the exact
+        # critical value), so the series tail starts at the local parameter t0 of that very point
+        tail = series_integral(k, t0, Fh, t0, noise=noise_level(ld))
+        return phi[ld.ref * self.n + place._label] + lines[ld.index][place._label] - tail
 
     def _near_place(self, x0, y0):
         """If (x0, y0) is inside the disc where a local series converges fast: (place, t)."""
