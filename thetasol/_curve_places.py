@@ -9,6 +9,14 @@ and an FFT gives Laurent-Puiseux coefficients of any function or differential th
 numerical tool replaces symbolic Puiseux expansions: it gives the limits of y at every place, the
 local expansions the Baker-Akhiezer construction needs, and the adjoint conditions (no negative
 powers of t in g/f_y dx/dt) that select the holomorphic differentials of a singular curve.
+
+Accuracy next to close critical values (motions near relative equilibria: pairs 1e-4 apart relative
+to their size).  The chart is centred at the exact critical value (its float64 value plus the low part
+from :func:`~thetasol._curve_poly.root_corrections`), the samples are evaluated through the exactly
+shifted polynomial, and f_y is taken at the exact roots (:meth:`CurvePoly.polish_dd`): each of these
+three roundings alone moved the series by ~eps |b| / r, i.e. 1e-12 relative next to a pair.  M = 128
+samples per turn keep the truncation of the series at the sampling circle, where tails of Abel
+integrals into places are summed, below 1e-19 (64 left 2e-10 of the largest term).
 """
 from __future__ import annotations
 
@@ -17,7 +25,11 @@ import sympy as sp
 
 from ._curve_quad import Piece
 
-M_SITE = 64
+# samples per turn.  The circle has radius half the distance to the next critical value, so in the
+# local parameter the series converges like 2^(-k/e) there and the FFT keeps e M / 2 terms: the
+# truncation is ~2^(-M/2) of the largest term.  That is what tails into places are summed with
+# (at t0 itself); M = 64 left ~2e-10 (1e-13 in Abel images of places, 3e-11 next to close pairs).
+M_SITE = 128
 M_INF = 128
 
 
@@ -35,6 +47,8 @@ class LocalData:
         self.ys = ys  # (n, M) indexed by reference labels
         self.perm = perm
         self.cycles = perm_cycles(perm)
+        self.center_lo = 0j  # the exact critical value is center + center_lo
+        self.xi0 = x1 - center  # first sample minus the exact critical value
 
     def place_samples(self, cycle):
         """(t samples, x samples, y samples) of length e*M for the place of this cycle."""
@@ -46,7 +60,7 @@ class LocalData:
         if self.kind == "infinity":
             t0 = self.x1 ** (-1.0 / e)
         else:
-            t0 = (self.x1 - self.center) ** (1.0 / e)
+            t0 = self.xi0 ** (1.0 / e)
         t = t0 * np.exp(2j * np.pi * m / (e * M))
         return t, x, y
 
@@ -118,19 +132,25 @@ def local_data(curve):
         ld.index = p
         rel = tr2.rel[tr2.nodes.offsets[p]:tr2.nodes.offsets[p] + M] if tr2.rel is not None else None
         xi = None
+        blo = 0j
         if kind == "critical":
-            # the FFT assumes samples exactly at b + xi_m, xi_m = (x1 - b) exp(2 pi i m / M)
-            xi = (x1 - b) * np.exp(2j * np.pi * np.arange(M) / M)
-            ld.xs = b + xi
+            # the FFT assumes samples exactly at b + xi_m, xi_m = xi_0 exp(2 pi i m / M), b the exact
+            # critical value (float b plus its low part: the float alone is off by ~eps |b|, which a
+            # close neighbour at distance d turns into errors ~eps |b| / d in the series)
+            blo = complex(curve._sites_lo[k]) if getattr(curve, "_sites_lo", None) is not None else 0j
+            ld.center_lo = blo
+            ld.xi0 = (x1 - b) - blo
+            xi = ld.xi0 * np.exp(2j * np.pi * np.arange(M) / M)
+            ld.xs = b + (blo + xi)
         ld.ys, ld.fys = _accurate_samples(curve, ld.xs, ld.ys, rel, center=b if kind == "critical" else None,
-                                          xi=xi)
+                                          xi=xi, center_lo=blo)
         out.append(ld)
     curve._cache["local"] = out
     curve._cache["local_lines"] = tr1
     return out
 
 
-def _accurate_samples(curve, xs, ys, rel, center=None, xi=None):
+def _accurate_samples(curve, xs, ys, rel, center=None, xi=None, center_lo=0j):
     """Sample values and f_y at them, with compensated (double-double) Newton steps.
 
     With ``center`` b, the samples are taken at exactly b + (xs - b) evaluated through the exactly
@@ -140,8 +160,9 @@ def _accurate_samples(curve, xs, ys, rel, center=None, xi=None):
     """
     poly = curve._poly
     if center is not None:
-        if np.finfo(float).eps * abs(center) > 1e-14 * np.min(np.abs(xi)):
-            Chi, Clo = poly.shifted_dd(center)
+        # (float sample positions b + xi are off by eps |b|: spurious terms ~eps |b| / |xi| in the series)
+        if np.finfo(float).eps * abs(center) > 1e-15 * np.min(np.abs(xi)):
+            Chi, Clo = poly.shifted_dd(center, center_lo)
             Ahi, Alo = poly.coeff_polys_dd_local(xi, Chi, Clo)
             Y, fy = poly.polish_dd(Ahi, Alo, ys.T.copy())
             return Y.T.copy(), fy.T.copy()

@@ -7,6 +7,11 @@ eigenvalues plus a Newton polish, values and derivatives of f and of differentia
 sympy is used only once per curve, for the exact discriminant and its square-free part, so that
 multiple critical values (nodes, cusps, exactly degenerate spectral curves) are recognised
 exactly instead of appearing as clusters of nearly equal floating roots.
+
+The compensated (double-double) evaluations use the coefficients as hi + lo pairs of the exact
+rationals, not their float64 roundings: next to two nearly colliding branch points (relative distance
+d) a relative change eps of the coefficients moves them by ~eps / d and the differentials by
+~eps / d^2 (5e-10 in the periods of a motion near a relative equilibrium, d ~ 2e-4).
 """
 from __future__ import annotations
 
@@ -91,11 +96,18 @@ class CurvePoly:
         self.dx = dx
         self.is_real = all(im == 0 for _, im in exact.values())
         C = np.zeros((dx + 1, n + 1), dtype=complex)
+        Clo = np.zeros_like(C)
         for (i, j), (re, im) in exact.items():
             C[i, j] = float(re) + 1j * float(im)
+            # the rounding error of each coefficient: the compensated evaluations use C + Clo (a
+            # double-double copy of the exact curve); next to nearly colliding branch points the
+            # float64-rounded curve alone moves them by ~eps |b|^2 / distance, i.e. relative errors of
+            # ~eps |b| / distance^2 in the integrands (1e-9 near relative equilibria)
+            Clo[i, j] = float(re - Fraction(C[i, j].real)) + 1j * float(im - Fraction(C[i, j].imag))
         if not np.all(np.isfinite(C)):
             raise ValueError("f has coefficients that overflow float64")
         self.C = C
+        self.Clo = Clo
         self.absC = np.abs(C)
         self.Cx = C[1:, :] * np.arange(1, dx + 1)[:, None] if dx > 0 else np.zeros((1, n + 1), complex)
         self._sympy = None
@@ -230,8 +242,8 @@ class CurvePoly:
         x = np.asarray(x, dtype=complex)
         C = self.C  # (dx + 1, n + 1): coefficient of x^i y^j
         chi = np.broadcast_to(C.T[None, :, :], (len(x),) + C.T.shape)  # (K, n+1, dx+1)
-        zeros = np.zeros_like(chi)
-        hi, lo = comp_horner(chi, zeros, np.broadcast_to(x[:, None], (len(x), self.n + 1)))
+        clo = np.broadcast_to(self.Clo.T[None, :, :], chi.shape)
+        hi, lo = comp_horner(chi, clo, np.broadcast_to(x[:, None], (len(x), self.n + 1)))
         return hi, lo
 
     def polish_dd(self, Ahi, Alo, Y, iters=4):
@@ -241,6 +253,7 @@ class CurvePoly:
         # derivative coefficients (j a_j) in double-double
         dhi, dlo = _two_prod_c(Ahi[:, 1:], jj)
         dlo = dlo + Alo[:, 1:] * jj
+        delta = np.zeros_like(Y)
         for _ in range(iters):
             rh, rl = comp_horner(Ahi[:, None, :], Alo[:, None, :], Y)
             fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
@@ -248,20 +261,35 @@ class CurvePoly:
             with np.errstate(divide="ignore", invalid="ignore"):
                 step = (rh + rl) / fy
             ok = np.isfinite(step) & (np.abs(step) < 0.1 * (np.abs(Y) + 1e-300) + 1e-300)
-            Y = np.where(ok, Y - step, Y)
+            Ynew = np.where(ok, Y - step, Y)
+            # what the float64 root misses of the exact one: (Y - step) - fl(Y - step), exact
+            # subtraction of nearby floats minus the (tiny, accurately known) step
+            delta = np.where(ok, (Y - Ynew) - step, 0)
+            Y = Ynew
             if not np.any(ok & (np.abs(step) > 1e-17 * np.abs(Y))):
                 break
         fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
-        return Y, fh + fl
+        fy = fh + fl
+        # f_y at the exact root, not at its float64 rounding: where two sheets nearly coincide,
+        # f_y changes by f_yy * delta, a relative eps |y| / gap (1e-12 next to close branch points)
+        small = np.abs(delta) <= 1e-10 * (np.abs(Y) + 1e-300)
+        if n > 1 and np.any(small & (delta != 0)):
+            d2 = Ahi[:, 2:] * (jj[1:] * (jj[1:] - 1))
+            fyy = np.broadcast_to(d2[:, -1:], Y.shape).astype(complex)
+            for j in range(d2.shape[1] - 2, -1, -1):
+                fyy = fyy * Y + d2[:, j:j + 1]
+            fy = np.where(small, fy + fyy * delta, fy)
+        return Y, fy
 
-    def shifted_dd(self, b):
-        """Coefficients of F(xi, y) = f(b + xi, y) in double-double: (hi, lo), arrays (dx + 1, n + 1).
+    def shifted_dd(self, b, b_lo=0.0):
+        """Coefficients of F(xi, y) = f(b + b_lo + xi, y) in double-double: (hi, lo), arrays (dx + 1, n + 1).
 
-        The shift is exact (rational arithmetic; b is the exact binary value of a float), so F is
-        evaluated accurately for small xi even where |b| is large against |xi| (a local chart at b).
+        The shift is exact (rational arithmetic; b and b_lo are the exact binary values of floats), so F
+        is evaluated accurately for small xi even where |b| is large against |xi| (a local chart at b;
+        b_lo carries a critical value beyond float64, see :func:`root_corrections`).
         """
-        b = complex(b)
-        br, bi = Fraction(b.real), Fraction(b.imag)
+        b, b_lo = complex(b), complex(b_lo)
+        br, bi = Fraction(b.real) + Fraction(b_lo.real), Fraction(b.imag) + Fraction(b_lo.imag)
         # powers of b as exact complex fractions
         pw = [(Fraction(1), Fraction(0))]
         for _ in range(self.dx):
@@ -422,6 +450,35 @@ def polynomial_roots(P) -> np.ndarray:
             r = np.where(np.abs(step) < 1e-6 * (np.abs(r) + sep), r - step, r)
         return r
     return _mp_polyroots(coef, deg)
+
+
+def root_corrections(P, r) -> np.ndarray:
+    """r_true - r for float roots r of the exact polynomial P (sympy Poly): the low parts of the roots.
+
+    A float64 root is off by up to eps |r| / 2 however well it is computed; next to another root at
+    distance d the local series centred there then carry relative errors ~ eps |r| / d (1e-12 next to
+    the close pairs of branch points of motions near relative equilibria).  One Newton step with a
+    compensated residual (coefficients in double-double) gives the remainder to ~eps times the
+    float root's own error bound; the local charts add it back.
+    """
+    r = np.asarray(r, dtype=complex)
+    if len(r) == 0 or P.degree() <= 0:
+        return np.zeros(len(r), complex)
+    coef = _poly_to_fracs(P)
+    mags = [max(abs(a), abs(b)) for a, b in coef]
+    big = max(m for m in mags if m != 0)
+    sh = big.numerator.bit_length() - big.denominator.bit_length()
+    fac = Fraction(1, 2**sh) if sh >= 0 else Fraction(2**(-sh), 1)
+    asc = [(a * fac, b * fac) for a, b in coef][::-1]
+    hi = np.array([complex(float(a), float(b)) for a, b in asc])
+    lo = np.array([complex(float(a - Fraction(h.real)), float(b - Fraction(h.imag))) for (a, b), h in zip(asc, hi)])
+    ph, pl = comp_horner(hi, lo, r)
+    dh, dl = comp_horner(*_two_prod_c(hi[1:], np.arange(1, len(hi))), r)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d = -(ph + pl) / (dh + dl)
+    # a correction is meaningful only at the rounding level of the float root
+    ok = np.isfinite(d) & (np.abs(d) <= 1e-12 * (np.abs(r) + 1e-300))
+    return np.where(ok, d, 0)
 
 
 def _mp_polyroots(coef, deg):

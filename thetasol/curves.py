@@ -23,7 +23,7 @@ import numpy as np
 import sympy as sp
 
 from ._curve_places import perm_cycles
-from ._curve_poly import CurvePoly, polynomial_roots
+from ._curve_poly import CurvePoly, polynomial_roots, root_corrections
 from ._curve_quad import Piece, Tracker
 from ._homology import LiftedGraph, symplectic_basis
 from ._paths import CellGraph
@@ -157,6 +157,7 @@ class PlaneCurve:
         F, disc_factors, disc = self._poly.critical_polynomial()
         self._disc_factors = disc_factors
         self._sites = polynomial_roots(F)
+        self._sites_lo = root_corrections(F, self._sites)  # exact critical value = _sites + _sites_lo
         self._graph = CellGraph(self._sites, _extra_sites)
         from ._curve_mp import ExactEvaluator
         self._exact = ExactEvaluator(self._poly)
@@ -591,6 +592,8 @@ class PlaneCurve:
         phi = self._potentials(P, key)
         from ._curve_places import noise_level
         k, t0, Fy, Fh = self._place_data(place, P, key)
+        # the approach line ends at the float x1 = b + xi0 exactly (xi0 is measured from the exact
+        # critical value), so the series tail starts at the local parameter t0 of that very point
         tail = series_integral(k, t0, Fh, t0, noise=noise_level(ld))
         return phi[ld.ref * self.n + place._label] + lines[ld.index][place._label] - tail
 
@@ -615,7 +618,7 @@ class PlaneCurve:
         for P in cands:
             k, t0, Fy, _ = self._place_data(P, None, None)
             e = P.e
-            base_t = x0 ** (-1.0 / e) if ld.kind == "infinity" else (x0 - ld.center) ** (1.0 / e)
+            base_t = x0 ** (-1.0 / e) if ld.kind == "infinity" else ((x0 - ld.center) - ld.center_lo) ** (1.0 / e)
             for j in range(e):
                 t = base_t * np.exp(2j * np.pi * j / e)
                 yv = series_eval(k, t0, Fy, t)
