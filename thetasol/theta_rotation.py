@@ -59,7 +59,7 @@ import numpy as np
 import sympy as sp
 
 from ._adapted_basis import real_flow_basis
-from ._lax import eigenvector_poles, lax_matrix, right_eigenvector
+from ._lax import eigenvector_poles, lax_matrix, polish_eigenvector_poles, right_eigenvector
 from ._theta_flow import FlowTheta
 from ._so3 import hat, polar_orthonormalize, vee
 from .equations import inertia_from_moments, invariants as _invariants
@@ -99,8 +99,8 @@ def _choose_alpha(X: np.ndarray) -> np.ndarray:
 
 
 def _abel_friendly_divisor(Jp, M, u, alpha, bp, degree):
-    """Pole divisor (E, w) of the eigenvector for the normalization vector, among alpha and random
-    ones, whose points are farthest from the branch points and all within 10 |bp|max of E = 0."""
+    """Pole divisor (E, w, alpha') of the eigenvector for the normalization vector alpha', among alpha
+    and random ones, whose points are farthest from the branch points and all within 10 |bp|max of E = 0."""
     R = float(np.abs(bp).max())
     rng = np.random.default_rng(20240602)
     best, score = None, -np.inf
@@ -110,7 +110,7 @@ def _abel_friendly_divisor(Jp, M, u, alpha, bp, degree):
             continue
         sc = np.min(np.abs(E[:, None] - bp[None, :])) / R if np.abs(E).max() <= 10.0 * R else -1.0
         if sc > score:
-            best, score = (E, w), sc
+            best, score = (E, w, c), sc
     if best is None:
         raise RuntimeError("no normalization vector gives a finite eigenvector divisor")
     return best
@@ -500,15 +500,21 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         # A(D0) does not depend on alpha (the pole divisors for two alphas differ by the divisor of
         # <alpha', v> / <alpha, v>): take it from an alpha whose divisor keeps away from the branch
         # points and from infinity, where Abel images lose accuracy.
-        D_E, D_w = _abel_friendly_divisor(Jp, M, u, alpha, np.asarray(curve.branch_points), g + 2)
+        D_E, D_w, D_alpha = _abel_friendly_divisor(Jp, M, u, alpha, np.asarray(curve.branch_points), g + 2)
     else:
-        D_E, D_w = Ed, wd
+        D_E, D_w, D_alpha = Ed, wd, alpha
     # zeros of the eigenvector components v_k (alpha = e_k; for a symmetric body the components in
     # B, alpha = conj(b_k)): the places where psi_k vanishes
-    comp_zeros = [eigenvector_poles(Jp, M, u, Bc[:, k] if curve.symmetric_body else np.eye(3)[k])
-                  for k in range(3)]
+    comp_alpha = [Bc[:, k] if curve.symmetric_body else np.eye(3)[k] for k in range(3)]
+    comp_zeros = [eigenvector_poles(Jp, M, u, al) for al in comp_alpha]
     R = float(np.abs(curve.branch_points).max())
     use_zeros = [curve.node is None and len(Ez) == g and np.abs(Ez).max() <= 10.0 * R for Ez, _ in comp_zeros]
+    # np.roots leaves the points a few ulps off: next to a tight pair of branch points (near a relative
+    # equilibrium) that moved their Abel images by up to 6e-11
+    D_E, D_w = polish_eigenvector_poles(Jp, M, u, D_alpha, D_E, D_w)
+    for k in range(3):
+        if use_zeros[k]:
+            comp_zeros[k] = polish_eigenvector_poles(Jp, M, u, comp_alpha[k], *comp_zeros[k])
     # one Abel-map call for D0, the places over E = 0 and the zeros used (the paths are planned together)
     batch = [(complex(x), complex(y)) for x, y in zip(D_E, D_w)] + list(P0)
     for (Ez, wz), use in zip(comp_zeros, use_zeros):
