@@ -72,6 +72,10 @@ __all__ = ["ThetaRotation"]
 #: Relative size below which a near-degeneracy of the data is snapped to an exact one.  At 1e-12
 #: the change of the data moves the trajectory by less than the float64 conditioning at t ~ 1e3.
 SNAP_TOL = 1e-12
+#: Nearly degenerate data refused at once (measured limits, docs/theta_rotation.md): a symmetric body's
+#: axial spin relative to |omega0| + sqrt|a|, and the relative gap of two principal second moments.
+MIN_AXIAL_SPIN = 1e-3
+MIN_J_GAP = 2e-8
 #: Points on the circles of the Cauchy means, and Gauss-Legendre nodes on their radii.
 N_CIRCLE = 32
 N_RAY = 16
@@ -430,6 +434,22 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
                 "symmetric body without spin about its symmetry axis: the two places over E = infinity "
                 "touch (a tacnode; the axis moves as in Neumann's problem, genus 2), which is not "
                 "implemented; use thetasol.integrate_rotation")
+        if abs(spin) < MIN_AXIAL_SPIN * scale:
+            # branch points run off to |E| ~ 1 / spin: the set-up failed from relative spin 8e-4 and
+            # took minutes at 4e-5 (measured), so refuse at once
+            raise ClosedFormUnavailable(
+                f"symmetric body with little spin about its symmetry axis ({abs(spin) / scale:.1e} of "
+                f"|omega0| + sqrt|a|, below {MIN_AXIAL_SPIN:g}): the spectral curve is near a tacnode over "
+                "E = infinity (Neumann's problem); use thetasol.integrate_rotation")
+    else:
+        gap = float(np.min(np.diff(Jp))) / Jp[-1]
+        if gap < MIN_J_GAP:
+            # branch points at |E| ~ 1 / gap: at 5e-9 the curve is numerically singular, below it the
+            # construction took minutes (measured); 5e-8 is solved to 1e-12
+            raise ClosedFormUnavailable(
+                f"nearly symmetric body (two principal second moments {gap:.1e} apart relative, above the "
+                f"snapping tolerance {SNAP_TOL:g} and below {MIN_J_GAP:g}): the spectral curve has branch "
+                "points near |E| ~ 1 / gap, out of the curve engine's reach; use thetasol.integrate_rotation")
     curve = spectral_curve(np.diag(Jp), hat(Ip @ w0p), -(Q0p.T @ a @ Q0p), tol=SNAP_TOL)
     M, u = curve.M, curve.u
     W0 = hat(w0p - spin * np.eye(3)[axis]) if axis is not None else hat(w0p)
