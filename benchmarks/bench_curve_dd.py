@@ -53,16 +53,6 @@ def _capture(name):
     return calls
 
 
-def _seeds(tr, crit):
-    tstart = np.concatenate([[0], np.cumsum([len(pc.y0) for pc in tr.pieces])])
-    out = []
-    for p, k, (lo, hi, N) in crit:
-        m = len(tr.pieces[p].y0)
-        rows = np.arange(k, k + N)
-        out.append(tr.R[rows[None, :], tr.choice[tstart[p]:tstart[p] + m, rows - tr.nodes.offsets[p]]])
-    return out
-
-
 def _mp_sums(tr, exact, crit, seeds, dps):
     with mpmath.workdps(dps + 10):
         nums = numerators_mp(exact, dps + 10)
@@ -94,7 +84,7 @@ def run(names):
         prep = []
         for tr, exact, crit in calls:
             poly = tr.tracker.poly
-            prep.append((tr, exact, crit, _seeds(tr, crit), exact_to_cdd(poly.exact, (poly.n + 1, poly.dx + 1)),
+            prep.append((tr, exact, crit, tr.interval_seeds(crit), exact_to_cdd(poly.exact, (poly.n + 1, poly.dx + 1)),
                          numerators_to_cdd(exact)))
         t_dd, dd = best_of(lambda: [intervals_dd(tr.pieces, crit, s, C, B, rounded=False)
                                     for tr, _, crit, s, C, B in prep], repeat=3)

@@ -69,21 +69,11 @@ def critical_call():
     return calls[0]
 
 
-def _seeds(tr, crit):
-    tstart = np.concatenate([[0], np.cumsum([len(pc.y0) for pc in tr.pieces])])
-    out = []
-    for p, k, (lo, hi, N) in crit:
-        m = len(tr.pieces[p].y0)
-        rows = np.arange(k, k + N)
-        out.append(tr.R[rows[None, :], tr.choice[tstart[p]:tstart[p] + m, rows - tr.nodes.offsets[p]]])
-    return out
-
-
 def test_dd_interval_sums_match_mpmath(critical_call):
     """Unrounded double-double sums equal 30-digit mpmath sums to 1e-25 relative, interval by interval."""
     tr, exact, crit = critical_call
     poly = tr.tracker.poly
-    seeds = _seeds(tr, crit)
+    seeds = tr.interval_seeds(crit)
     dd = intervals_dd(tr.pieces, crit, seeds, exact_to_cdd(poly.exact, (poly.n + 1, poly.dx + 1)),
                       numerators_to_cdd(exact), rounded=False)
     worst = 0.0
@@ -104,7 +94,7 @@ def test_dd_interval_sums_match_mpmath(critical_call):
 def test_dd_root_leaving_its_sheet_is_refused(critical_call):
     tr, exact, crit = critical_call
     poly = tr.tracker.poly
-    seeds = _seeds(tr, crit[:1])
+    seeds = tr.interval_seeds(crit[:1])
     seeds[0] = seeds[0] * (1 + 1e-2)
     with pytest.raises(ValueError, match="moved away from its sheet"):
         intervals_dd(tr.pieces, crit[:1], seeds, exact_to_cdd(poly.exact, (poly.n + 1, poly.dx + 1)),

@@ -632,6 +632,13 @@ class Tracked:
         if circ:  # no double-double parametrization (never planned for quadrature so far)
             out = self._add_mp(out, exact, circ)
             crit = [c for c in crit if self.pieces[c[0]].kind in ("line", "point", "inf")]
+        parts = intervals_dd(self.pieces, crit, self.interval_seeds(crit), tr._curve_cdd, numerators_to_cdd(exact))
+        for (p, k, _), part in zip(crit, parts):
+            out[p] = out[p] + part
+        return out
+
+    def interval_seeds(self, crit) -> list:
+        """Float roots at the nodes of each critical interval, one row per track: (m, N) arrays."""
         tstart = np.concatenate([[0], np.cumsum([len(pc.y0) for pc in self.pieces])])
         seeds = []
         for p, k, (lo, hi, N) in crit:
@@ -639,32 +646,18 @@ class Tracked:
             rows = np.arange(k, k + N)
             ch = self.choice[tstart[p]:tstart[p] + m, rows - self.nodes.offsets[p]]
             seeds.append(self.R[rows[None, :], ch])
-        parts = intervals_dd(self.pieces, crit, seeds, tr._curve_cdd, numerators_to_cdd(exact))
-        for (p, k, _), part in zip(crit, parts):
-            out[p] = out[p] + part
-        return out
+        return seeds
 
     def _add_mp(self, out, exact, crit):
         """mpmath (20 digits) version of :meth:`_add_dd`: the reference of tests and benchmarks."""
         import mpmath
 
         from ._curve_mp import interval_mp, numerators_mp
-        nodes = self.nodes
         ev = self.tracker.exact
         dps = 20
         with mpmath.workdps(dps + 10):
             nums = numerators_mp(exact, dps + 10)
-            tstart = {}
-            pos = 0
-            for p, pc in enumerate(self.pieces):
-                tstart[p] = pos
-                pos += len(pc.y0)
-            for p, k, (lo, hi, N) in crit:
-                pc = self.pieces[p]
-                m = len(pc.y0)
-                rows = np.arange(k, k + N)
-                ch = self.choice[tstart[p]:tstart[p] + m, rows - nodes.offsets[p]]
-                seeds = self.R[rows[None, :], ch]
-                part = interval_mp(pc, lo, hi, N, seeds, ev, nums, dps)
+            for (p, k, (lo, hi, N)), seeds in zip(crit, self.interval_seeds(crit)):
+                part = interval_mp(self.pieces[p], lo, hi, N, seeds, ev, nums, dps)
                 out[p] = out[p] + np.array([[complex(v) for v in row] for row in part])
         return out
