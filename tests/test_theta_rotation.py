@@ -65,13 +65,12 @@ def test_integrals_4_13_are_constant_on_the_theta_solution(name):
     t = np.concatenate([np.linspace(0, 50, 401), [997.0, 4002.0, 1e5, 1e6]])
     w, Q = sol(t)
     inv = invariants(J, a, Q, w)
-    # float64 resolves the phases t u to eps |t u|: the bound grows like eps t at far times
-    bound = np.maximum(1e-10, 1e-14 * t)
+    # measured <= 6.6e-13 up to t = 1e6 (the phases t u are reduced mod 1 before theta is summed)
     for key in ("energy", "I2", "I3"):
         v = inv[key]
-        assert np.all(np.abs(v - v[0]) <= bound * (1 + abs(v[0]))), key
+        assert np.abs(v - v[0]).max() <= 1e-10 * (1 + abs(v[0])), key
     C = inv["curve"]
-    assert np.all(np.abs(C - C[0]).max(axis=(1, 2)) <= bound * (1 + np.abs(C[0]).max()))
+    assert np.abs(C - C[0]).max() <= 1e-10 * (1 + np.abs(C[0]).max())
 
 
 def test_linear_flow_velocity_is_the_drift_of_the_eigenvector_divisor():
@@ -282,8 +281,9 @@ def test_symmetric_body_with_little_axial_spin_is_refused_at_once():
 
 @pytest.mark.parametrize("seed", range(4))
 def test_random_symmetric_bodies_against_dop853(seed):
-    """Random symmetric bodies (either axis, random a, attitude, spin): measured worst 3.7e-11 on 16
-    such cases at t <= 40 against DOP853 at rtol 1e-13, whose own error is of that size."""
+    """Random symmetric bodies (either axis, random a, attitude, spin).  Measured on these four at
+    t <= 40: 7.5e-14..1.2e-12 from DOP853 at rtol 1e-13, 1.5e-14..1.7e-13 from heyoka 80-bit (and
+    worst 3.7e-11 from DOP853 on 16 other random cases)."""
     from thetasol._so3 import rodrigues
 
     rng = np.random.default_rng([2026, seed])
@@ -297,4 +297,4 @@ def test_random_symmetric_bodies_against_dop853(seed):
     t = np.array([0.0, 1.3, 7.7, 40.0])
     w, Q = sol(t)
     wr, Qr = integrate_rotation(J, a, Q0, w0, t, rtol=1e-13)
-    assert max(np.abs(w - wr).max(), np.abs(Q - Qr).max()) <= 1e-9
+    assert max(np.abs(w - wr).max(), np.abs(Q - Qr).max()) <= 1e-10

@@ -61,8 +61,6 @@ class FlowTheta:
         self.Dd = D * (2j * math.pi * (self.modes @ u))[None, :]
         self.u = u
         self.r = r
-        self.tau = tau
-        self.shifts = shifts
 
     def __call__(self, t: np.ndarray, derivative: bool = True):
         """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv."""

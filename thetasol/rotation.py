@@ -192,8 +192,9 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     RuntimeWarning
         The theta-function set-up lost accuracy (``|Im Phi(0, t)|`` above 1e-8 at ``t = 1000``,
         the size is stated): errors of that size are to be expected.  The check cannot see an
-        error of the torus position along the real torus: near an unstable relative equilibrium
-        errors up to ~1e-8 at ``t ~ 1e3`` were measured without it (docs/theta_rotation.md).
+        error of the torus position along the real torus (near an unstable relative equilibrium
+        1.5e-8 went unseen before the curve engine's fix for clustered branch points; 1.1e-9, the
+        data's own conditioning, after it: docs/theta_rotation.md).
 
     Examples
     --------

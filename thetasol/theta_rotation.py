@@ -61,7 +61,7 @@ import sympy as sp
 from ._adapted_basis import real_flow_basis
 from ._lax import eigenvector_poles, lax_matrix, polish_eigenvector_poles, right_eigenvector
 from ._theta_flow import FlowTheta
-from ._so3 import hat, polar_orthonormalize, vee
+from ._so3 import hat, polar_orthonormalize, rotation_about, vee
 from .equations import inertia_from_moments, invariants as _invariants
 from .rotation import ClosedFormUnavailable, RotationSolution
 from .spectral import spectral_curve
@@ -194,12 +194,7 @@ class ThetaRotation(RotationSolution):
         if self._c["axis"] is not None:
             # back from the frame turning at -spin about the symmetry axis: Q = Q~ R^T, omega = R omega~ + spin e
             ax, spin = self._c["axis"], self._c["spin"]
-            i, j = [k for k in range(3) if k != ax]
-            ang = spin * t
-            c, s = np.cos(ang), np.sin(ang)
-            R = np.zeros(t.shape + (3, 3))
-            R[..., ax, ax] = 1.0
-            R[..., i, i], R[..., j, j], R[..., i, j], R[..., j, i] = c, c, s, -s   # R(t) = exp(-spin t hat(e))
+            R = rotation_about(ax, -spin * t)                  # R(t) = exp(-spin t hat(e))
             Qp = Qp @ np.swapaxes(R, -1, -2)
             wp = np.einsum("nij,nj->ni", R, wp)
             wp[..., ax] += spin
@@ -429,18 +424,15 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         # third-kind singularity there (docs/theta_rotation.md).
         spin = float(w0p[axis])
         scale = np.linalg.norm(w0p) + np.sqrt(np.abs(np.linalg.eigvalsh(a)).max())
-        if abs(spin) <= SNAP_TOL * scale:
-            raise ClosedFormUnavailable(
-                "symmetric body without spin about its symmetry axis: the two places over E = infinity "
-                "touch (a tacnode; the axis moves as in Neumann's problem, genus 2), which is not "
-                "implemented; use thetasol.integrate_rotation")
         if abs(spin) < MIN_AXIAL_SPIN * scale:
-            # branch points run off to |E| ~ 1 / spin: the set-up failed from relative spin 8e-4 and
-            # took minutes at 4e-5 (measured), so refuse at once
+            # Without spin the two places over E = infinity touch (a tacnode, genus 2: not
+            # implemented); for a small spin branch points run off to |E| ~ 1 / spin: the set-up
+            # failed from relative spin 8e-4 and took minutes at 4e-5 (measured), so refuse at once.
             raise ClosedFormUnavailable(
-                f"symmetric body with little spin about its symmetry axis ({abs(spin) / scale:.1e} of "
-                f"|omega0| + sqrt|a|, below {MIN_AXIAL_SPIN:g}): the spectral curve is near a tacnode over "
-                "E = infinity (Neumann's problem); use thetasol.integrate_rotation")
+                f"symmetric body with little spin (or none) about its symmetry axis ({abs(spin) / scale:.1e} of "
+                f"|omega0| + sqrt|a|, below {MIN_AXIAL_SPIN:g}): the spectral curve is at or near a tacnode "
+                "over E = infinity (the axis moves as in Neumann's problem, genus 2), which is not "
+                "implemented; use thetasol.integrate_rotation")
     else:
         gap = float(np.min(np.diff(Jp))) / Jp[-1]
         if gap < MIN_J_GAP:
@@ -489,12 +481,10 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         for Pl, m in zip(_match_branches(curve, branches, mu), mu):
             Pl._slope = m
     P0_reg = [Pl for Pl in P0 if getattr(Pl, "_slope", None) is None]
-    # canonical divisor of E dE / f_w: simple zeros at the regular places over E = 0 (none at the
-    # node's branches), and at the places at infinity the order their expansions show
-    # Abel images at infinity are avoided where possible: for a nearly symmetric body the places
-    # inf_1, inf_2 sit in a cluster of branch points and their images came out 1e-10 off.  With
-    # distinct J and no node, E^2 dE / f_w is holomorphic and non-zero at infinity, so its divisor
-    # 2 (P_1 + P_2 + P_3) lies over E = 0 (regular places, far from the branch points).
+    # Canonical divisor for K.  Abel images at infinity are avoided where possible (for a nearly
+    # symmetric body inf_1, inf_2 sit in a cluster of branch points): with distinct J and no node,
+    # E^2 dE / f_w is holomorphic and non-zero at infinity, so its divisor 2 (P_1 + P_2 + P_3) lies
+    # over E = 0, at regular places far from the branch points.
     far = curve.node is None and not curve.symmetric_body
     if far:
         canon = {Pl: 2 for Pl in P0_reg}
@@ -763,8 +753,8 @@ def _solve_theta_rotation(J, a, Q0, omega0, dps=None) -> ThetaRotation:
                         curve=curve, basis=consts["G"], riemann_matrix=tau, U=U, abel_divisor=AD0,
                         alpha=alpha, _c=consts)
     # Phi(0, t) is real: its imaginary part at a far time bounds what the set-up lost (it runs
-    # 1e-13..1e-9 at t = 1000 on accurate solutions, 3e-7 where a nearly symmetric body's spectral
-    # data came out 1e-7 off).
+    # 1e-13..1e-9 at t = 1000 on accurate solutions; it was 3e-7 where a nearly symmetric body's
+    # spectral data came out 1e-7 off, before the engine's fix for clustered branch points).
     res = float(sol.imaginary_residual(np.array([1000.0]))[0])
     inv["imaginary_residual_t1000"] = res
     if res > 1e-8:
