@@ -38,7 +38,8 @@ Degenerate data (only what the scene needs)
 * ``a`` with a repeated eigenvalue (the gravity gradient of Section 7): the curve has a node at
   ``E = 0`` and the same construction runs on its genus-3 normalization, the node's two branches
   taking the place of two of the points over ``E = 0``.
-* ``a`` isotropic or zero: no torque; :func:`thetasol.solve_rotation` uses the Euler top instead.
+* ``a`` isotropic or zero, or a spherical body: no torque; :func:`thetasol.solve_rotation` uses the
+  Euler top instead.
 * a symmetric body (two equal ``J_i``): the spin about the symmetry axis is an integral and the
   curve has a node over ``E = infinity``.  In the frame turning at ``-spin`` about the axis
   (``Q~ = Q R(t)``, ``omega~ = R^T omega - spin e``) the Lax equation keeps its form and ``omega~``
@@ -46,8 +47,9 @@ Degenerate data (only what the scene needs)
   branches: the construction runs on the genus-3 normalization (genus 2 with a rank-one ``a``)
   with ``B`` the eigenvectors ``(e1 +- i e2) / sqrt 2`` of ``M`` at the node, and
   ``Q = Q~ R(t)^T``, ``omega = R omega~ + spin e``.  Without axial spin the branches touch
-  (a tacnode; the axis moves as in Neumann's problem): not handled (ClosedFormUnavailable), and
-  the set-up fails for small axial spin.
+  (a tacnode; the axis moves as in Neumann's problem): not handled.  A spin below
+  ``MIN_AXIAL_SPIN`` of ``|omega0| + sqrt|a|`` is refused at once (ClosedFormUnavailable); up to a
+  few times that the set-up may still fail, and says so.
 """
 from __future__ import annotations
 
