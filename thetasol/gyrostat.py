@@ -419,6 +419,26 @@ def _algebra_at(Ip, n, m0, dps, exact=False):
 
 # -- the generic (elliptic) motion ------------------------------------------------------------
 
+def _adaptive_series(coeffs, nmax, what, why=""):
+    """``coeffs(n)``, the series of ``psi'`` from ``n`` samples, for ``n = 64, 128, ...`` until
+    its tail (the last quarter of the coefficients) reaches round-off or stops decreasing (the
+    samples' own rounding noise), at most ``nmax`` samples.  Returns the coefficients and the
+    tail relative to the largest; a tail above 1e-9 raises :class:`NotImplementedError`."""
+    n, prev = 64, np.inf
+    while True:
+        c = coeffs(n)
+        scale = np.max(np.abs(c))
+        tail = np.max(np.abs(c[3 * len(c) // 4:]))
+        if tail <= 4 * _EPS * scale or (tail > 0.5 * prev and tail < 1e-11 * scale) or n >= nmax:
+            break
+        prev = tail
+        n *= 2
+    if tail / scale > 1e-9:
+        raise NotImplementedError(f"solve_gyrostat: the precession angle's {what} does not converge "
+                                  f"(tail {tail / scale:.1e}{why})")
+    return c, tail / scale
+
+
 def _cheb_nodes(n):
     return np.cos(np.pi * (np.arange(n) + 0.5) / n)
 
@@ -570,6 +590,25 @@ class _Elliptic:
         else:
             self.phase_error = 4 * _EPS * self.T * np.max(hdot) / scale
 
+    def reanchored(self, ta, dps=None):
+        """The same orbit with the pencil anchored at time ``ta``, at the point this closed form
+        gives there in mpmath (not rounded: the curve stays the data's to the working precision)."""
+        ma = self.momentum_mp(float(ta), as_mp=True)
+        return _Elliptic(self.Ip, self.n, np.array([float(x) for x in ma]), self.P, t_anchor=float(ta),
+                         m0_mp=ma, dps=self.mpc["dps"], Ip_exact=self.Ip_exact)
+
+    def gives_back(self, mq) -> bool:
+        """m(0) in mpmath equals the exact data ``mq`` to 1e-20 min(m, mc) (an exactly degenerate
+        orbit: to the working precision less 40 digits)."""
+        import mpmath as mp
+
+        dps = self.mpc["dps"]
+        with mp.workdps(dps):
+            back = self.momentum_mp(0.0, as_mp=True)
+            mis = max(abs(back[k] - _mpq(mp, mq[k])) for k in range(3)) / max(abs(_mpq(mp, x)) for x in mq)
+            small = min(self.mpc["m"], self.mpc["mc"])
+            return mis <= (mp.mpf(10) ** -20 * small if small > 0 else mp.mpf(10) ** (40 - dps))
+
     def anchor_is_slow(self) -> bool:
         """h(0) is much slower than the fast part of the orbit (next to a saddle)."""
         v0, v = self.speed(np.array([self.t_anchor]))[0], self.speed(self.orbit_times(64))
@@ -691,22 +730,13 @@ class _Elliptic:
 
     def _fourier(self):
         """Fourier coefficients of psi' over one period, doubling the sampling until the tail
-        reaches round-off or stops decreasing (the samples' own rounding noise)."""
-        n, prev = 64, np.inf
-        while True:
-            ts = np.arange(n) * (self.T / n)
-            f = self._psidot_d(self._dW(ts)[0])
-            c = np.fft.rfft(f) / n
-            scale = np.max(np.abs(c))
-            tail = np.max(np.abs(c[3 * len(c) // 4:]))
-            if tail <= 4 * _EPS * scale or (tail > 0.5 * prev and tail < 1e-11 * scale) or n >= 2 ** 17:
-                break
-            prev = tail
-            n *= 2
-        self.fourier_tail = tail / scale
-        if self.fourier_tail > 1e-9:
-            raise NotImplementedError("solve_gyrostat: the precession angle's Fourier series does not "
-                                      f"converge (tail {self.fourier_tail:.1e}; orbit too close to a separatrix)")
+        reaches round-off or stops decreasing (see :func:`_adaptive_series`)."""
+
+        def coeffs(n):
+            return np.fft.rfft(self._psidot_d(self._dW(np.arange(n) * (self.T / n))[0])) / n
+
+        c, self.fourier_tail = _adaptive_series(
+            coeffs, 2 ** 17, "Fourier series", "; orbit too close to a separatrix")
         self.nu = c[0].real
         Om = 2 * np.pi / self.T
         k = np.arange(1, len(c) - 1)
@@ -722,25 +752,14 @@ class _Elliptic:
         off, adaptive), less nu and its linear part at +-1 (the rounding of psi' at the saddle),
         is divided exactly by 1 - s^2 and integrated term by term."""
         C = np.polynomial.chebyshev
-        n, prev = 64, np.inf
-        while True:
-            s = _cheb_nodes(n)
-            u = np.arctanh(s)
-            f = self._psidot_d(self._dW_u(u, 0 * u)[0])
-            c = _dct2(f)
-            scale = np.max(np.abs(c))
-            tail = np.max(np.abs(c[3 * n // 4:]))
-            if tail <= 4 * _EPS * scale or (tail > 0.5 * prev and tail < 1e-11 * scale) or n >= 2 ** 14:
-                break
-            prev = tail
-            n *= 2
-        self.fourier_tail = tail / scale
-        if self.fourier_tail > 1e-9:
-            raise NotImplementedError("solve_gyrostat: the precession angle's Chebyshev series on the "
-                                      f"separatrix does not converge (tail {self.fourier_tail:.1e})")
+
+        def coeffs(n):
+            u = np.arctanh(_cheb_nodes(n))
+            return _dct2(self._psidot_d(self._dW_u(u, 0 * u)[0]))
+
+        c, self.fourier_tail = _adaptive_series(coeffs, 2 ** 14, "Chebyshev series on the separatrix")
         p1, m1 = C.chebval(1.0, c), C.chebval(-1.0, c)
         self.nu = 0.5 * (p1 + m1)
-        c = c.copy()
         c[0] -= self.nu
         c[1] -= 0.5 * (p1 - m1)
         q, _ = C.chebdiv(c, [0.5, 0.0, -0.5])  # 1 - s^2 = (T0 - T2) / 2
@@ -880,6 +899,32 @@ class _Delegate:
         return self.sol._omega(t)
 
 
+def _reanchor(impl, mq):
+    """``impl`` (anchored at the data, ``mq`` exactly) re-anchored at a fast point of its orbit
+    where the torsion does not vanish.
+
+    Of the fastest candidates the first with a non-degenerate anchor is taken; on a nearly
+    planar orbit (next to a separatrix of a nearly torque-free body, the torsion small
+    everywhere) the least degenerate, and the error estimate says what is lost.  The new anchor
+    came from the old pencil, whose mpmath evaluation loses digits where that pencil is
+    degenerate (15-20 were seen), and next to a separatrix the phase amplifies an error in the
+    anchor by ~1/mc: unless the new pencil gives back the data at t = 0
+    (:meth:`_Elliptic.gives_back`), both are redone with twice the digits."""
+    best = None
+    for ta in impl.anchor_candidates()[:6]:
+        new = impl.reanchored(ta)
+        if not new.anchor_is_degenerate():
+            best = new
+            break
+        if best is None or new.torsion_ratio() > best.torsion_ratio():
+            best = new
+    while not best.gives_back(mq) and best.mpc["dps"] <= 4000:
+        first = _Elliptic(impl.Ip, impl.n, impl.m0, impl.P, m0_mp=mq, Ip_exact=impl.Ip_exact,
+                          dps=2 * best.mpc["dps"])
+        best = first.reanchored(best.t_anchor)
+    return best
+
+
 # -- entry point -------------------------------------------------------------------------------
 
 def solve_gyrostat(J, N, Q0, omega0) -> GyrostatSolution:
@@ -996,46 +1041,8 @@ def solve_gyrostat(J, N, Q0, omega0) -> GyrostatSolution:
         # the orbit meets the osculating plane again; and a slow point (next to a saddle),
         # whose tangent line passes close to the saddle, so that the pencil angle resolves the
         # points around the saddle, where the orbit lingers, only to eps / (distance), and the
-        # Weierstrass form is based at a nearly double root.  Re-anchor at a fast point of the
-        # orbit, given there by the closed form in mpmath (not rounded: the curve stays the
-        # data's to the working precision).
-        best = None
-        for ta in impl.anchor_candidates()[:6]:
-            ma = impl.momentum_mp(float(ta), as_mp=True)
-            new = _Elliptic(Ip, n, np.array([float(x) for x in ma]), R, t_anchor=float(ta),
-                            m0_mp=ma, dps=impl.mpc["dps"], Ip_exact=Iq)
-            if not new.anchor_is_degenerate():
-                best = new
-                break
-            # (a nearly planar orbit, next to a separatrix of a nearly torque-free body: the
-            # torsion is small everywhere; the least degenerate anchor is kept, and the error
-            # estimate says what is lost)
-            if best is None or new.torsion_ratio() > best.torsion_ratio():
-                best = new
-        # The new anchor came from the old pencil, whose mpmath evaluation loses digits where
-        # that pencil is degenerate (15-20 were seen); next to a separatrix the phase amplifies
-        # an error in the anchor by ~1/mc.  Check that the new pencil gives back the data at
-        # t = 0 to 1e-20 min(m, mc) (exactly degenerate orbits: to the working precision, less
-        # 40 digits); else redo both with twice the digits.
-        dps = best.mpc["dps"]
-        while True:
-            import mpmath as mp
-
-            with mp.workdps(dps):
-                back = best.momentum_mp(0.0, as_mp=True)
-                mis = max(abs(back[k] - _mpq(mp, mq[k])) for k in range(3)) / max(abs(_mpq(mp, x)) for x in mq)
-                small = min(best.mpc["m"], best.mpc["mc"])
-                ok = mis <= (mp.mpf(10) ** -20 * small if small > 0 else mp.mpf(10) ** (40 - dps))
-            if ok or dps > 4000:
-                break
-            dps *= 2
-            first = _Elliptic(Ip, n, m, R, m0_mp=mq, Ip_exact=Iq, dps=dps)
-            ta = best.t_anchor
-            ma = first.momentum_mp(ta, as_mp=True)
-            best = _Elliptic(Ip, n, np.array([float(x) for x in ma]), R, t_anchor=ta, m0_mp=ma,
-                             dps=first.mpc["dps"], Ip_exact=Iq)
-            dps = best.mpc["dps"]
-        impl = best
+        # Weierstrass form is based at a nearly double root.  Re-anchor at a fast point.
+        impl = _reanchor(impl, mq)
     impl.finish()
     impl.setup_attitude(Q0p)
     impl.check_float_against_mp()
