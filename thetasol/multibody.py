@@ -130,11 +130,12 @@ class _System:
         self._hatP, self._hatC = hat(self.rhoP), hat(self.rhoC)
 
     def unpack(self, y):
-        N = self.N
-        x = y[:3 * N].reshape(N, 3)
-        v = y[3 * N:6 * N].reshape(N, 3)
-        Q = y[6 * N:15 * N].reshape(N, 3, 3)
-        w = y[15 * N:].reshape(N, 3)
+        """``(x, v, Q, w)`` from the state vector(s) ``y`` of shape ``(..., 18 N)``."""
+        N, lead = self.N, y.shape[:-1]
+        x = y[..., :3 * N].reshape(lead + (N, 3))
+        v = y[..., 3 * N:6 * N].reshape(lead + (N, 3))
+        Q = y[..., 6 * N:15 * N].reshape(lead + (N, 3, 3))
+        w = y[..., 15 * N:].reshape(lead + (N, 3))
         return x, v, Q, w
 
     @staticmethod
@@ -256,11 +257,7 @@ def integrate_multibody(config: Configuration, a, b, q0, v0, Q0: dict, omega0: d
         Y = np.tile(y0, (tt.size, 1))
         nfev = 0
     seconds = time.perf_counter() - start
-    N = sys.N
-    X = Y[:, :3 * N].reshape(-1, N, 3).transpose(1, 0, 2)
-    Vel = Y[:, 3 * N:6 * N].reshape(-1, N, 3).transpose(1, 0, 2)
-    Qs = Y[:, 6 * N:15 * N].reshape(-1, N, 3, 3).transpose(1, 0, 2, 3)
-    W = Y[:, 15 * N:].reshape(-1, N, 3).transpose(1, 0, 2)
+    X, Vel, Qs, W = (np.moveaxis(z, 0, 1) for z in sys.unpack(Y))  # body axis first: (N, T, ...)
     ortho = float(np.max(np.abs(np.swapaxes(Qs, -1, -2) @ Qs - np.eye(3))))
     resid = 0.0
     for k in range(tt.size):
