@@ -81,6 +81,7 @@ def integrate_rotation(J, a, Q0, omega0, t, rtol: float = 1e-12, atol: float | N
         raise ValueError(f"rtol must be in (0, 1), got {rtol}")
     atol = 1e-3 * rtol if atol is None else float(atol)
     Im = inertia_from_moments(Jm)
+    I_inv = np.linalg.inv(Im)
     m0 = Im @ w0
     # Integrate once over the distinct times, forward for t > 0 and backward for t < 0.
     ts, inv = np.unique(tt.ravel(), return_inverse=True)
@@ -96,17 +97,15 @@ def integrate_rotation(J, a, Q0, omega0, t, rtol: float = 1e-12, atol: float | N
         if method == "splitting":
             m_out[idx], Q_out[idx] = _splitting(Jm, am, Q0, m0, tgrid, rtol, step, w0)
         elif method == "heyoka":
-            m_out[idx], Q_out[idx] = _heyoka(Jm, am, Q0, m0, tgrid, rtol, dtype)
+            m_out[idx], Q_out[idx] = _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype)
         else:
-            m_out[idx], Q_out[idx] = _solve_ivp(Jm, Im, am, Q0, m0, tgrid, rtol, atol, method)
+            m_out[idx], Q_out[idx] = _solve_ivp(Jm, I_inv, am, Q0, m0, tgrid, rtol, atol, method)
     Q_out = polar_orthonormalize(Q_out)
     omega = np.linalg.solve(Im, m_out[..., None])[..., 0]
     return omega[inv].reshape(tt.shape + (3,)), Q_out[inv].reshape(tt.shape + (3, 3))
 
 
-def _solve_ivp(Jm, Im, am, Q0, m0, tgrid, rtol, atol, method):
-    I_inv = np.linalg.inv(Im)
-
+def _solve_ivp(Jm, I_inv, am, Q0, m0, tgrid, rtol, atol, method):
     def rhs(_t, y):
         mdot, Qdot = rotation_rhs(Jm, I_inv, am, y[:3], y[3:].reshape(3, 3))
         return np.concatenate([mdot, Qdot.ravel()])
@@ -208,13 +207,11 @@ class _SplitState:
 
 # -- heyoka ----------------------------------------------------------------------------------
 
-def _heyoka(Jm, am, Q0, m0, tgrid, rtol, dtype):
+def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype):
     try:
         import heyoka as hy
     except ImportError as exc:  # pragma: no cover - exercised only without the extra
         raise ImportError("method='heyoka' needs the optional extra: pip install 'thetasol[bench]'") from exc
-    Im = inertia_from_moments(Jm)
-    I_inv = np.linalg.inv(Im)
     names = [f"m{i}" for i in range(3)] + [f"q{i}{j}" for i in range(3) for j in range(3)]
     xs = hy.make_vars(*names)
     m = xs[:3]
