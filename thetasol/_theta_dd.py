@@ -72,9 +72,7 @@ class DD:
         return DD(*two_sum(p, e))
 
     def mul_dd(self, other: "DD"):
-        p, e = two_prod(self.hi, other.hi)
-        e = e + (self.hi * other.lo + self.lo * other.hi)
-        return DD(*two_sum(p, e))
+        return DD(*dd_mul(self.hi, self.lo, other.hi, other.lo))
 
     def frac(self):
         """``self mod 1`` in [-1/2, 1/2] as a float (the rounding of hi is exact)."""
