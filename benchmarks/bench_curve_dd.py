@@ -25,7 +25,7 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, ROOT)
 
 from thetasol import _curve_quad, solve_rotation  # noqa: E402
-from thetasol._curve_dd import exact_to_cdd, intervals_dd, numerators_to_cdd  # noqa: E402
+from thetasol._curve_dd import curve_to_cdd, intervals_dd, numerators_to_cdd  # noqa: E402
 from thetasol._curve_mp import interval_mp, numerators_mp  # noqa: E402
 from _common import best_of, machine_info  # noqa: E402
 
@@ -84,7 +84,7 @@ def run(names):
         prep = []
         for tr, exact, crit in calls:
             poly = tr.tracker.poly
-            prep.append((tr, exact, crit, tr.interval_seeds(crit), exact_to_cdd(poly.exact, (poly.n + 1, poly.dx + 1)),
+            prep.append((tr, exact, crit, tr.interval_seeds(crit), curve_to_cdd(poly),
                          numerators_to_cdd(exact)))
         t_dd, dd = best_of(lambda: [intervals_dd(tr.pieces, crit, s, C, B, rounded=False)
                                     for tr, _, crit, s, C, B in prep], repeat=3)

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from thetasol import _curve_quad, solve_rotation
-from thetasol._curve_dd import exact_to_cdd, intervals_dd, numerators_to_cdd
+from thetasol._curve_dd import curve_to_cdd, intervals_dd, numerators_to_cdd
 from thetasol._curve_mp import interval_mp, numerators_mp
 from thetasol._theta_dd import cdd_div, cdd_mul, dd_div
 
@@ -74,7 +74,7 @@ def test_dd_interval_sums_match_mpmath(critical_call):
     tr, exact, crit = critical_call
     poly = tr.tracker.poly
     seeds = tr.interval_seeds(crit)
-    dd = intervals_dd(tr.pieces, crit, seeds, exact_to_cdd(poly.exact, (poly.n + 1, poly.dx + 1)),
+    dd = intervals_dd(tr.pieces, crit, seeds, curve_to_cdd(poly),
                       numerators_to_cdd(exact), rounded=False)
     worst = 0.0
     with mpmath.workdps(40):
@@ -97,5 +97,5 @@ def test_dd_root_leaving_its_sheet_is_refused(critical_call):
     seeds = tr.interval_seeds(crit[:1])
     seeds[0] = seeds[0] * (1 + 1e-2)
     with pytest.raises(ValueError, match="moved away from its sheet"):
-        intervals_dd(tr.pieces, crit[:1], seeds, exact_to_cdd(poly.exact, (poly.n + 1, poly.dx + 1)),
+        intervals_dd(tr.pieces, crit[:1], seeds, curve_to_cdd(poly),
                      numerators_to_cdd(exact))

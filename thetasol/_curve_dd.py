@@ -16,33 +16,32 @@ double-double arithmetic.  The primitives are those of :mod:`thetasol._theta_dd`
 """
 from __future__ import annotations
 
-from fractions import Fraction
 from functools import lru_cache
 
 import mpmath
 import numpy as np
 
 from ._curve_mp import gauss_legendre_mp
+from ._curve_poly import split_exact
 from ._theta_dd import cdd, cdd_add, cdd_div, cdd_mul, cdd_scale, cdd_sub, cdd_value, dd_add, dd_div, \
-    dd_mul, dd_sum, DD
+    dd_mul, dd_split_mp, dd_sum, DD
 
 _NEWTON_MAX = 12
 _REL_DONE = 2.0 ** -104   # a Newton step this small (relative) changes nothing in double-double
 _REL_STALL = 1e-26        # steps stagnating below this are rounding noise of an ill-conditioned root
 
 
-def _split_fraction(fr: Fraction) -> tuple[float, float]:
-    hi = float(fr)
-    return hi, float(fr - Fraction(hi))
-
-
 def exact_to_cdd(exact: dict, shape: tuple[int, int]):
     """{(i, j): (Fraction re, Fraction im)} -> complex double-double arrays of ``shape`` indexed [j, i]."""
-    out = [np.zeros(shape) for _ in range(4)]
+    hi, lo = np.zeros(shape, complex), np.zeros(shape, complex)
     for (i, j), (re, im) in exact.items():
-        out[0][j, i], out[1][j, i] = _split_fraction(re)
-        out[2][j, i], out[3][j, i] = _split_fraction(im)
-    return tuple(out)
+        hi[j, i], lo[j, i] = split_exact(re, im)
+    return hi.real, lo.real, hi.imag, lo.imag
+
+
+def curve_to_cdd(poly):
+    """The curve's coefficients (:class:`CurvePoly` C + Clo) as complex double-double arrays indexed [j, i]."""
+    return poly.C.T.real, poly.Clo.T.real, poly.C.T.imag, poly.Clo.T.imag
 
 
 def numerators_to_cdd(numer_exact):
@@ -58,11 +57,7 @@ def gauss_legendre_dd(N: int):
     """Gauss-Legendre nodes and weights on [-1, 1] as double-double pairs (t_hi, t_lo, w_hi, w_lo)."""
     ts, ws = gauss_legendre_mp(N, 24)
     with mpmath.workdps(40):
-        th = np.array([float(t) for t in ts])
-        tl = np.array([float(t - mpmath.mpf(h)) for t, h in zip(ts, th)])
-        wh = np.array([float(w) for w in ws])
-        wl = np.array([float(w - mpmath.mpf(h)) for w, h in zip(ws, wh)])
-    return th, tl, wh, wl
+        return (*dd_split_mp(ts), *dd_split_mp(ws))
 
 
 def _horner(C, z, deriv=False):

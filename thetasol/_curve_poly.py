@@ -98,12 +98,11 @@ class CurvePoly:
         C = np.zeros((dx + 1, n + 1), dtype=complex)
         Clo = np.zeros_like(C)
         for (i, j), (re, im) in exact.items():
-            C[i, j] = float(re) + 1j * float(im)
-            # the rounding error of each coefficient: the compensated evaluations use C + Clo (a
+            # Clo: the rounding error of each coefficient.  The compensated evaluations use C + Clo (a
             # double-double copy of the exact curve); next to nearly colliding branch points the
             # float64-rounded curve alone moves them by ~eps |b|^2 / distance, i.e. relative errors of
             # ~eps |b| / distance^2 in the integrands (1e-9 near relative equilibria)
-            Clo[i, j] = float(re - Fraction(C[i, j].real)) + 1j * float(im - Fraction(C[i, j].imag))
+            C[i, j], Clo[i, j] = split_exact(re, im)
         if not np.all(np.isfinite(C)):
             raise ValueError("f has coefficients that overflow float64")
         self.C = C
@@ -309,9 +308,7 @@ class CurvePoly:
                     m = comb(k, i)
                     sr += m * (cr * pr - ci * pi)
                     si += m * (cr * pi + ci * pr)
-                h = complex(float(sr), float(si))
-                hi[i, j] = h
-                lo[i, j] = complex(float(sr - Fraction(h.real)), float(si - Fraction(h.imag)))
+                hi[i, j], lo[i, j] = split_exact(sr, si)
         return hi, lo
 
     def coeff_polys_dd_local(self, xi, Chi, Clo):
@@ -322,13 +319,15 @@ class CurvePoly:
         clo = np.broadcast_to(Clo.T[None, :, :], (K,) + Clo.T.shape)
         return comp_horner(chi, clo, np.broadcast_to(xi[:, None], (K, self.n + 1)))
 
-    def second_derivatives(self, x, Y):
-        """f_xx, f_xy, f_yy at (x[k], Y[k, s]) (plain float64; used only for step control)."""
+    def second_derivatives(self, x, Y, A=None):
+        """f_xx, f_xy, f_yy at (x[k], Y[k, s]) (plain float64; used only for step control).
+
+        A: the coefficients a_j(x) (:meth:`coeff_polys`) when already at hand."""
         x = np.asarray(x, dtype=complex)
         n, dx = self.n, self.dx
         C = self.C
         ii = np.arange(dx + 1)
-        A0 = self.coeff_polys(x)
+        A0 = self.coeff_polys(x) if A is None else A
         A1 = self.coeff_polys_dx(x)
         A2 = _horner_x((C * (ii * (ii - 1))[:, None])[2:], x) if dx >= 2 else np.zeros(x.shape + (n + 1,), complex)
         jj = np.arange(n + 1)
@@ -394,8 +393,25 @@ def _poly_to_fracs(P):
     return [_to_fraction_pair(c) for c in P.all_coeffs()]
 
 
-def _fracs_to_complex(coef):
-    return np.array([float(r) + 1j * float(i) for r, i in coef], dtype=complex)
+def split_exact(re: Fraction, im: Fraction) -> tuple[complex, complex]:
+    """Exact complex ``re + i im`` -> (hi, lo): hi its float64 rounding, lo that of the remainder."""
+    h = complex(float(re), float(im))
+    return h, complex(float(re - Fraction(h.real)), float(im - Fraction(h.imag)))
+
+
+def _split_coefs(coef) -> tuple[np.ndarray, np.ndarray]:
+    """A list of exact (re, im) Fraction pairs -> complex double-double arrays (hi, lo)."""
+    pairs = [split_exact(r, i) for r, i in coef]
+    return np.array([h for h, _ in pairs], dtype=complex), np.array([l for _, l in pairs], dtype=complex)
+
+
+def _scaled_fracs(P):
+    """Exact coefficients (descending) of P scaled by a power of 2 so the largest is ~1 (no float overflow)."""
+    coef = _poly_to_fracs(P)
+    big = max(m for m in (max(abs(r), abs(i)) for r, i in coef) if m != 0)
+    sh = big.numerator.bit_length() - big.denominator.bit_length()
+    fac = Fraction(1, 2**sh) if sh >= 0 else Fraction(2**(-sh), 1)
+    return [(r * fac, i * fac) for r, i in coef]
 
 
 def polynomial_roots(P) -> np.ndarray:
@@ -408,14 +424,8 @@ def polynomial_roots(P) -> np.ndarray:
     deg = P.degree()
     if deg <= 0:
         return np.zeros(0, complex)
-    coef = _poly_to_fracs(P)
-    # Scale exactly by a power of 2 so the largest coefficient is ~1 (avoids float overflow).
-    mags = [max(abs(r), abs(i)) for r, i in coef]
-    big = max(m for m in mags if m != 0)
-    sh = big.numerator.bit_length() - big.denominator.bit_length()
-    fac = Fraction(1, 2**sh) if sh >= 0 else Fraction(2**(-sh), 1)
-    coef = [(r * fac, i * fac) for r, i in coef]
-    c = _fracs_to_complex(coef)
+    coef = _scaled_fracs(P)
+    c, c_lo = _split_coefs(coef)
     r = np.roots(c) if deg > 0 else np.zeros(0, complex)
     if len(r) != deg:
         # leading coefficient underflowed in float: fall back to mpmath entirely
@@ -438,10 +448,7 @@ def polynomial_roots(P) -> np.ndarray:
     if np.all(err < 1e-6 * sep) and np.all(np.isfinite(r)):
         # compensated Newton steps: the critical values to ~eps |r| (the local series at a branch
         # point are centred there; an offset delta shows up as spurious poles ~ delta / radius)
-        asc = coef[::-1]
-        hi = np.array([complex(float(a), float(b)) for a, b in asc])
-        lo = np.array([complex(float(a - Fraction(h.real)), float(b - Fraction(h.imag)))
-                       for (a, b), h in zip(asc, hi)])
+        hi, lo = c[::-1], c_lo[::-1]
         dc = np.polyder(c)
         for _ in range(2):
             ph, pl = comp_horner(hi, lo, r)
@@ -464,14 +471,7 @@ def root_corrections(P, r) -> np.ndarray:
     r = np.asarray(r, dtype=complex)
     if len(r) == 0 or P.degree() <= 0:
         return np.zeros(len(r), complex)
-    coef = _poly_to_fracs(P)
-    mags = [max(abs(a), abs(b)) for a, b in coef]
-    big = max(m for m in mags if m != 0)
-    sh = big.numerator.bit_length() - big.denominator.bit_length()
-    fac = Fraction(1, 2**sh) if sh >= 0 else Fraction(2**(-sh), 1)
-    asc = [(a * fac, b * fac) for a, b in coef][::-1]
-    hi = np.array([complex(float(a), float(b)) for a, b in asc])
-    lo = np.array([complex(float(a - Fraction(h.real)), float(b - Fraction(h.imag))) for (a, b), h in zip(asc, hi)])
+    hi, lo = _split_coefs(_scaled_fracs(P)[::-1])
     ph, pl = comp_horner(hi, lo, r)
     dh, dl = comp_horner(*_two_prod_c(hi[1:], np.arange(1, len(hi))), r)
     with np.errstate(divide="ignore", invalid="ignore"):

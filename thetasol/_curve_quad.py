@@ -235,40 +235,38 @@ class Tracker:
         self.mp_fallback = mp_fallback
         self.n_refined_steps = 0
         self.n_mp_nodes = 0
-        self._curve_cdd = None  # f's exact coefficients as double-double pairs (lazy)
 
     # -------------------------------------------------------------- node evaluation
+    def _polish_nodes(self, x, R, A):
+        """Compensated (double-double) Newton polish and f_y: roots accurate to ~eps |y| even where the
+        sheets nearly coincide; the plain float64 bound enters at second order only.
+        Returns (R, f_y, f_x, error bound of R)."""
+        poly = self.poly
+        Ahi, Alo = poly.coeff_polys_dd(x)
+        R, fy = poly.polish_dd(Ahi, Alo, R)
+        _, fx = poly.fy_fx(x, R, A)
+        return R, fy, fx, EPS * np.abs(R) + 4 * poly.n * EPS * poly.root_error_bound(x, R, fy)
+
     def _eval_nodes(self, x, dx, precise=True, ddx=None):
         poly = self.poly
         R, A = poly.roots(x)
         if precise:
-            # compensated (double-double) Newton polish and f_y: roots accurate to ~eps |y| even
-            # where the sheets nearly coincide; the plain float64 bound enters at second order only
-            Ahi, Alo = poly.coeff_polys_dd(x)
-            R, fy = poly.polish_dd(Ahi, Alo, R)
-            _, fx = poly.fy_fx(x, R, A)
-            err = None
+            R, fy, fx, err = self._polish_nodes(x, R, A)
         else:  # tracking-only points (refinement): plain float64 is enough to match sheets
             fy, fx = poly.fy_fx(x, R, A)
         with np.errstate(divide="ignore", invalid="ignore"):
             D = -fx / fy
         sep = _separations(R)
-        if precise:
-            err = EPS * np.abs(R) + 4 * poly.n * EPS * poly.root_error_bound(x, R, fy)
-        else:
+        if not precise:
             err = poly.root_error_bound(x, R, fy)
             weak = (err > 1e-8 * sep).any(axis=1)
             if np.any(weak):
                 # compensated polish where plain float64 is not clearly enough (still cheap)
                 w = np.nonzero(weak)[0]
-                Ahi, Alo = poly.coeff_polys_dd(x[w])
-                Rw, fyw = poly.polish_dd(Ahi, Alo, R[w])
-                _, fxw = poly.fy_fx(x[w], Rw, A[w])
-                R[w], fy[w], fx[w] = Rw, fyw, fxw
+                R[w], fy[w], fx[w], err[w] = self._polish_nodes(x[w], R[w], A[w])
                 with np.errstate(divide="ignore", invalid="ignore"):
-                    D[w] = -fxw / fyw
-                sep[w] = _separations(Rw)
-                err[w] = EPS * np.abs(Rw) + 4 * poly.n * EPS * poly.root_error_bound(x[w], Rw, fyw)
+                    D[w] = -fx[w] / fy[w]
+                sep[w] = _separations(R[w])
         self._last_rel = None
         # float64 roots whose rounding error is not negligible against the gaps between sheets
         # (nearly colliding branch points) are recomputed in mpmath
@@ -288,7 +286,7 @@ class Tracker:
             self.n_mp_nodes += len(idx)
         Dt = D * dx[:, None]
         # second derivative in tau: y_xx x_tau^2 + y_x x_tautau, y_xx = -(f_xx + 2 f_xy y' + f_yy y'^2) / f_y
-        fxx, fxy, fyy = poly.second_derivatives(x, R)
+        fxx, fxy, fyy = poly.second_derivatives(x, R, A)
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             Dxx = -(fxx + 2 * fxy * D + fyy * D * D) / fy
             D2 = Dxx * (dx * dx)[:, None] + (D * ddx[:, None] if ddx is not None else 0)
@@ -624,15 +622,13 @@ class Tracked:
 
     def _add_dd(self, out, exact, crit):
         """Add the double-double sums of the critical intervals (:mod:`thetasol._curve_dd`)."""
-        from ._curve_dd import exact_to_cdd, intervals_dd, numerators_to_cdd
-        tr = self.tracker
-        if tr._curve_cdd is None:
-            tr._curve_cdd = exact_to_cdd(tr.poly.exact, (tr.poly.n + 1, tr.poly.dx + 1))
+        from ._curve_dd import curve_to_cdd, intervals_dd, numerators_to_cdd
         circ = [c for c in crit if self.pieces[c[0]].kind not in ("line", "point", "inf")]
         if circ:  # no double-double parametrization (never planned for quadrature so far)
             out = self._add_mp(out, exact, circ)
-            crit = [c for c in crit if self.pieces[c[0]].kind in ("line", "point", "inf")]
-        parts = intervals_dd(self.pieces, crit, self.interval_seeds(crit), tr._curve_cdd, numerators_to_cdd(exact))
+            crit = [c for c in crit if c not in circ]
+        parts = intervals_dd(self.pieces, crit, self.interval_seeds(crit), curve_to_cdd(self.tracker.poly),
+                             numerators_to_cdd(exact))
         for (p, k, _), part in zip(crit, parts):
             out[p] = out[p] + part
         return out
