@@ -150,6 +150,12 @@ def local_data(curve):
     return out
 
 
+def local_of(curve, place):
+    """The :class:`LocalData` of the critical value or of infinity under a (non-regular) place."""
+    lds = local_data(curve)
+    return lds[place._site] if place.kind == "critical" else lds[-1]
+
+
 def _accurate_samples(curve, xs, ys, rel, center=None, xi=None, center_lo=0j):
     """Sample values and f_y at them, with compensated (double-double) Newton steps.
 
@@ -370,8 +376,7 @@ def expansion(curve, place, numer, order, mode):
         t, x, y, fy = curve._cache[key]
         e = 1
     else:
-        lds = local_data(curve)
-        ld = lds[place._site] if place.kind == "critical" else lds[-1]
+        ld = local_of(curve, place)
         t, x, y = ld.place_samples(place._cycle)
         fy = np.concatenate([ld.fys[c] for c in place._cycle])
         e = place.e

@@ -22,7 +22,8 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from ._curve_places import perm_cycles
+from ._curve_places import (adjoint_subspace, expansion, laurent, local_data, local_of, noise_level, perm_cycles,
+                            place_series, series_eval, series_integral)
 from ._curve_poly import CurvePoly, polynomial_roots, root_corrections
 from ._curve_quad import Piece, Tracker
 from ._homology import LiftedGraph, symplectic_basis
@@ -109,7 +110,6 @@ class Place:
         sheets on a circle (see docs/curves.md); coefficient k is accurate to about 1e-16 * 2^k
         relative to the largest term.
         """
-        from ._curve_places import expansion
         return expansion(self.curve, self, None, int(order), "y")
 
     def expand(self, numerator, order: int = 8, differential: bool = True):
@@ -118,7 +118,6 @@ class Place:
         Returns (k, c) with g dx / f_y = sum c_k t^k dt (or g = sum c_k t^k) in the local parameter
         t of :meth:`local_parameter`; see :meth:`series`.
         """
-        from ._curve_places import expansion
         P = self.curve._numerators([numerator])
         return expansion(self.curve, self, P, int(order), "differential" if differential else "function")
 
@@ -313,7 +312,6 @@ class PlaneCurve:
             if len(pts) == g:
                 diffs = [x ** (i - 1) * y ** (j - 1) for i, j in pts]
             elif len(pts) > g:
-                from ._curve_places import adjoint_subspace
                 diffs = adjoint_subspace(self, [x ** (i - 1) * y ** (j - 1) for i, j in pts])
             else:
                 raise RuntimeError(f"genus {g} exceeds the Newton polygon bound {len(pts)} (internal error)")
@@ -438,7 +436,6 @@ class PlaneCurve:
     # ------------------------------------------------------------------ places
     def _all_places(self):
         if "places" not in self._cache:
-            from ._curve_places import local_data
             out_sites, out_inf = [], []
             for ld in local_data(self):
                 for cyc in ld.cycles:
@@ -452,10 +449,8 @@ class PlaneCurve:
         return self._cache["places"]
 
     def _place_limits(self, places):
-        from ._curve_places import local_data, laurent
-        lds = local_data(self)
         for P in places:
-            ld = lds[P._site] if P.kind == "critical" else lds[-1]
+            ld = local_of(self, P)
             t, xs, ys = ld.place_samples(P._cycle)
             k, c, _ = laurent(t, ys)
             scale = np.max(np.abs(ys)) + 1e-300
@@ -567,39 +562,35 @@ class PlaneCurve:
         return (x0, y0)
 
     def _local(self):
-        from ._curve_places import local_data
         return local_data(self)
 
     def _place_data(self, place, P, key):
         """(k, t0, Fy, Fh) Laurent data of a critical or infinite place for numerators P."""
-        from ._curve_places import place_series
         ck = ("pser", key, place._key())
         if ck not in self._cache:
-            lds = self._local()
-            ld = lds[place._site] if place.kind == "critical" else lds[-1]
-            self._cache[ck] = place_series(self, ld, place._cycle, P)
+            self._cache[ck] = place_series(self, local_of(self, place), place._cycle, P)
         return self._cache[ck]
+
+    def _series_integral(self, place, P, key, t):
+        """Integral from the place to its local parameter t along its Laurent series."""
+        k, t0, _, Fh = self._place_data(place, P, key)
+        return series_integral(k, t0, Fh, t0 if t is None else t, noise=noise_level(local_of(self, place)))
 
     def _place_value(self, place, P, key):
         """Integral from the default base to a critical or infinite place."""
-        from ._curve_places import series_integral
-        lds = self._local()
-        ld = lds[place._site] if place.kind == "critical" else lds[-1]
+        ld = local_of(self, place)
         ck = ("lines", key)
         if ck not in self._cache:
             self._cache[ck] = self._cache["local_lines"].integrate(P)
         lines = self._cache[ck]
         phi = self._potentials(P, key)
-        from ._curve_places import noise_level
-        k, t0, Fy, Fh = self._place_data(place, P, key)
         # the approach line ends at the float x1 = b + xi0 exactly (xi0 is measured from the exact
         # critical value), so the series tail starts at the local parameter t0 of that very point
-        tail = series_integral(k, t0, Fh, t0, noise=noise_level(ld))
+        tail = self._series_integral(place, P, key, None)
         return phi[ld.ref * self.n + place._label] + lines[ld.index][place._label] - tail
 
     def _near_place(self, x0, y0):
         """If (x0, y0) is inside the disc where a local series converges fast: (place, t)."""
-        from ._curve_places import series_eval
         lds = self._local()
         ld = None
         if len(self._sites):
@@ -631,7 +622,6 @@ class PlaneCurve:
 
     def _abel_raw(self, targets, P, key):
         """Integrals of the numerators P from the default base point to every target: (N, nd)."""
-        from ._curve_places import series_integral
         G = self._graph
         n = self.n
         phi = self._potentials(P, key)
@@ -645,11 +635,7 @@ class PlaneCurve:
             near = self._near_place(x0, yv)
             if near is not None:
                 pl, tt = near
-                from ._curve_places import noise_level
-                k, t0, _, Fh = self._place_data(pl, P, key)
-                lds = self._local()
-                ld = lds[pl._site] if pl.kind == "critical" else lds[-1]
-                out[i] = self._place_value(pl, P, key) + series_integral(k, t0, Fh, tt, noise=noise_level(ld))
+                out[i] = self._place_value(pl, P, key) + self._series_integral(pl, P, key, tt)
                 continue
             kind, k, e, sg, q = G.locate(x0)
             a, b = G.edges[e]
