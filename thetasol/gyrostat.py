@@ -615,17 +615,15 @@ class _Elliptic:
         return not (np.isfinite(v0) and np.all(np.isfinite(v))) or v0 < 0.25 * np.max(v)
 
     def torsion_ratio(self) -> float:
-        """|dtheta/dt| at the anchor against its maximum over the orbit."""
+        """|dtheta/dt| at the anchor against its maximum over the orbit (0 when a value on the
+        orbit is not finite: the formula is 0/0 somewhere)."""
         W = np.abs(self._dW(self.orbit_times(64))[1])
         return abs(self.s0) / np.max(W) if np.all(np.isfinite(W)) and np.max(W) > 0 else 0.0
 
     def anchor_is_degenerate(self) -> bool:
         """The orbit's torsion (nearly) vanishes at the anchor: dtheta_Z/dt = s0 ~ 0 there, and
         the pencil formula becomes 0/0 where the orbit meets the osculating plane again."""
-        _, W = self._dW(self.orbit_times(64))
-        W = np.abs(W)
-        # (a non-finite value on the orbit: the formula is 0/0 somewhere, re-anchor)
-        return not np.all(np.isfinite(W)) or abs(self.s0) < 1e-2 * np.max(W)
+        return self.torsion_ratio() < 1e-2
 
     def finish(self):
         self._pole()
@@ -910,14 +908,15 @@ def _reanchor(impl, mq):
     degenerate (15-20 were seen), and next to a separatrix the phase amplifies an error in the
     anchor by ~1/mc: unless the new pencil gives back the data at t = 0
     (:meth:`_Elliptic.gives_back`), both are redone with twice the digits."""
-    best = None
+    best, best_ratio = None, -1.0
     for ta in impl.anchor_candidates()[:6]:
         new = impl.reanchored(ta)
-        if not new.anchor_is_degenerate():
+        ratio = new.torsion_ratio()
+        if ratio >= 1e-2:  # not anchor_is_degenerate
             best = new
             break
-        if best is None or new.torsion_ratio() > best.torsion_ratio():
-            best = new
+        if ratio > best_ratio:
+            best, best_ratio = new, ratio
     while not best.gives_back(mq) and best.mpc["dps"] <= 4000:
         first = _Elliptic(impl.Ip, impl.n, impl.m0, impl.P, m0_mp=mq, Ip_exact=impl.Ip_exact,
                           dps=2 * best.mpc["dps"])
