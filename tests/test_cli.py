@@ -7,13 +7,14 @@ import numpy as np
 import pytest
 
 from thetasol.__main__ import main
+from thetasol.rotation import ClosedFormUnavailable
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "satellite_boom.toml"
 
 
 def test_demo_as_a_process(tmp_path):
-    """The README's main job, as a user runs it (also measures that it stays well under 30 s)."""
+    """The README's main job, as a user runs it (within a 120 s timeout; it takes 5-8 s, docs/mechanics.md)."""
     res = subprocess.run([sys.executable, "-m", "thetasol", "demo", "-o", str(tmp_path / "demo.npz")],
                          capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert res.returncode == 0, res.stderr
@@ -96,3 +97,16 @@ def test_example_script_runs():
                          text=True, timeout=120)
     assert res.returncode == 0, res.stderr
     assert "split vs unsplit" in res.stdout and "shifts:" in res.stdout
+
+
+@pytest.mark.xfail(strict=True, raises=ClosedFormUnavailable,
+                   reason="regression since 666a0f1: for these data (J, a diagonal, Q0 = 1) the theta set-up asks "
+                          "for the Abel image of the point (E, w) = (0, nan) and gives up")
+def test_readme_example():
+    """The README's code example, as printed there: a theta-function solution of genus 4."""
+    from thetasol import solve_rotation
+
+    sol = solve_rotation([0.6, 1.0, 1.7], np.diag([-1.0, 0.4, 1.5]), np.eye(3), [0.5, -0.8, 0.6])
+    assert sol.method == "theta/genus-4"
+    omega, Q = sol(np.linspace(0, 1000, 2001))
+    assert omega.shape == (2001, 3) and Q.shape == (2001, 3, 3)

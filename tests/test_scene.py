@@ -83,7 +83,7 @@ def test_load_solve_and_initial_state(tmp_path):
     assert isinstance(traj, Trajectories)
     assert traj.position.shape == (3, 41, 3) and traj.attitude.shape == (3, 41, 3, 3)
     x, v, Q, w = initial_state(sc.config, sc.q0, sc.v0, sc.Q0, sc.omega0)
-    # closed-form rotations (theta functions) reproduce the initial state to 1e-13 (issue 6)
+    # the rotations (closed forms where solve_rotation gives one) reproduce the initial state to 1e-13
     assert np.allclose(traj.position[:, 0], x, rtol=0, atol=1e-13)
     assert np.allclose(traj.velocity[:, 0], v, rtol=0, atol=1e-13)
     assert np.allclose(traj.attitude[:, 0], Q, rtol=0, atol=1e-13)
@@ -91,6 +91,10 @@ def test_load_solve_and_initial_state(tmp_path):
     models = traj.info["models"]
     assert [k for _, k in models["mass_center"]] == ["hyperbolic", "trigonometric", "trigonometric"]
     assert all("numerical fallback" in m or "closed form" in m for m in models["rotations"].values())
+    # the arm (a symmetric box at rest) turns as a pendulum; the tip is generic: genus 4.  (The root, whose
+    # principal axis z is an eigenvector of a, falls back to numerics since 666a0f1: see test_readme_example.)
+    assert models["rotations"]["arm"].endswith("closed form pendulum/libration")
+    assert models["rotations"]["tip"].endswith("closed form theta/genus-4")
 
 
 def test_run_report_and_checks(tmp_path):
