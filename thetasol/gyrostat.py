@@ -271,12 +271,10 @@ def _turning_point(mp, f, s0, e_top, roots):
             if prec >= dps:
                 return +th
 
-    cands = [(sl, th) for sl, th in zip(slopes, ths)]
     # every real zero is a turning point of this orbit or of the other real component (then the
     # anchor is not on its arc: wp(t_a - t_r) < e_top); the steepest of this orbit's is taken
-    cands.sort(key=lambda x: -x[0])
     etol = tol * max(abs(x) for x in roots)
-    for _, th in cands:
+    for _, th in sorted(zip(slopes, ths), key=lambda x: -x[0]):
         th = polish(polish(th))
         dr = _rotate_quartic(f, mp.cos(th), mp.sin(th))
         k, c = dr[1] / 4, dr[2] / 12
@@ -455,7 +453,6 @@ class _Elliptic:
         self.Ip, self.a, self.n, self.m0, self.h0 = Ip, 1.0 / Ip, n, m0, h0
         self.P = Pbody  # principal -> body
         self.G = _norm(h0)
-        self.w0 = self.a * m0
         self.t_anchor = float(t_anchor)
         # (a re-anchoring point is passed in mpmath, so that the curve stays the data's to the
         # working precision: rounding it would move an orbit on a separatrix off it)
