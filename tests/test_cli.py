@@ -7,7 +7,6 @@ import numpy as np
 import pytest
 
 from thetasol.__main__ import main
-from thetasol.rotation import ClosedFormUnavailable
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "satellite_boom.toml"
@@ -99,9 +98,6 @@ def test_example_script_runs():
     assert "split vs unsplit" in res.stdout and "shifts:" in res.stdout
 
 
-@pytest.mark.xfail(strict=True, raises=ClosedFormUnavailable,
-                   reason="regression since 666a0f1: for these data (J, a diagonal, Q0 = 1) the theta set-up asks "
-                          "for the Abel image of the point (E, w) = (0, nan) and gives up")
 def test_readme_example():
     """The README's code example, as printed there: a theta-function solution of genus 4."""
     from thetasol import solve_rotation

@@ -90,9 +90,10 @@ def test_load_solve_and_initial_state(tmp_path):
     assert np.allclose(traj.mass_center[0], sc.q0)
     models = traj.info["models"]
     assert [k for _, k in models["mass_center"]] == ["hyperbolic", "trigonometric", "trigonometric"]
-    assert all("numerical fallback" in m or "closed form" in m for m in models["rotations"].values())
-    # the arm (a symmetric box at rest) turns as a pendulum; the tip is generic: genus 4.  (The root, whose
-    # principal axis z is an eigenvector of a, falls back to numerics since 666a0f1: see test_readme_example.)
+    assert all("closed form" in m for m in models["rotations"].values())
+    # the arm (a symmetric box at rest) turns as a pendulum; the tip is generic: genus 4, and so is the root,
+    # whose principal axis z is an eigenvector of a (it fell back to numerics from 666a0f1 to 6ef5add)
+    assert models["rotations"]["root"].endswith("closed form theta/genus-4")
     assert models["rotations"]["arm"].endswith("closed form pendulum/libration")
     assert models["rotations"]["tip"].endswith("closed form theta/genus-4")
 

@@ -298,3 +298,21 @@ def test_random_symmetric_bodies_against_dop853(seed):
     w, Q = sol(t)
     wr, Qr = integrate_rotation(J, a, Q0, w0, t, rtol=1e-13)
     assert max(np.abs(w - wr).max(), np.abs(Q - Qr).max()) <= 1e-10
+
+
+@pytest.mark.parametrize("turn", [None, (2, 0.7), (0, -1.1)])
+def test_principal_axes_along_eigenvectors_of_a(turn):
+    """J and a diagonal, Q0 = 1 or a turn about one axis: some e_k is an eigenvector of u, the zeros of
+    v_k sit at places over E = 0 with no w of their own.  From 666a0f1 to 6ef5add these data (the
+    README's example) raised ClosedFormUnavailable.  Measured against heyoka 80-bit at t <= 4002:
+    1.6e-12, 1.4e-12, 9.3e-12."""
+    from thetasol._so3 import rotation_about
+
+    J, a, w0 = [0.6, 1.0, 1.7], np.diag([-1.0, 0.4, 1.5]), np.array([0.5, -0.8, 0.6])
+    Q0 = np.eye(3) if turn is None else rotation_about(*turn)
+    sol = solve_rotation(J, a, Q0, w0)
+    assert sol.method == "theta/genus-4"
+    t = np.array([0.0, 3.1, 40.0])
+    w, Q = sol(t)
+    wr, Qr = integrate_rotation(J, a, Q0, w0, t, rtol=1e-13)
+    assert max(np.abs(w - wr).max(), np.abs(Q - Qr).max()) <= 1e-10

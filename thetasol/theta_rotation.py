@@ -520,7 +520,10 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     comp_alpha = [Bc[:, k] if curve.symmetric_body else np.eye(3)[k] for k in range(3)]
     comp_zeros = [eigenvector_poles(Jp, M, u, al) for al in comp_alpha]
     R = float(np.abs(curve.branch_points).max())
-    use_zeros = [curve.node is None and len(Ez) == g and np.abs(Ez).max() <= 10.0 * R for Ez, _ in comp_zeros]
+    # A zero without a w (NaN) is where v_k vanishes on two sheets at once: the axis e_k is an
+    # eigenvector of u, and the zeros sit at places over E = 0; those k take the other formula below.
+    use_zeros = [curve.node is None and len(Ez) == g and np.abs(Ez).max() <= 10.0 * R and np.all(np.isfinite(wz))
+                 for Ez, wz in comp_zeros]
     # np.roots leaves the points a few ulps off: next to a tight pair of branch points (near a relative
     # equilibrium) that moved their Abel images by up to 6e-11
     D_E, D_w = polish_eigenvector_poles(Jp, M, u, D_alpha, D_E, D_w)
