@@ -587,7 +587,7 @@ class _Elliptic:
         else:
             self.phase_error = 4 * _EPS * self.T * np.max(hdot) / scale
 
-    def reanchored(self, ta, dps=None):
+    def reanchored(self, ta):
         """The same orbit with the pencil anchored at time ``ta``, at the point this closed form
         gives there in mpmath (not rounded: the curve stays the data's to the working precision)."""
         ma = self.momentum_mp(float(ta), as_mp=True)
