@@ -46,7 +46,9 @@ Degenerate data (only what the scene needs)
   has no axial part, so the Baker-Akhiezer function has no third-kind singularity at the node's
   branches: the construction runs on the genus-3 normalization (genus 2 with a rank-one ``a``)
   with ``B`` the eigenvectors ``(e1 +- i e2) / sqrt 2`` of ``M`` at the node, and
-  ``Q = Q~ R(t)^T``, ``omega = R omega~ + spin e``.  Without axial spin the branches touch
+  ``Q = Q~ R(t)^T``, ``omega = R omega~ + spin e``; the exponents' difference at the node (the
+  rate of the turn about the axis) is exact, from the third-kind differential ``E^2 dE / f_w``
+  (:func:`_node_exponent_gap`).  Without axial spin the branches touch
   (a tacnode; the axis moves as in Neumann's problem): not handled.  A spin below
   ``MIN_AXIAL_SPIN`` of ``|omega0| + sqrt|a|`` is refused at once (ClosedFormUnavailable); up to a
   few times that the set-up may still fail, and says so.
@@ -379,11 +381,12 @@ def _parities(curve, nums) -> np.ndarray:
     return np.array(out, float)
 
 
-def _fit_exponents(nu, nub, X0, nu_aux, h_aux):
+def _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap=None):
     """Weighted least-squares fit of nu_sk = F_s - G_k (imaginary parts).
 
     The error model of an entry grows like (|psi| / |psi_k|)^2: where a component is small the
     directly computed exponent depends on the Abel images through two nearly cancelling poles.
+    ``gap = (k0, k1, value)`` imposes G_k0 - G_k1 = value (known exactly, see _node_exponent_gap).
     Returns (fitted nu (3, 3), max residual in units of the error model).
     """
     hs = np.abs(X0) / np.linalg.norm(X0, axis=0, keepdims=True)       # [k, s]
@@ -393,14 +396,56 @@ def _fit_exponents(nu, nub, X0, nu_aux, h_aux):
     rows += [(3 + i, k, nu_aux[i, k].imag, err_aux[i, k])
              for i in range(nu_aux.shape[0]) for k in range(3)]
     nF = 3 + nu_aux.shape[0]
+    k0, k1, gval = gap if gap is not None else (0, 0, 0.0)
+    # with the constraint, G_k1 = G_k0 - gap is eliminated: its rows become rows of G_k0 (its
+    # column stays zero; lstsq's minimum-norm solution leaves it at 0)
+    fit_rows = [(s_, k0, val - gval, er) if gap is not None and k == k1 else (s_, k, val, er)
+                for s_, k, val, er in rows]
     A = np.zeros((len(rows) + 1, nF + 3))
     rhs = np.zeros(len(rows) + 1)
-    for i, (s_, k, val, er) in enumerate(rows):
+    for i, (s_, k, val, er) in enumerate(fit_rows):
         A[i, s_], A[i, nF + k], rhs[i] = 1.0 / er, -1.0 / er, val / er
     A[-1, nF] = 1.0 / min(r[3] for r in rows)                          # gauge G_0 = 0
     x, *_ = np.linalg.lstsq(A, rhs, rcond=None)
+    if gap is not None:
+        x[nF + k1] = x[nF + k0] - gval
     resid = max(abs(x[s_] - x[nF + k] - val) / er for s_, k, val, er in rows)
     return x[:3][:, None] - x[nF:][None, :], float(resid)
+
+
+def _node_exponent_gap(curve, Pinf, Jinf, G, U):
+    """G_k0 - G_k1 for the two branches inf_k0, inf_k1 of a symmetric body's node over E = infinity.
+
+    The exponents' constants G_k = Omega(inf_k) (the regular part of the normalized abelian integral
+    of the second kind with principal parts -J_j E at inf_j) are otherwise only fitted from theta
+    derivatives, to ~1e-13: their difference at the node is the rate of the turn about the symmetry
+    axis, and that error grew as 1.2e-13 t (4e-9 at t = 4000 for a fast spin, measured).  Exactly:
+    the differential ``omega3 = E^2 dE / f_w`` is of the third kind on the normalization, with simple
+    poles only at the node's branches (residues +-r); let Omega3 = omega3 / r minus its a-periods in
+    the normalized holomorphic differentials.  Riemann's bilinear relation for the pair
+    (Omega, Omega3), both with zero a-periods, leaves the sum of the residues of Omega Omega3 at
+    infinity, so ``G_k0 - G_k1 = sum_j J_j c_j`` with c_j the t^0 coefficient of Omega3 / dt at
+    inf_j (t = 1/E): the same pairing that gives U.  Returns (k0, k1, value in nu units) with the
+    value determined modulo 2 pi Z U (the path to infinity), which the caller fixes from the fit.
+    """
+    pair = [j for j in range(3) if np.sum(np.abs(Jinf - Jinf[j]) <= SNAP_TOL * Jinf.max()) == 2]
+    if len(pair) != 2:
+        return None
+    om = curve.x ** 2
+    res, c0 = np.zeros(3, complex), np.zeros(3, complex)
+    for j, Pl in enumerate(Pinf):
+        k, c = Pl.expand(om, order=3)
+        res[j] = c[k == -1][0] if np.any(k == -1) else 0.0
+        c0[j] = c[k == 0][0] if np.any(k == 0) else 0.0
+    k0, k1 = pair
+    r = res[k0]
+    if abs(r) == 0 or abs(res[k1] + r) > 1e-8 * abs(r) or abs(res[3 - k0 - k1]) > 1e-8 * abs(r):
+        raise RuntimeError(f"E^2 dE / f_w has residues {res} at infinity: not the node's third-kind "
+                           "differential (internal error)")
+    g = curve.genus
+    pa = (np.asarray(curve.period_matrix(differentials=[om])) @ G).ravel()[:g] / r
+    V3 = (Jinf @ c0) / r - pa @ U
+    return k0, k1, float(V3.imag)
 
 
 def _symmetry_axis(Jp: np.ndarray):
@@ -587,6 +632,19 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     X0b, rhob, nub = constants(0.5 * r)
     nu_aux, h_aux = _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d, Bc)
     nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux)
+    gap = _node_exponent_gap(curve, Pinf, Jinf, G, U) if curve.symmetric_body else None
+    node_gap_change = None
+    if gap is not None:
+        # the exact value holds modulo 2 pi n.U: take the n the fit points at, if it points at one
+        k0, k1, val = gap
+        fitted = float(nu_fit[0, k1] - nu_fit[0, k0])
+        n = np.array(np.meshgrid(*[np.arange(-3, 4)] * rdim, indexing="ij")).reshape(rdim, -1).T
+        cand = val + 2 * np.pi * n @ U[:rdim]
+        miss = np.abs(fitted - cand)
+        order = np.argsort(miss)
+        if miss[order[0]] <= 1e-8 * (1 + abs(fitted)) and (len(miss) == 1 or miss[order[1]] > 1e-4):
+            nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux, (k0, k1, float(cand[order[0]])))
+            node_gap_change = float(fitted - cand[order[0]])
     scale_nu = 1 + np.abs(nu).max()
     if np.abs(nu.real).max() > 1e-6 * scale_nu:
         raise RuntimeError(f"exponents are not imaginary (max |Re| {np.abs(nu.real).max():.2g}): "
@@ -625,6 +683,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     diag = {
         "nu_real_part": float(np.abs(nu.real).max()),
         "nu_fit_residual": resid,
+        "node_gap_change": node_gap_change,
         "rho_two_radii": float(np.max(np.abs(rho - rhob) / np.maximum(np.abs(rho), 1e-300))),
         "X0_two_radii": float(np.max(np.abs(X0 - X0b))),
         "circle_radius": r,
