@@ -191,8 +191,9 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     ValueError
         Non-finite, wrongly shaped or unphysical data.
     ClosedFormUnavailable
-        (a ``NotImplementedError``) A symmetric body (two equal principal moments) with no or
-        little spin about its symmetry axis in a potential with torque, ``dps`` with a potential,
+        (a ``NotImplementedError``) A symmetric body (two equal principal moments) with little
+        (but not zero) spin about its symmetry axis in a potential with torque, a Neumann torus
+        too close to a separatrix or too thin, ``dps`` with a potential,
         or nearly degenerate data for which the curve computations cannot reach the solution's
         accuracy; the message says which.
 
