@@ -13,6 +13,8 @@ Dispatch (one small function per branch, tried in order, see ``_BRANCHES``):
 * angular velocity along a principal axis that is also an eigenvector of ``Q0^T a Q0``: the
   body keeps turning about that axis, a planar pendulum in elliptic functions
   (:mod:`thetasol.pendulum`; the spectral curve is reducible), uniform rotation or rest included;
+* a symmetric body with no spin about its symmetry axis: the axis moves as in C. Neumann's problem
+  and the body is parallel-transported along it (:mod:`thetasol.neumann`);
 * any other ``a`` (Section 4 II): the Baker-Akhiezer theta-function solution of
   :mod:`thetasol.theta_rotation` (genus 4; genus 3 for a potential with a repeated eigenvalue
   or for a symmetric body, genus 2 for both).
@@ -141,6 +143,13 @@ def _pendulum_branch(J, a, Q0, omega0, dps):
     return _solve_pendulum(J, a, Q0, omega0, dps)
 
 
+def _neumann_branch(J, a, Q0, omega0, dps):
+    # symmetric body without axial spin: the axis moves as in Neumann's problem (tacnode of (4.12))
+    from .neumann import _solve_neumann_rotation
+
+    return _solve_neumann_rotation(J, a, Q0, omega0, dps)
+
+
 def _potential_branch(J, a, Q0, omega0, dps):
     from .theta_rotation import _solve_theta_rotation
 
@@ -148,7 +157,7 @@ def _potential_branch(J, a, Q0, omega0, dps):
 
 
 #: Tried in order; each returns a RotationSolution or None (not its case).
-_BRANCHES: list[Callable] = [_free_branch, _pendulum_branch, _potential_branch]
+_BRANCHES: list[Callable] = [_free_branch, _pendulum_branch, _neumann_branch, _potential_branch]
 
 
 def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolution:
@@ -182,8 +191,9 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     ValueError
         Non-finite, wrongly shaped or unphysical data.
     ClosedFormUnavailable
-        (a ``NotImplementedError``) A symmetric body (two equal principal moments) with no or
-        little spin about its symmetry axis in a potential with torque, ``dps`` with a potential,
+        (a ``NotImplementedError``) A symmetric body (two equal principal moments) with little
+        (but not zero) spin about its symmetry axis in a potential with torque, a Neumann torus
+        too close to a separatrix or too thin, ``dps`` with a potential,
         or nearly degenerate data for which the curve computations cannot reach the solution's
         accuracy; the message says which.
 
