@@ -177,9 +177,13 @@ def test_general_body_frame_and_shapes():
     assert np.abs(Q - Qr).max() < 1e-10 and np.abs(w - wr).max() < 1e-10
 
 
-def test_symmetric_body_without_axial_spin_says_what_is_missing():
+def test_symmetric_body_with_little_axial_spin_says_what_is_missing():
+    """No axial spin goes to Neumann's problem (tests/test_neumann.py); a little spin (a curve near
+    a tacnode, branch points near |E| ~ 1 / spin) is refused at once, naming the cause."""
+    J, a = [0.5, 0.5, 1.2], np.diag([1.0, 2.0, 3.0])
+    assert solve_rotation(J, a, np.eye(3), [0.1, 0.2, 0.0]).method.startswith("neumann/")
     with pytest.raises(ClosedFormUnavailable, match="tacnode"):
-        solve_rotation([0.5, 0.5, 1.2], np.diag([1.0, 2.0, 3.0]), np.eye(3), [0.1, 0.2, 0.0])
+        solve_rotation(J, a, np.eye(3), [0.1, 0.2, 1e-5])
 
 
 def test_symmetric_body_as_a_tensor_against_dop853():
