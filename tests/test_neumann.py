@@ -76,21 +76,23 @@ def test_against_dop853(label, J, a, Q0, w0, method):
                          ids=["oblate-rest", "oblate-saddle", "near-unstable", "oblate-rank1",
                               "planar-circulation"])
 def test_against_heyoka_far_times(label, J, a, Q0, w0, method):
+    _check_against_heyoka(J, a, Q0, w0)
+
+
+def _check_against_heyoka(J, a, Q0, w0):
+    """Issue 6's times to t = 4002 against heyoka 80-bit: the issue asks 1e-9; measured <= 3.8e-12 on
+    every case (docs/neumann.md), so 1e-10 leaves room for the reference and still catches a drift."""
     pytest.importorskip("heyoka")
     sol = solve_rotation(J, a, Q0, w0)
     w, Q = sol(T_FAR)
     wr, Qr = integrate_rotation(J, a, Q0, w0, T_FAR, method="heyoka", dtype="ldbl", rtol=1e-19)
-    assert np.abs(w - wr).max() < 1e-9 and np.abs(Q - Qr).max() < 1e-9
+    assert np.abs(w - wr).max() < 1e-10 and np.abs(Q - Qr).max() < 1e-10
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("label, J, a, Q0, w0, method", CASES, ids=IDS)
 def test_against_heyoka_far_times_all(label, J, a, Q0, w0, method):
-    pytest.importorskip("heyoka")
-    sol = solve_rotation(J, a, Q0, w0)
-    w, Q = sol(T_FAR)
-    wr, Qr = integrate_rotation(J, a, Q0, w0, T_FAR, method="heyoka", dtype="ldbl", rtol=1e-19)
-    assert np.abs(w - wr).max() < 1e-9 and np.abs(Q - Qr).max() < 1e-9
+    _check_against_heyoka(J, a, Q0, w0)
 
 
 @pytest.mark.parametrize("label, J, a, Q0, w0, method", CASES, ids=IDS)
