@@ -122,6 +122,54 @@ def test_heyoka_quadruple_reference_conserves_to_round_off():
     assert np.max(np.abs(Qd - Q)) < 1e-9 and np.max(np.abs(wd - w)) < 1e-9  # the issue's t <= 100 figure
 
 
+@pytest.mark.parametrize("dtype", ["ldbl", "f128"])
+def test_extended_precision_references_integrate_the_body_of_the_data(dtype):
+    """I^-1 and m0 = I omega0 of the extended-precision paths are those of I = tr(J) 1 - J for the float64 J
+    and omega0, rounded once in the working precision (mpmath at 60 digits as the reference): the float64
+    inverse is another body, one ulp away, and near an unstable relative equilibrium that ulp moved the
+    reference by 5e-9 at t = 4000."""
+    hy = pytest.importorskip("heyoka")
+    import mpmath
+
+    from thetasol.integrate import _mp_to_fp, _working_precision_inertia
+
+    fp, ulp = {"ldbl": (np.longdouble, 2.0 ** -63), "f128": (hy.real128, 2.0 ** -112)}[dtype]
+    J, _, _, w0 = random_case(6)
+    Iinv, m0 = _working_precision_inertia(J, w0, _mp_to_fp(fp))
+    with mpmath.workdps(60):
+        Jm = mpmath.matrix(J.tolist())
+        I = (Jm[0, 0] + Jm[1, 1] + Jm[2, 2]) * mpmath.eye(3) - Jm
+        Iinv_ref, m0_ref = I ** -1, I * mpmath.matrix(w0.tolist())
+        err_inv = max(abs(mpmath.mpf(str(Iinv[i][k])) - Iinv_ref[i, k]) / abs(Iinv_ref[i, k])
+                      for i in range(3) for k in range(3))
+        err_m = max(abs(mpmath.mpf(str(m0[i])) - m0_ref[i]) / abs(m0_ref[i]) for i in range(3))
+        err_f64 = max(abs(mpmath.mpf(float(x)) - Iinv_ref[i, k]) / abs(Iinv_ref[i, k])
+                      for (i, k), x in np.ndenumerate(np.linalg.inv(np.trace(J) * np.eye(3) - J)))
+    assert err_inv <= ulp and err_m <= ulp, (err_inv, err_m)
+    assert err_f64 > 100 * ulp    # the float64 inverse is not the body's (the test can fail)
+
+
+@pytest.mark.slow
+def test_quadruple_reference_next_to_an_unstable_equilibrium_matches_the_closed_form():
+    """The near-unstable-equilibrium case of tests/data/rotation/refs.json at its worst time on a dense grid
+    (t = 3726.8625): quadruple-precision heyoka against the theta-function solution, which is exact for the
+    body I = tr(J) 1 - J of the float64 data.  Measured 2.7e-11; 5.5e-9 while the reference rounded I^-1
+    to float64."""
+    pytest.importorskip("heyoka")
+    import json
+    import pathlib
+
+    from thetasol import solve_rotation
+
+    r = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())[
+        "near_unstable_equilibrium"]
+    J, a, Q0, w0 = np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"])
+    t = np.array([3726.8625])
+    wq, Qq = integrate_rotation(J, a, Q0, w0, t, method="heyoka", dtype="f128", rtol=1e-25)
+    ws, Qs = solve_rotation(J, a, Q0, w0)(t)
+    assert max(np.abs(ws - wq).max(), np.abs(Qs - Qq).max()) <= 1e-10
+
+
 # -- integrate_rotation: shapes and input ------------------------------------------------------------------
 
 def test_shapes_order_and_time_zero():

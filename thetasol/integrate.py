@@ -62,7 +62,10 @@ def integrate_rotation(J, a, Q0, omega0, t, rtol: float = 1e-12, atol: float | N
     step : float, optional
         Fixed step for ``"splitting"`` (overrides the ``rtol`` rule).
     dtype : {"dbl", "ldbl", "f128"}
-        Floating type for ``"heyoka"``.
+        Floating type for ``"heyoka"``.  With ``"ldbl"`` and ``"f128"`` the inverse inertia and
+        ``m0 = I omega0`` are those of the float64 ``J`` and ``omega0`` rounded once to that type
+        (not the float64 inverse: near an unstable relative equilibrium its one-ulp change of the
+        body moved the trajectory by 5e-9 at t = 4000).
 
     Returns
     -------
@@ -97,7 +100,7 @@ def integrate_rotation(J, a, Q0, omega0, t, rtol: float = 1e-12, atol: float | N
         if method == "splitting":
             m_out[idx], Q_out[idx] = _splitting(Jm, am, Q0, m0, tgrid, rtol, step, w0)
         elif method == "heyoka":
-            m_out[idx], Q_out[idx] = _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype)
+            m_out[idx], Q_out[idx] = _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0)
         else:
             m_out[idx], Q_out[idx] = _solve_ivp(Jm, I_inv, am, Q0, m0, tgrid, rtol, atol, method)
     Q_out = polar_orthonormalize(Q_out)
@@ -207,7 +210,37 @@ class _SplitState:
 
 # -- heyoka ----------------------------------------------------------------------------------
 
-def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype):
+def _working_precision_inertia(Jm, w0, to_fp):
+    """I^-1 and m0 = I omega0 for I = tr(J) 1 - J of the float64 data, exact to the working precision.
+
+    The float64 inverse of the float64 inertia is another body, about one ulp away: next to an
+    unstable relative equilibrium that moved the trajectory by 5e-9 at t = 4000 (the data's own
+    conditioning there is ~1e-10), so an extended-precision reference must not round I^-1 to float64.
+    """
+    import mpmath
+
+    with mpmath.workdps(60):
+        Jmp = mpmath.matrix([[mpmath.mpf(float(x)) for x in row] for row in Jm])
+        Imp = (Jmp[0, 0] + Jmp[1, 1] + Jmp[2, 2]) * mpmath.eye(3) - Jmp
+        Iinv = Imp ** -1
+        m0 = Imp * mpmath.matrix([mpmath.mpf(float(x)) for x in w0])
+        return [[to_fp(Iinv[i, k]) for k in range(3)] for i in range(3)], [to_fp(m0[i]) for i in range(3)]
+
+
+def _mp_to_fp(fp):
+    """mpmath number -> fp, rounded once: the sum of its float64 triple-word split, added in fp."""
+    import mpmath
+
+    def conv(x):
+        parts = []
+        for _ in range(3):
+            parts.append(float(x))
+            x = x - mpmath.mpf(parts[-1])
+        return (fp(parts[0]) + fp(parts[1])) + fp(parts[2])
+    return conv
+
+
+def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0):
     try:
         import heyoka as hy
     except ImportError as exc:  # pragma: no cover - exercised only without the extra
@@ -216,7 +249,14 @@ def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype):
     xs = hy.make_vars(*names)
     m = xs[:3]
     Q = [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]
-    w = [sum(float(I_inv[i, k]) * m[k] for k in range(3)) for i in range(3)]
+    fp = {"dbl": float, "ldbl": np.longdouble, "f128": hy.real128}
+    if dtype not in fp:
+        raise ValueError(f"dtype must be 'dbl', 'ldbl' or 'f128', got {dtype!r}")
+    if dtype == "dbl":
+        Iw, m0w = [[float(x) for x in row] for row in I_inv], [float(x) for x in m0]
+    else:
+        Iw, m0w = _working_precision_inertia(Jm, w0, _mp_to_fp(fp[dtype]))
+    w = [sum(Iw[i][k] * m[k] for k in range(3)) for i in range(3)]
     aQ = [[sum(float(am[i, k]) * Q[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
     ap = [[sum(Q[k][i] * aQ[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
     JA = [[sum(float(Jm[i, k]) * ap[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
@@ -227,17 +267,15 @@ def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype):
     W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
     Qdot = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
     sys = list(zip(xs, mdot + Qdot))
-    y0 = np.concatenate([m0, Q0.ravel()])
-    fp = {"dbl": float, "ldbl": np.longdouble}
     if dtype == "f128":
-        y0h = np.array([hy.real128(str(float(v))) for v in y0])
+        # the float64 values themselves (str() would give the nearest short decimal: another number)
+        y0h = np.array(m0w + [hy.real128(float(v)) for v in Q0.ravel()])
         ta = hy.taylor_adaptive(sys, y0h, tol=hy.real128(str(rtol)), fp_type=hy.real128)
-        grid = np.array([hy.real128(str(float(v))) for v in np.concatenate([[0.0], tgrid])])
-    elif dtype in fp:
-        ta = hy.taylor_adaptive(sys, y0.astype(fp[dtype]), tol=fp[dtype](rtol), fp_type=fp[dtype])
-        grid = np.concatenate([[0.0], tgrid]).astype(fp[dtype])
+        grid = np.array([hy.real128(float(v)) for v in np.concatenate([[0.0], tgrid])])
     else:
-        raise ValueError(f"dtype must be 'dbl', 'ldbl' or 'f128', got {dtype!r}")
+        y0 = np.concatenate([np.array(m0w, dtype=fp[dtype]), Q0.ravel().astype(fp[dtype])])
+        ta = hy.taylor_adaptive(sys, y0, tol=fp[dtype](rtol), fp_type=fp[dtype])
+        grid = np.concatenate([[0.0], tgrid]).astype(fp[dtype])
     res = ta.propagate_grid(grid)
     states = np.asarray(res[-1], dtype=float)[1:]
     return states[:, :3], states[:, 3:].reshape(-1, 3, 3)
