@@ -203,8 +203,8 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
         The theta-function set-up lost accuracy (``|Im Phi(0, t)|`` above 1e-8 at ``t = 1000``,
         the size is stated): errors of that size are to be expected.  The check cannot see an
         error of the torus position along the real torus (near an unstable relative equilibrium
-        1.5e-8 went unseen before the curve engine's fix for clustered branch points; 1.1e-9, the
-        data's own conditioning, after it: docs/theta_rotation.md).
+        1.5e-8 went unseen before the curve engine's fix for clustered branch points; the reference
+        case is at 6.1e-12 since: docs/theta_rotation.md).
 
     Examples
     --------
