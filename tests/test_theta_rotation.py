@@ -16,12 +16,10 @@ from thetasol._so3 import hat
 from thetasol.theta_rotation import ThetaRotation, _lattice_coords
 
 REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
-# Known limits are tracked here, not hidden (none at present).  The near-unstable-equilibrium case
-# "drifted" to 1.3e-9 against references integrated with the float64 inverse of the float64 inertia,
-# a body one ulp away that is not integrable (5.3e-9 near that separatrix); against the corrected
-# quadruple-precision references it is 6.1e-12.  The symmetric fast spin drifted (4.2e-9) until the
-# exponents' difference at the node became exact (_node_exponent_gap).
-KNOWN_LIMITS: dict[str, str] = {}
+# Every reference case passes.  The near-unstable-equilibrium case once "drifted" to 1.3e-9 against
+# references integrated with the float64 inverse of the float64 inertia, a body one ulp away that is
+# not integrable; against the corrected quadruple-precision references it is 6.1e-12.  The symmetric
+# fast spin drifted (4.2e-9) until the exponents' difference at the node became exact.
 
 
 def _case(name):
@@ -32,8 +30,6 @@ def _case(name):
 @pytest.mark.parametrize("name", [n for n in REFS])
 def test_against_long_high_accuracy_integration(name):
     """Max error in omega and Q <= 1e-9 at t in {0.7, 3.1, 17.3, 102, 997, 4002} (issue 6)."""
-    if name in KNOWN_LIMITS:
-        pytest.xfail(KNOWN_LIMITS[name])
     J, a, Q0, w0, r = _case(name)
     sol = solve_rotation(J, a, Q0, w0)
     assert isinstance(sol, ThetaRotation)

@@ -396,11 +396,10 @@ def _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap=None):
     rows += [(3 + i, k, nu_aux[i, k].imag, err_aux[i, k])
              for i in range(nu_aux.shape[0]) for k in range(3)]
     nF = 3 + nu_aux.shape[0]
-    k0, k1, gval = gap if gap is not None else (0, 0, 0.0)
+    k0, k1, gval = gap if gap is not None else (0, -1, 0.0)
     # with the constraint, G_k1 = G_k0 - gap is eliminated: its rows become rows of G_k0 (its
     # column stays zero; lstsq's minimum-norm solution leaves it at 0)
-    fit_rows = [(s_, k0, val - gval, er) if gap is not None and k == k1 else (s_, k, val, er)
-                for s_, k, val, er in rows]
+    fit_rows = [(s_, k0, val - gval, er) if k == k1 else (s_, k, val, er) for s_, k, val, er in rows]
     A = np.zeros((len(rows) + 1, nF + 3))
     rhs = np.zeros(len(rows) + 1)
     for i, (s_, k, val, er) in enumerate(fit_rows):
@@ -413,7 +412,7 @@ def _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap=None):
     return x[:3][:, None] - x[nF:][None, :], float(resid)
 
 
-def _node_exponent_gap(curve, Pinf, Jinf, G, U):
+def _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit):
     """G_k0 - G_k1 for the two branches inf_k0, inf_k1 of a symmetric body's node over E = infinity.
 
     The exponents' constants G_k = Omega(inf_k) (the regular part of the normalized abelian integral
@@ -425,12 +424,15 @@ def _node_exponent_gap(curve, Pinf, Jinf, G, U):
     the normalized holomorphic differentials.  Riemann's bilinear relation for the pair
     (Omega, Omega3), both with zero a-periods, leaves the sum of the residues of Omega Omega3 at
     infinity, so ``G_k0 - G_k1 = sum_j J_j c_j`` with c_j the t^0 coefficient of Omega3 / dt at
-    inf_j (t = 1/E): the same pairing that gives U.  Returns (k0, k1, value in nu units) with the
-    value determined modulo 2 pi Z U (the path to infinity), which the caller fixes from the fit.
+    inf_j (t = 1/E): the same pairing that gives U.  That value holds modulo 2 pi n.U (the path to
+    infinity); n is the one the fitted exponents ``nu_fit`` point at.
+
+    Returns ``(k0, k1, value in nu units)``, or None when the fit points at no single n (within 1e-8;
+    the next candidate at least 1e-4 away): the fitted value is then kept (its rate error ~1e-13).
     """
     pair = [j for j in range(3) if np.sum(np.abs(Jinf - Jinf[j]) <= SNAP_TOL * Jinf.max()) == 2]
     if len(pair) != 2:
-        return None
+        raise RuntimeError(f"no node over E = infinity (J at infinity {Jinf}; internal error)")
     om = curve.x ** 2
     res, c0 = np.zeros(3, complex), np.zeros(3, complex)
     for j, Pl in enumerate(Pinf):
@@ -444,8 +446,15 @@ def _node_exponent_gap(curve, Pinf, Jinf, G, U):
                            "differential (internal error)")
     g = curve.genus
     pa = (np.asarray(curve.period_matrix(differentials=[om])) @ G).ravel()[:g] / r
-    V3 = (Jinf @ c0) / r - pa @ U
-    return k0, k1, float(V3.imag)
+    value = float(((Jinf @ c0) / r - pa @ U).imag)
+    fitted = float(nu_fit[0, k1] - nu_fit[0, k0])
+    n = np.array(np.meshgrid(*[np.arange(-3, 4)] * rdim, indexing="ij")).reshape(rdim, -1).T
+    cand = value + 2 * np.pi * n @ U[:rdim]
+    miss = np.abs(fitted - cand)
+    order = np.argsort(miss)
+    if miss[order[0]] > 1e-8 * (1 + abs(fitted)) or (len(miss) > 1 and miss[order[1]] <= 1e-4):
+        return None
+    return k0, k1, float(cand[order[0]])
 
 
 def _symmetry_axis(Jp: np.ndarray):
@@ -632,19 +641,12 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     X0b, rhob, nub = constants(0.5 * r)
     nu_aux, h_aux = _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d, Bc)
     nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux)
-    gap = _node_exponent_gap(curve, Pinf, Jinf, G, U) if curve.symmetric_body else None
+    gap = _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit) if curve.symmetric_body else None
     node_gap_change = None
     if gap is not None:
-        # the exact value holds modulo 2 pi n.U: take the n the fit points at, if it points at one
         k0, k1, val = gap
-        fitted = float(nu_fit[0, k1] - nu_fit[0, k0])
-        n = np.array(np.meshgrid(*[np.arange(-3, 4)] * rdim, indexing="ij")).reshape(rdim, -1).T
-        cand = val + 2 * np.pi * n @ U[:rdim]
-        miss = np.abs(fitted - cand)
-        order = np.argsort(miss)
-        if miss[order[0]] <= 1e-8 * (1 + abs(fitted)) and (len(miss) == 1 or miss[order[1]] > 1e-4):
-            nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux, (k0, k1, float(cand[order[0]])))
-            node_gap_change = float(fitted - cand[order[0]])
+        node_gap_change = float(nu_fit[0, k1] - nu_fit[0, k0]) - val
+        nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap)
     scale_nu = 1 + np.abs(nu).max()
     if np.abs(nu.real).max() > 1e-6 * scale_nu:
         raise RuntimeError(f"exponents are not imaginary (max |Re| {np.abs(nu.real).max():.2g}): "
