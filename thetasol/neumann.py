@@ -43,14 +43,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .equations import inertia_from_moments, invariants as _invariants
+from .equations import invariants as _invariants
+from .pendulum import _pendulum_angle
 from .rotation import ClosedFormUnavailable, RotationSolution
+from .theta_rotation import SNAP_TOL, _principal_frame, _symmetry_axis
 
 __all__ = ["NeumannRotation"]
 
 _EPS = np.finfo(float).eps
-#: Relative size below which a near-degeneracy is snapped to the exact one (as in theta_rotation).
-SNAP_TOL = 1e-12
 #: Fourier series are refined until their trailing coefficients fall below this (relative).
 COEF_TOL = 2e-16
 N_MAX_1D = 2 ** 12
@@ -61,50 +61,61 @@ MIN_WIDTH = 1e-8
 
 # -- Fourier series on the circle ----------------------------------------------------------------
 
-def _fit_series(fun, what: str, n0: int = 64, nmax: int = N_MAX_1D, tol: float = COEF_TOL,
-                floor: float = 0.0):
-    """Coefficients ``c_n`` (n = 0..N/2) with ``fun(x) = Re(c_0 + 2 sum c_n e^{inx})``, N doubled
-    until the upper quarter of the spectrum is below ``tol`` times the largest coefficient or below
-    ``floor`` (the absolute noise of the samples)."""
+def _refined_fft(transform, what: str, n0: int, nmax: int, terms=str):
+    """Double the grid ``n`` from ``n0`` until the outer band of the spectrum is below ``COEF_TOL``
+    times the largest coefficient or the absolute noise of the samples.  ``transform(n)`` returns
+    (coefficients, mask of the outer band, noise floor); the answer is (n, c, mask of the kept)."""
     n = n0
     while True:
-        x = 2 * np.pi * np.arange(n) / n
-        c = np.fft.rfft(fun(x)) / n
+        c, band, floor = transform(n)
         scale = max(np.abs(c).max(), np.finfo(float).tiny)
-        tail = np.abs(c[(3 * n) // 8:]).max()
-        if tail <= max(tol * scale, floor):
-            keep = np.flatnonzero(np.abs(c) > 0.25 * max(tol * scale, floor))
-            m = keep.max() + 1 if keep.size else 1
-            return c[:m].copy()
+        tail = np.abs(c[band]).max()
+        if tail <= max(COEF_TOL * scale, floor):
+            return n, c, np.abs(c) > 0.25 * max(COEF_TOL * scale, floor)
         if n >= nmax:
             raise ClosedFormUnavailable(
-                f"Neumann solution: the Fourier series of {what} has not converged with {n} terms "
+                f"Neumann solution: the Fourier series of {what} has not converged with {terms(n)} terms "
                 f"(tail {tail / scale:.1e} relative): the torus is too close to a separatrix or the "
                 "trajectory too close to the reference axis; use thetasol.integrate_rotation")
         n *= 2
 
 
+def _fit_series(fun, what: str, floor: float = 0.0):
+    """Coefficients ``c_n`` (n = 0..N/2) with ``fun(x) = Re(c_0 + 2 sum c_n e^{inx})``, N doubled
+    until the upper quarter of the spectrum is below ``COEF_TOL`` times the largest coefficient or
+    below ``floor`` (the absolute noise of the samples)."""
+    def transform(n):
+        c = np.fft.rfft(fun(2 * np.pi * np.arange(n) / n)) / n
+        return c, slice((3 * n) // 8, None), floor
+
+    _, c, keep = _refined_fft(transform, what, 64, N_MAX_1D)
+    keep = np.flatnonzero(keep)
+    return c[:keep.max() + 1 if keep.size else 1].copy()
+
+
+def _sum_series(E: np.ndarray, c: np.ndarray):
+    """``Re(c_0 + 2 sum c_n e^{inx})`` from the powers ``E = _powers(x, >= c.size - 1)``."""
+    return c[0].real + 2.0 * (E[..., :c.size - 1] @ c[1:]).real
+
+
 def _eval_series(c: np.ndarray, x: np.ndarray, derivative: bool = False):
     """``Re(c_0 + 2 sum c_n e^{inx})`` (and its derivative) at real ``x`` (any shape)."""
-    n = np.arange(1, c.size)
     E = _powers(x, c.size - 1)
-    val = c[0].real + 2.0 * (E @ c[1:]).real
+    val = _sum_series(E, c)
     if not derivative:
         return val
-    return val, 2.0 * (E @ (1j * n * c[1:])).real
+    return val, 2.0 * (E @ (1j * np.arange(1, c.size) * c[1:])).real
 
 
 def _powers(x: np.ndarray, n: int) -> np.ndarray:
     """``e^{i k x}`` for k = 1..n, shape x.shape + (n,): products of one exponential (the rounding of
     the k-th power grows like k eps, on coefficients that decay geometrically)."""
-    z = np.exp(1j * np.remainder(x, 2 * np.pi))
     if n <= 8:
         return np.exp(1j * np.multiply.outer(np.remainder(x, 2 * np.pi), np.arange(1, n + 1)))
     # powers by repeated squaring blocks: e^{ikx} = e^{i(k mod 8)x} e^{i 8 (k div 8) x}
     base = np.exp(1j * np.multiply.outer(np.remainder(x, 2 * np.pi), np.arange(1, 9)))
     step = np.cumprod(np.broadcast_to(base[..., 7:8], x.shape + ((n + 7) // 8 - 1,)), axis=-1)
     blocks = np.concatenate([np.ones(x.shape + (1,), complex), step], -1)
-    del z
     return (blocks[..., :, None] * base[..., None, :]).reshape(x.shape + (-1,))[..., :n]
 
 
@@ -132,7 +143,6 @@ class _Oscillator:
         self.below = np.asarray(below, float)
         self.above = np.asarray(above, float)
         self.cplx = np.asarray(complex_roots, complex)
-        self.name = name
         self.f = _fit_series(lambda th: 1.0 / self.rate(th), f"d{name}/rate")
         self.fbar = self.f[0].real
         self.A = _integrated(self.f) / self.fbar            # alpha = theta + A(theta)
@@ -164,31 +174,41 @@ class _Oscillator:
 
     def _invert(self, al):
         """theta with theta + A(theta) = al (safeguarded Newton; the map is increasing)."""
+        def fun(th):
+            g, dg = _eval_series(self.A, th, derivative=True)
+            return th + g, 1.0 + dg
+
         span = 2.0 * np.abs(self.A[1:]).sum() + 1e-300
-        lo_, hi_ = al - span, al + span
-        th = al.copy()
-        for _ in range(100):
-            g, dg = _eval_series(self.A, th, derivative=True)
-            r = th + g - al
-            lo_ = np.where(r < 0, th, lo_)
-            hi_ = np.where(r > 0, th, hi_)
-            step = th - r / (1.0 + dg)
-            bad = (step < lo_) | (step > hi_) | ~np.isfinite(step)
-            new = np.where(bad, 0.5 * (lo_ + hi_), step)
-            close = np.all(np.abs(new - th) <= 1e-9)
-            th = new
-            if close:
-                break
-        for _ in range(2):                          # quadratic convergence: two more steps reach rounding
-            g, dg = _eval_series(self.A, th, derivative=True)
-            th = th - (th + g - al) / (1.0 + dg)
-        return th
+        return _monotone_newton(fun, al, al.copy(), al - span, al + span,
+                                lambda new, th: np.all(np.abs(new - th) <= 1e-9), 100, 2)
 
     def theta(self, al):
         return al + _eval_series(self.B, al)
 
     def alpha(self, th):
         return th + _eval_series(self.A, th)
+
+
+def _monotone_newton(fun, y, x, lo, hi, converged, maxiter: int, polish: int):
+    """x with fun(x)[0] = y for an increasing fun (returning value and derivative): Newton steps,
+    bisection of the bracket [lo, hi] where a step leaves it, until ``converged(new, old)``; then
+    ``polish`` plain steps (quadratic convergence reaches rounding)."""
+    for _ in range(maxiter):
+        f, df = fun(x)
+        r = f - y
+        lo = np.where(r < 0, x, lo)
+        hi = np.where(r > 0, x, hi)
+        step = x - r / df
+        bad = (step < lo) | (step > hi) | ~np.isfinite(step)
+        new = np.where(bad, 0.5 * (lo + hi), step)
+        close = converged(new, x)
+        x = new
+        if close:
+            break
+    for _ in range(polish):
+        f, df = fun(x)
+        x = x - (f - y) / df
+    return x
 
 
 def _quadratic_roots(a2: float, a1: float, a0: float):
@@ -208,9 +228,7 @@ class _NeumannTorus:
     distinct) from ``(x0, y0)``: the separated solution ``x(t)``, ``xdot(t)``."""
 
     def __init__(self, k: np.ndarray, x0: np.ndarray, y0: np.ndarray):
-        self.k = k
         d = k - k[1]                                   # shifted to the middle eigenvalue (exact)
-        self.d = d
         L = np.cross(x0, y0)
         x2 = x0 * x0
         jl = [(1, 2), (0, 2), (0, 1)]
@@ -220,10 +238,8 @@ class _NeumannTorus:
         zu = _quadratic_roots(a2, a1, a0)              # u1 <= k2 <= u2 (shifted)
         L2 = L * L
         zb = _quadratic_roots(a2, a1 + L2.sum(), a0 - (L2 * d).sum())
-        self.b = zb
         roots = sorted([(d[i], "k", i) for i in range(3)] + [(zb[j], "b", j) for j in range(2)],
                        key=lambda r: r[0])
-        self.roots = roots
         vals = np.array([r[0] for r in roots])
         scale = max(abs(d[0]), abs(d[2]))
         tol = 1e-9 * scale
@@ -290,8 +306,7 @@ class _NeumannTorus:
                    for kk, o in enumerate(self.osc)]
         self.P = [_integrated(c) for c in self.cu]
         self.fbar = np.array([o.fbar for o in self.osc])
-        self.ubar = np.array([c[0].real for c in self.cu])
-        self.drift = self.ubar[1] - self.ubar[0]
+        self.drift = self.cu[1][0].real - self.cu[0][0].real
         self.P0 = np.array([_eval_series(P, a) for P, a in zip(self.P, self.alpha0)])
         self.Pspan = sum(2 * f * np.abs(P).sum() for f, P in zip(self.fbar, self.P)) * 2
 
@@ -330,39 +345,23 @@ class _NeumannTorus:
 
     # -- time -> s ---------------------------------------------------------------------------------
     def _time(self, s):
-        """t(s), u2 - u1, alpha and theta at s (one set of powers e^{i n alpha} per coordinate)."""
+        """t(s) and dt/ds = u2 - u1 at s (one set of powers e^{i n alpha} per coordinate)."""
         al = self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
         t = self.drift * s
-        th, u = [], []
+        u = []
         for kk, (o, P) in enumerate(zip(self.osc, self.P)):
             E = _powers(al[kk], max(P.size, o.B.size) - 1)
-            th_k = al[kk] + o.B[0].real + 2.0 * (E[:, :o.B.size - 1] @ o.B[1:]).real
-            Pk = P[0].real + 2.0 * (E[:, :P.size - 1] @ P[1:]).real
-            t = t + (1 if kk else -1) * self.fbar[kk] * (Pk - self.P0[kk])
-            th.append(th_k)
-            u.append(o.u(th_k))
-        return t, u[1] - u[0], al, np.array(th)
+            t = t + (1 if kk else -1) * self.fbar[kk] * (_sum_series(E, P) - self.P0[kk])
+            u.append(o.u(al[kk] + o.B[0].real + 2.0 * (E[:, :o.B.size - 1] @ o.B[1:]).real))
+        return t, u[1] - u[0]
 
     def s_of_t(self, t: np.ndarray):
-        """s with t(s) = t (safeguarded Newton; t(s) is increasing); also alpha(s), theta(s)."""
-        lo = (t - self.Pspan) / self.drift
-        hi = (t + self.Pspan) / self.drift
-        s = t / self.drift
-        for _ in range(200):
-            ts, dts, al, th = self._time(s)
-            r = ts - t
-            lo = np.where(r < 0, s, lo)
-            hi = np.where(r > 0, s, hi)
-            step = s - r / dts
-            bad = (step < lo) | (step > hi) | ~np.isfinite(step)
-            new = np.where(bad, 0.5 * (lo + hi), step)
-            close = np.all(np.abs(new - s) <= 1e-8 * (np.abs(s) + 1.0 / self.drift))
-            s = new
-            if close:
-                break
-        # one more step (quadratic convergence reaches rounding); alpha, theta at the final s
-        ts, dts, al, th = self._time(s)
-        s = s - (ts - t) / dts
+        """s with t(s) = t (safeguarded Newton, one polishing step; t(s) is increasing); also
+        alpha(s), theta(s)."""
+        s = _monotone_newton(self._time, t, t / self.drift, (t - self.Pspan) / self.drift,
+                             (t + self.Pspan) / self.drift,
+                             lambda new, s: np.all(np.abs(new - s) <= 1e-8 * (np.abs(s) + 1.0 / self.drift)),
+                             200, 1)
         al = self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
         th = np.array([o.theta(a) for o, a in zip(self.osc, al)])
         return s, al, th
@@ -381,27 +380,18 @@ class _AngleSeries:
 
     def __init__(self, H, beta0: np.ndarray, nu: np.ndarray, parity, what: str):
         p = np.asarray(parity, float)
-        n = 32
-        while True:
+
+        def transform(n):
             a = 2 * np.pi * np.arange(n) / n
             vals = H(a)
             twist = np.exp(-0.5j * (p[0] * a[:, None] + p[1] * a[None, :]))
-            c = np.fft.fft2(vals * twist) / (n * n)
-            m = np.rint(np.fft.fftfreq(n) * n).astype(int)
-            floor = 8 * _EPS * np.abs(vals).max()
-            scale = max(np.abs(c).max(), np.finfo(float).tiny)
-            band = (np.abs(m)[:, None] >= (3 * n) // 8) | (np.abs(m)[None, :] >= (3 * n) // 8)
-            tail = np.abs(c[band]).max()
-            if tail <= max(COEF_TOL * scale, floor):
-                break
-            if n >= N_MAX_2D:
-                raise ClosedFormUnavailable(
-                    f"Neumann solution: the Fourier series of {what} on the torus has not converged with "
-                    f"{n}^2 terms (tail {tail / scale:.1e} relative): the torus is too close to a separatrix "
-                    "or the trajectory too close to the reference axis; use thetasol.integrate_rotation")
-            n *= 2
-        self.n = n
-        keep = np.abs(c) > 0.25 * max(COEF_TOL * scale, floor)
+            m = np.abs(np.rint(np.fft.fftfreq(n) * n).astype(int))
+            band = (m[:, None] >= (3 * n) // 8) | (m[None, :] >= (3 * n) // 8)
+            return np.fft.fft2(vals * twist) / (n * n), band, 8 * _EPS * np.abs(vals).max()
+
+        self.n, c, keep = _refined_fft(transform, what + " on the torus", 32, N_MAX_2D,
+                                       terms=lambda n: f"{n}^2")
+        m = np.rint(np.fft.fftfreq(self.n) * self.n).astype(int)
         i1, i2 = np.nonzero(keep)
         modes = np.stack([2 * m[i1] + int(p[0]), 2 * m[i2] + int(p[1])], -1)   # beta harmonics
         coef = c[i1, i2]
@@ -409,7 +399,6 @@ class _AngleSeries:
         self.mean = coef[zero].sum().real
         modes, coef = modes[~zero], coef[~zero]
         D = modes @ nu
-        self.beta0, self.nu = beta0, nu
         # near-resonant terms keep the form s e^{iDs/2} sinc: amplification min(s, 1/|D|)
         res = np.abs(D) < 1e-3 * nu.min()
         self.C_res = coef[res] * np.exp(1j * (modes[res] @ beta0))
@@ -544,9 +533,7 @@ def _genus2_motion(T: _NeumannTorus, ref: int, e10: np.ndarray):
 
 def _symmetric_no_spin(J: np.ndarray, a: np.ndarray, omega0: np.ndarray):
     """(Jp, P, axis) when the body is symmetric, a is not isotropic and omega0 has no axial part
-    (relative to |omega0| + sqrt|a|, within SNAP_TOL); else None."""
-    from .theta_rotation import _principal_frame, _symmetry_axis
-
+    (relative to |omega0| + sqrt|a|, within theta_rotation's SNAP_TOL); else None."""
     Jp, P = _principal_frame(J)
     if Jp[-1] - Jp[0] <= SNAP_TOL * Jp[-1]:
         return None                                    # spherical: no torque
@@ -590,7 +577,6 @@ def _solve_neumann_rotation(J, a, Q0, omega0, dps=None):
     x0 = x0 / np.linalg.norm(x0)
     y0 = y0 - x0 * (x0 @ y0)
     e10 = V.T @ Q0p[:, a1]
-    span = k[2] - k[0]
     inv = {key: float(v) for key, v in _invariants(J, a, Q0, omega0).items() if key != "curve"}
     inv["k"] = k.copy()
     motion, info, method = _axis_model(k, x0, y0, e10)
@@ -609,40 +595,30 @@ def _rotate(v: np.ndarray, n: np.ndarray, angle: np.ndarray) -> np.ndarray:
 
 
 def _pendulum(psi0: float, psidot0: float, nu: float):
-    """psi'' = -nu^2 sin psi from (psi0 in (-pi, pi], psidot0): t -> (psi(t) - psi0, psidot(t)), kind.
-    The closed forms of thetasol.pendulum (elliptic functions reduced modulo their periods)."""
-    from .elliptic import ellipf, ellipj
+    """psi'' = -nu^2 sin psi from (psi0 in (-pi, pi], psidot0): the parameters of
+    :func:`thetasol.pendulum._pendulum_angle` (which returns half of ``psi(t) - psi0``, ``psidot(t)``)
+    and the kind of motion."""
+    from .elliptic import ellipf
 
     if nu == 0.0 or (psidot0 == 0.0 and np.sin(psi0) == 0.0):
-        return (lambda t: (psidot0 * t, np.full_like(t, psidot0))), ("uniform" if psidot0 else "rest")
+        return {"kind": "uniform", "phi0": 0.0, "w0": 0.5 * psidot0}, ("uniform" if psidot0 else "rest")
+    c = {"nu": nu, "psi0": psi0}
     s2, c2 = np.sin(0.5 * psi0), np.cos(0.5 * psi0)
     x = psidot0 / (2.0 * nu)
     m = x * x + s2 * s2
     mc = (c2 - x) * (c2 + x)
     if mc > 0:
-        k = np.sqrt(m)
         u0 = float(ellipf(np.arctan2(s2, x), m, mc)) if m > 0 else 0.0
-
-        def f(t):
-            sn, cn, dn, _ = ellipj(nu * t + u0, m, mc)
-            return 2.0 * np.arctan2(k * sn, dn) - psi0, 2.0 * k * nu * cn
-        return f, "libration"
-    sgn = 1.0 if psidot0 >= 0 else -1.0
-    if mc < 0:
-        k = np.sqrt(m)
-        mm, mmc = 1.0 / m, -mc / m
-        u0 = float(ellipf(sgn * 0.5 * psi0, mm, mmc))
-
-        def f(t):
-            _, _, dn, am = ellipj(k * nu * t + u0, mm, mmc)
-            return sgn * 2.0 * am - psi0, sgn * 2.0 * k * nu * dn
-        return f, "circulation"
-    u0 = float(np.arctanh(np.clip(sgn * s2, -1.0, 1.0)))
-
-    def f(t):
-        s = nu * t + u0
-        return sgn * 2.0 * np.arctan2(np.tanh(s), 1.0 / np.cosh(s)) - psi0, sgn * 2.0 * nu / np.cosh(s)
-    return f, "separatrix"
+        c.update(kind="libration", m=m, mc=mc, u0=u0, sign=1.0)
+    else:
+        sgn = 1.0 if psidot0 >= 0 else -1.0
+        if mc < 0:
+            mm, mmc = 1.0 / m, -mc / m
+            c.update(kind="circulation", m=mm, mc=mmc, u0=float(ellipf(sgn * 0.5 * psi0, mm, mmc)),
+                     k=np.sqrt(m), sign=sgn)
+        else:
+            c.update(kind="separatrix", u0=float(np.arctanh(np.clip(sgn * s2, -1.0, 1.0))), sign=sgn)
+    return c, c["kind"]
 
 
 def _planar_motion(k, x0, y0, e10, normal):
@@ -664,17 +640,17 @@ def _planar_motion(k, x0, y0, e10, normal):
     nu2 = kq - kp
     scale = abs(vdot0) + np.sqrt(np.abs(k).max())
     nu = 0.0 if nu2 <= 4 * _EPS * scale ** 2 else float(np.sqrt(nu2))
-    f, kind = _pendulum(psi0, 2.0 * vdot0, nu)
+    pend, kind = _pendulum(psi0, 2.0 * vdot0, nu)
 
     x0n = x0 - (x0 @ n) * n
     x0n /= np.linalg.norm(x0n)
 
     def motion(t):
-        dpsi, psidot = f(t)
+        dv, vdot = _pendulum_angle(pend, t)                 # v - v0 = (psi - psi0) / 2
         # the axis and the body's first axis turned by the same angle: Q stays orthogonal at far times
-        x = _rotate(x0n, n, 0.5 * dpsi)
-        xd = (0.5 * psidot)[:, None] * np.cross(n, x)
-        return x, xd, _rotate(e10, n, 0.5 * dpsi)
+        x = _rotate(x0n, n, dv)
+        xd = vdot[:, None] * np.cross(n, x)
+        return x, xd, _rotate(e10, n, dv)
 
     return motion, {"torus_dimension": 1 if nu else 0, "pendulum_nu": nu, "plane_normal": n}, kind
 
@@ -754,14 +730,17 @@ def _repeated_motion(k, x0, y0, e10, idx):
     P_lam, P_phi = _integrated(c_lam), _integrated(c_phi)
     Pl0, Pp0 = _eval_series(P_lam, al0), _eval_series(P_phi, al0)
 
+    n_pow = max(osc.B.size, P_lam.size, P_phi.size) - 1
+
     def motion(t):
         al = al0 + t / fbar
-        th = osc.theta(al)
+        E = _powers(al, n_pow)                                      # shared by the three series
+        th = al + _sum_series(E, osc.B)
         z = osc.u(th)
         r2 = rho2(th)
         rho = np.sqrt(r2)
-        lam = lam0 + c_lam[0].real * t + fbar * (_eval_series(P_lam, al) - Pl0)
-        phi = phi0 + c_phi[0].real * t + fbar * (_eval_series(P_phi, al) - Pp0)
+        lam = lam0 + c_lam[0].real * t + fbar * (_sum_series(E, P_lam) - Pl0)
+        phi = phi0 + c_phi[0].real * t + fbar * (_sum_series(E, P_phi) - Pp0)
         zd = 0.5 * osc.w * np.sin(th) * osc.rate(th)
         cl, sl = np.cos(lam)[:, None], np.sin(lam)[:, None]
         radial = cl * m1 + sl * m2
