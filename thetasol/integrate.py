@@ -210,34 +210,30 @@ class _SplitState:
 
 # -- heyoka ----------------------------------------------------------------------------------
 
-def _working_precision_inertia(Jm, w0, to_fp):
-    """I^-1 and m0 = I omega0 for I = tr(J) 1 - J of the float64 data, exact to the working precision.
+def _working_precision_inertia(Jm, w0, fp):
+    """I^-1 and m0 = I omega0 for I = tr(J) 1 - J of the float64 data, as lists of ``fp`` numbers.
 
-    The float64 inverse of the float64 inertia is another body, about one ulp away: next to an
-    unstable relative equilibrium that moved the trajectory by 5e-9 at t = 4000 (the data's own
-    conditioning there is ~1e-10), so an extended-precision reference must not round I^-1 to float64.
+    Formed in mpmath at 60 digits and rounded to ``fp`` (np.longdouble, heyoka.real128) as the sum
+    of the float64 triple-word split, added in ``fp`` (within one ulp of ``fp``).  The float64 inverse
+    of the float64 inertia is another body, about one ulp away: next to an unstable relative
+    equilibrium that moved the trajectory by 5e-9 at t = 4000 (the data's own conditioning there is
+    ~1e-10), so an extended-precision reference must not round I^-1 to float64.
     """
     import mpmath
 
     with mpmath.workdps(60):
+        def to_fp(x):
+            parts = []
+            for _ in range(3):
+                parts.append(float(x))
+                x = x - mpmath.mpf(parts[-1])
+            return (fp(parts[0]) + fp(parts[1])) + fp(parts[2])
+
         Jmp = mpmath.matrix([[mpmath.mpf(float(x)) for x in row] for row in Jm])
         Imp = (Jmp[0, 0] + Jmp[1, 1] + Jmp[2, 2]) * mpmath.eye(3) - Jmp
         Iinv = Imp ** -1
         m0 = Imp * mpmath.matrix([mpmath.mpf(float(x)) for x in w0])
         return [[to_fp(Iinv[i, k]) for k in range(3)] for i in range(3)], [to_fp(m0[i]) for i in range(3)]
-
-
-def _mp_to_fp(fp):
-    """mpmath number -> fp, rounded once: the sum of its float64 triple-word split, added in fp."""
-    import mpmath
-
-    def conv(x):
-        parts = []
-        for _ in range(3):
-            parts.append(float(x))
-            x = x - mpmath.mpf(parts[-1])
-        return (fp(parts[0]) + fp(parts[1])) + fp(parts[2])
-    return conv
 
 
 def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0):
@@ -252,10 +248,11 @@ def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0):
     fp = {"dbl": float, "ldbl": np.longdouble, "f128": hy.real128}
     if dtype not in fp:
         raise ValueError(f"dtype must be 'dbl', 'ldbl' or 'f128', got {dtype!r}")
+    ft = fp[dtype]
     if dtype == "dbl":
         Iw, m0w = [[float(x) for x in row] for row in I_inv], [float(x) for x in m0]
     else:
-        Iw, m0w = _working_precision_inertia(Jm, w0, _mp_to_fp(fp[dtype]))
+        Iw, m0w = _working_precision_inertia(Jm, w0, ft)
     w = [sum(Iw[i][k] * m[k] for k in range(3)) for i in range(3)]
     aQ = [[sum(float(am[i, k]) * Q[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
     ap = [[sum(Q[k][i] * aQ[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
@@ -267,15 +264,11 @@ def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0):
     W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
     Qdot = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
     sys = list(zip(xs, mdot + Qdot))
-    if dtype == "f128":
-        # the float64 values themselves (str() would give the nearest short decimal: another number)
-        y0h = np.array(m0w + [hy.real128(float(v)) for v in Q0.ravel()])
-        ta = hy.taylor_adaptive(sys, y0h, tol=hy.real128(str(rtol)), fp_type=hy.real128)
-        grid = np.array([hy.real128(float(v)) for v in np.concatenate([[0.0], tgrid])])
-    else:
-        y0 = np.concatenate([np.array(m0w, dtype=fp[dtype]), Q0.ravel().astype(fp[dtype])])
-        ta = hy.taylor_adaptive(sys, y0, tol=fp[dtype](rtol), fp_type=fp[dtype])
-        grid = np.concatenate([[0.0], tgrid]).astype(fp[dtype])
+    # Q0 and the times are the float64 values themselves (real128(str(x)) would be another number)
+    y0 = np.array(m0w + [ft(float(v)) for v in Q0.ravel()])
+    grid = np.array([ft(float(v)) for v in np.concatenate([[0.0], tgrid])])
+    tol = hy.real128(str(rtol)) if dtype == "f128" else ft(rtol)
+    ta = hy.taylor_adaptive(sys, y0, tol=tol, fp_type=ft)
     res = ta.propagate_grid(grid)
     states = np.asarray(res[-1], dtype=float)[1:]
     return states[:, :3], states[:, 3:].reshape(-1, 3, 3)
