@@ -100,13 +100,16 @@ def test_integrals_and_orthogonality(label, J, a, Q0, w0, method):
     sol = solve_rotation(J, a, Q0, w0)
     t = np.array([0.0, 1.3, 55.0, 1234.5, 1e5, -7.7])
     w, Q = sol(t)
-    assert np.abs(np.swapaxes(Q, -1, -2) @ Q - np.eye(3)).max() < 1e-13
-    assert np.allclose(np.linalg.det(Q), 1.0, atol=1e-13)
+    # measured: orthogonality <= 6.7e-16, integrals <= 2.8e-15 relative, except planar-circulation
+    # (1.1e-12: its angle 2 am(.) is ~1e5 rad at t = 1e5 and carries eps |angle| of absolute rounding)
+    assert np.abs(np.swapaxes(Q, -1, -2) @ Q - np.eye(3)).max() < 1e-14
+    assert np.allclose(np.linalg.det(Q), 1.0, rtol=0.0, atol=1e-14)
     inv = invariants(np.diag(J), a, Q, w)
     ref = invariants(np.diag(J), a, Q0, np.asarray(w0, float))
+    tol = 1e-11 if label == "planar-circulation" else 2e-14
     for key in ("energy", "I2", "I3"):
         scale = 1.0 + abs(ref[key])
-        assert np.abs(inv[key] - ref[key]).max() < 1e-11 * scale, key
+        assert np.abs(inv[key] - ref[key]).max() < tol * scale, key
     assert np.abs(w[:, 2]).max() == 0.0          # no axial spin (principal frame = given frame here)
 
 
