@@ -20,7 +20,8 @@ apply.  The mechanics is solved directly instead (docs/neumann.md has the deriva
 * Each ``u_k`` oscillates between two neighbouring roots ``lo, hi`` of ``A B``; with
   ``u = lo + (hi - lo) sin^2(theta / 2)`` the rate ``dtheta / ds = 2 sqrt(prod_others |u - r|)`` is
   analytic and positive, so ``s(theta)`` is ``theta`` times a mean plus a Fourier series (FFT to
-  float64, trailing coefficients below 2e-16 relative or the sample noise).  Its inverse, the time ``t(s) = int (u2 - u1) ds`` and
+  float64, trailing coefficients below 2e-16 relative or the sample noise).  Its inverse, the time
+  ``t(s) = int (u2 - u1) ds`` and
   ``x_i = prod_k sqrt(k_i - u_k) / sqrt(prod_{j != i} (k_i - k_j))`` (signed square roots that are
   smooth in theta) follow.  A time ``t`` is mapped to ``s`` by a safeguarded Newton solve of the
   monotone ``t(s) = <u2 - u1> s + bounded``: a far time costs what ``t = 1`` costs.
