@@ -45,7 +45,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .equations import invariants as _invariants
-from .pendulum import _pendulum_angle
+from .pendulum import _pendulum_angle, _pendulum_params
 from .rotation import ClosedFormUnavailable, RotationSolution
 from .theta_rotation import SNAP_TOL, _principal_frame, _symmetry_axis
 
@@ -599,26 +599,9 @@ def _pendulum(psi0: float, psidot0: float, nu: float):
     """psi'' = -nu^2 sin psi from (psi0 in (-pi, pi], psidot0): the parameters of
     :func:`thetasol.pendulum._pendulum_angle` (which returns half of ``psi(t) - psi0``, ``psidot(t)``)
     and the kind of motion."""
-    from .elliptic import ellipf
-
     if nu == 0.0 or (psidot0 == 0.0 and np.sin(psi0) == 0.0):
         return {"kind": "uniform", "phi0": 0.0, "w0": 0.5 * psidot0}, ("uniform" if psidot0 else "rest")
-    c = {"nu": nu, "psi0": psi0}
-    s2, c2 = np.sin(0.5 * psi0), np.cos(0.5 * psi0)
-    x = psidot0 / (2.0 * nu)
-    m = x * x + s2 * s2
-    mc = (c2 - x) * (c2 + x)
-    if mc > 0:
-        u0 = float(ellipf(np.arctan2(s2, x), m, mc)) if m > 0 else 0.0
-        c.update(kind="libration", m=m, mc=mc, u0=u0, sign=1.0)
-    else:
-        sgn = 1.0 if psidot0 >= 0 else -1.0
-        if mc < 0:
-            mm, mmc = 1.0 / m, -mc / m
-            c.update(kind="circulation", m=mm, mc=mmc, u0=float(ellipf(sgn * 0.5 * psi0, mm, mmc)),
-                     k=np.sqrt(m), sign=sgn)
-        else:
-            c.update(kind="separatrix", u0=float(np.arctanh(np.clip(sgn * s2, -1.0, 1.0))), sign=sgn)
+    c, _ = _pendulum_params(psi0, psidot0, nu)
     return c, c["kind"]
 
 

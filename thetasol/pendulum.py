@@ -89,6 +89,33 @@ def _axis_of(J, a, Q0, omega0):
     return None
 
 
+def _pendulum_params(psi0: float, psidot0: float, nu: float):
+    """Constants of :func:`_pendulum_angle` for ``psi'' = -nu^2 sin psi`` (``nu > 0``) from ``psi0``
+    in (-pi, pi] and ``psidot0``: libration, circulation (parameter 1/m) or the separatrix.
+
+    Returns (dict with ``kind`` and its constants, ``m = k^2``, the energy parameter).
+    """
+    s2, c2 = np.sin(0.5 * psi0), np.cos(0.5 * psi0)
+    # m = k^2 = psidot^2 / (4 nu^2) + sin^2(psi/2);  1 - m = cos^2(psi/2) - psidot^2 / (4 nu^2)
+    x = psidot0 / (2.0 * nu)
+    m = x * x + s2 * s2
+    mc = (c2 - x) * (c2 + x)
+    c = {"nu": nu, "psi0": psi0}
+    if mc > 0:
+        # sn(u0) = sin(psi0/2) / k, cn(u0) = psidot0 / (2 k nu)
+        u0 = float(ellipf(np.arctan2(s2, x), m, mc)) if m > 0 else 0.0
+        c.update(kind="libration", m=m, mc=mc, u0=u0, sign=1.0)
+        return c, m
+    sgn = 1.0 if psidot0 >= 0 else -1.0
+    if mc < 0:
+        mm, mmc = 1.0 / m, -mc / m
+        c.update(kind="circulation", m=mm, mc=mmc, u0=float(ellipf(sgn * 0.5 * psi0, mm, mmc)),
+                 k=np.sqrt(m), sign=sgn)
+    else:
+        c.update(kind="separatrix", u0=float(np.arctanh(np.clip(sgn * s2, -1.0, 1.0))), sign=sgn)
+    return c, m
+
+
 def _solve_pendulum(J, a, Q0, omega0, dps=None):
     """The pendulum branch of :func:`thetasol.solve_rotation` (None when it does not apply)."""
     if dps is not None:
@@ -117,34 +144,14 @@ def _solve_pendulum(J, a, Q0, omega0, dps=None):
     # psi = 2 phi + delta - pi [kappa > 0] obeys psi'' = -nu^2 sin psi; phi(0) = 0
     psi0 = np.remainder(delta - (np.pi if kappa > 0 else 0.0) + np.pi, 2 * np.pi) - np.pi
     nu = np.sqrt(abs(kappa))
-    psidot0 = 2.0 * w0
-    s2, c2 = np.sin(0.5 * psi0), np.cos(0.5 * psi0)
-    # m = k^2 = psidot^2 / (4 nu^2) + sin^2(psi/2);  1 - m = cos^2(psi/2) - psidot^2 / (4 nu^2)
-    x = psidot0 / (2.0 * nu)
-    m = x * x + s2 * s2
-    mc = (c2 - x) * (c2 + x)
-    c.update(nu=nu, psi0=psi0)
+    params, m = _pendulum_params(psi0, 2.0 * w0, nu)
+    c.update(params)
     inv["pendulum_nu"] = float(nu)
     inv["pendulum_m"] = float(m)
-    if mc > 0:
-        # sn(u0) = sin(psi0/2) / k, cn(u0) = psidot0 / (2 k nu)
-        u0 = float(ellipf(np.arctan2(s2, x), m, mc)) if m > 0 else 0.0
-        c.update(kind="libration", m=m, mc=mc, u0=u0, sign=1.0)
-        inv["period"] = float(4.0 * ellipk(m, mc) / nu)
-        method = "pendulum/libration"
-    elif mc < 0:
-        k = np.sqrt(m)
-        sgn = 1.0 if psidot0 >= 0 else -1.0
-        mm = 1.0 / m
-        mmc = -mc / m
-        u0 = float(ellipf(sgn * 0.5 * psi0, mm, mmc))
-        c.update(kind="circulation", m=mm, mc=mmc, u0=u0, k=k, sign=sgn)
-        inv["period"] = float(2.0 * ellipk(mm, mmc) / (k * nu))
-        method = "pendulum/circulation"
-    else:
-        sgn = 1.0 if psidot0 >= 0 else -1.0
-        u0 = float(np.arctanh(np.clip(sgn * s2, -1.0, 1.0)))
-        c.update(kind="separatrix", u0=u0, sign=sgn)
-        method = "pendulum/separatrix"
+    if c["kind"] == "libration":
+        inv["period"] = float(4.0 * ellipk(c["m"], c["mc"]) / nu)
+    elif c["kind"] == "circulation":
+        inv["period"] = float(2.0 * ellipk(c["m"], c["mc"]) / (c["k"] * nu))
+    method = "pendulum/" + c["kind"]
     return PendulumRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=method, invariants=inv,
                             axis_body=P[:, i], _c=c)
