@@ -6,7 +6,9 @@ Everything is measured in one run on this machine:
 * thetasol.solve_rotation (set-up and evaluation timed separately), scipy's DOP853 at several
   tolerances (integrate_rotation), the symplectic splitting integrator, heyoka float64 (if
   installed; its JIT compilation is timed separately);
-* errors against heyoka in 80-bit extended precision (tol 1e-19).
+* errors against heyoka in 80-bit extended precision (tol 1e-19), within 4e-19..3.4e-14 of quadruple
+  precision (tol 1e-25) on the default cases and the symmetric body to t = 1e4; not adequate next to an
+  unstable relative equilibrium (5e-10 there, tests/data/rotation/make_refs.py).
 
 Run:  OPENBLAS_NUM_THREADS=1 python benchmarks/bench_theta_rotation.py [--quick] [--plot PNG]
 Writes a markdown table to stdout (docs/bench_theta_rotation.md holds a recorded run).
