@@ -99,3 +99,44 @@ def test_dd_root_leaving_its_sheet_is_refused(critical_call):
     with pytest.raises(ValueError, match="moved away from its sheet"):
         intervals_dd(tr.pieces, crit[:1], seeds, curve_to_cdd(poly),
                      numerators_to_cdd(exact))
+
+
+def test_local_samples_fall_back_to_mpmath_only_where_double_double_loses_digits():
+    """y^2 = (x - 1)^2 + 1e-26 sampled at |x - 1| = 3e-13: two sheets 6e-13 apart under O(1)
+    coefficients, so even the compensated residual's second-order error (~eps^2 / |y|) is 4e-8 of y.
+    The samples must come back exact to float64 (mpmath polish), and the flag alone (tracker rel
+    above 1e-11) must not send well-conditioned samples to mpmath."""
+    from types import SimpleNamespace
+
+    import sympy as sp
+
+    from thetasol._curve_mp import ExactEvaluator
+    from thetasol._curve_places import _accurate_samples
+    from thetasol._curve_poly import CurvePoly
+
+    x, y = sp.symbols("x y")
+    e2 = sp.Rational(1, 10**26)
+    poly = CurvePoly(sp.expand(y**2 - (x - 1) ** 2 - e2), x, y)
+    curve = SimpleNamespace(_poly=poly, _exact=ExactEvaluator(poly))
+    xs = 1 + 3e-13 * np.exp(2j * np.pi * np.arange(8) / 8)
+    with mpmath.workdps(50):
+        r = [complex(mpmath.sqrt((mpmath.mpc(complex(v)) - 1) ** 2 + mpmath.mpf(e2.p) / e2.q)) for v in xs]
+    exact = np.array([r, [-v for v in r]])
+
+    def err(Y):
+        return (np.minimum(np.abs(Y - exact), np.abs(Y - exact[::-1])) / np.abs(exact)).max()
+
+    start = exact * (1 + 1e-9)
+    dd_only, _ = _accurate_samples(curve, xs, start.copy(), None)
+    polished, _ = _accurate_samples(curve, xs, start.copy(), np.full(8, 1e-3))
+    assert err(dd_only) > 1e-9        # the case really needs the fallback
+    assert err(polished) <= 2e-16
+    # well separated sheets (x far from 1): the same flag leaves the double-double result as it is
+    xs2 = xs + 0.5
+    with mpmath.workdps(50):
+        r2 = [complex(mpmath.sqrt((mpmath.mpc(complex(v)) - 1) ** 2 + mpmath.mpf(e2.p) / e2.q)) for v in xs2]
+    start2 = np.array([r2, [-v for v in r2]])
+    no_mp = SimpleNamespace(_poly=poly, _exact=None)  # any use of the mpmath evaluator fails
+    a, _ = _accurate_samples(no_mp, xs2, start2.copy(), None)
+    b, _ = _accurate_samples(no_mp, xs2, start2.copy(), np.full(8, 1e-3))
+    assert np.array_equal(a, b)

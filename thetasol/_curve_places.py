@@ -162,7 +162,8 @@ def _accurate_samples(curve, xs, ys, rel, center=None, xi=None, center_lo=0j):
     With ``center`` b, the samples are taken at exactly b + (xs - b) evaluated through the exactly
     shifted polynomial f(b + xi, y) when the circle is small against |b| (otherwise rounding x to
     float64 would jitter the samples by eps |b| / radius of the circle, which the FFT turns into
-    spurious negative powers).  Where even that loses digits, the samples are polished in mpmath.
+    spurious negative powers).  Where even the compensated residual loses digits (its second-order
+error above the float64 rounding of the root), the samples are polished in mpmath.
     """
     poly = curve._poly
     if center is not None:
@@ -176,6 +177,13 @@ def _accurate_samples(curve, xs, ys, rel, center=None, xi=None, center_lo=0j):
     Y, fy = poly.polish_dd(Ahi, Alo, ys.T.copy())
     ys, fys = Y.T.copy(), fy.T.copy()
     if rel is None or np.max(rel) <= 1e-11:
+        return ys, fys
+    # The tracker's rel includes the float64 rounding of the roots themselves (eps |y| / gap), which no
+    # polish can improve on; what mpmath can improve is the second-order error of the compensated
+    # residual, 4n eps times the float64 bound, where it exceeds that rounding.
+    err2 = 4 * poly.n * np.finfo(float).eps * poly.root_error_bound(xs, Y, fy)
+    rel = np.where((err2 > np.finfo(float).eps * np.abs(Y)).any(axis=1), rel, 0.0)
+    if np.max(rel) <= 1e-11:
         return ys, fys
     import mpmath
     ev = curve._exact
