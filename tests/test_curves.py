@@ -484,3 +484,42 @@ def test_abel_jacobi_at_clustered_branch_points():
         A = C.abel_map([(b + h, r) for r in R[0]])
         dist.append(min(np.max(np.abs(_reduce(a - C.abel_map(P), tau))) for a in A))
     assert dist[0] < 1e-3 and abs(dist[0] / dist[1] - 10) < 0.5
+
+
+def test_sheets_turning_together_are_matched_without_refinement(monkeypatch):
+    """A nearly symmetric body's spectral curve (J_2 / J_1 = 1 + 1e-7): two sheets 1e-7 apart relative
+    to |w| ~ |E|^2, and branch points at |E| ~ 1.2e7.  On the circles around infinity and the far
+    branch points the Hermite test on y alone needs steps ~ gap^(1/3) (384 unsafe steps, ~3300 nodes
+    per circle); the tests on log y and on a pair's mean and half-difference need none.  Their
+    matching must be the one of the plain test: same monodromy and same samples at every site."""
+    import json
+    from unittest import mock
+
+    from thetasol import _curve_quad
+    from thetasol._curve_places import local_data
+    from thetasol._so3 import hat
+    from thetasol.spectral import spectral_curve
+
+    with open(os.path.join(os.path.dirname(__file__), "data", "rotation", "refs.json")) as fh:
+        r = json.load(fh)["nearly_symmetric"]
+    Jp = np.array([1.0, 1.0 + 1e-7, 1.7])
+    Q0, a = np.array(r["Q0"]), np.array(r["a"])
+    m = (Jp.sum() - Jp) * np.array(r["omega0"])
+
+    def circles():
+        C = spectral_curve(Jp, hat(m), -Q0.T @ a @ Q0)
+        assert np.abs(C.branch_points).max() > 1e7
+        C._tracker.n_refined_steps = 0
+        return local_data(C), C._tracker.n_refined_steps
+
+    fast, n_fast = circles()
+
+    def off(y, *args):
+        return np.zeros(len(y), int), np.zeros(len(y), bool)
+
+    with mock.patch.object(_curve_quad, "_log_hermite", off), mock.patch.object(_curve_quad, "_pair_hermite", off):
+        plain, n_plain = circles()
+    assert n_fast == 0 and n_plain > 100
+    for p, q in zip(fast, plain):
+        assert np.array_equal(p.perm, q.perm)
+        assert np.array_equal(p.ys, q.ys)

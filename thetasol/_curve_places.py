@@ -163,7 +163,7 @@ def _accurate_samples(curve, xs, ys, rel, center=None, xi=None, center_lo=0j):
     shifted polynomial f(b + xi, y) when the circle is small against |b| (otherwise rounding x to
     float64 would jitter the samples by eps |b| / radius of the circle, which the FFT turns into
     spurious negative powers).  Where even the compensated residual loses digits (its second-order
-error above the float64 rounding of the root), the samples are polished in mpmath.
+    error above the float64 rounding of the root), the samples are polished in mpmath.
     """
     poly = curve._poly
     if center is not None:
