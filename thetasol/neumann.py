@@ -239,7 +239,7 @@ class _Oscillator:
 
         span = 2.0 * np.abs(self.A[1:]).sum() + 1e-300
         return _monotone_newton(fun, al, al.copy(), al - span, al + span,
-                                lambda new, th: np.all(np.abs(new - th) <= 1e-9), 100, 2)
+                                lambda new, th: np.abs(new - th) <= 1e-9, 100, 2)
 
     def theta(self, al):
         return al + _eval_series(self.B, al)
@@ -249,21 +249,27 @@ class _Oscillator:
 
 
 def _monotone_newton(fun, y, x, lo, hi, converged, maxiter: int, polish: int):
-    """x with fun(x)[0] = y for an increasing fun (returning value and derivative): Newton steps,
-    bisection of the bracket [lo, hi] where a step leaves it, until ``converged(new, old)``; then
-    ``polish`` plain steps (quadratic convergence reaches rounding)."""
+    """x with fun(x)[0] = y for an increasing fun (returning value and derivative; 1-d arrays):
+    Newton steps, bisection of the bracket [lo, hi] where a step leaves it, each point until
+    ``converged(new, old)`` (elementwise) holds for it (the others go on alone); then ``polish``
+    plain steps on all (quadratic convergence reaches rounding)."""
+    x = np.array(x, float)
+    idx = np.arange(x.size)
+    xa, ya = x, y
+    lo, hi = np.broadcast_to(lo, x.shape), np.broadcast_to(hi, x.shape)
     for _ in range(maxiter):
-        f, df = fun(x)
-        r = f - y
-        lo = np.where(r < 0, x, lo)
-        hi = np.where(r > 0, x, hi)
-        step = x - r / df
+        f, df = fun(xa)
+        r = f - ya
+        lo = np.where(r < 0, xa, lo)
+        hi = np.where(r > 0, xa, hi)
+        step = xa - r / df
         bad = (step < lo) | (step > hi) | ~np.isfinite(step)
         new = np.where(bad, 0.5 * (lo + hi), step)
-        close = converged(new, x)
-        x = new
-        if close:
+        more = ~converged(new, xa)
+        x[idx] = new
+        if not more.any():
             break
+        idx, xa, ya, lo, hi = idx[more], new[more], ya[more], lo[more], hi[more]
     for _ in range(polish):
         f, df = fun(x)
         x = x - (f - y) / df
@@ -407,15 +413,21 @@ class _NeumannTorus:
         return np.stack(np.broadcast_arrays(*xs), -1), np.stack(np.broadcast_arrays(*dxs), -1), gap
 
     # -- time -> s ---------------------------------------------------------------------------------
-    def _time(self, s):
-        """t(s) and dt/ds = u2 - u1 at s (one set of powers e^{i n alpha} per coordinate)."""
+    def _time(self, s, angles: bool = False):
+        """t(s) and dt/ds = u2 - u1 at s (one set of powers e^{i n alpha} per coordinate); with
+        ``angles`` also theta_k(alpha_k(s)) and dtheta_k/dalpha_k."""
         al = self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
         t = self.drift * s
-        u = []
+        u, th, dth = [], [], []
         for kk, (o, P) in enumerate(zip(self.osc, self.P)):
             E = _powers(al[kk], max(P.size, o.B.size) - 1)
             t = t + (1 if kk else -1) * self.fbar[kk] * (_sum_series(E, P) - self.P0[kk])
-            u.append(o.u(al[kk] + _sum_series(E, o.B)))
+            th.append(al[kk] + _sum_series(E, o.B))
+            u.append(o.u(th[-1]))
+            if angles:
+                dth.append(1.0 + 2.0 * np.tensordot(1j * np.arange(1, o.B.size) * o.B[1:], E[:o.B.size - 1], 1).real)
+        if angles:
+            return t, u[1] - u[0], np.array(th), np.array(dth)
         return t, u[1] - u[0]
 
     def _time_model(self, s):
@@ -435,15 +447,19 @@ class _NeumannTorus:
         unit = 1.0 / self.drift
 
         def close(tol):
-            return lambda new, s: np.all(np.abs(new - s) <= np.maximum(tol * unit, 64 * _EPS * np.abs(s)))
+            return lambda new, s: np.abs(new - s) <= np.maximum(tol * unit, 64 * _EPS * np.abs(s))
 
-        s = _monotone_newton(self._time_model, t, t / self.drift, lo, hi, close(1e-10), 200, 0)
+        s0 = _monotone_newton(self._time_model, t, t / self.drift, lo, hi, close(1e-10), 200, 0)
         # the tables are good to 1e-12 unit: one series step lands at rounding (the step after it
-        # would be ~1e-24 unit); a poor table just costs more steps here
-        s = _monotone_newton(self._time, t, s, lo, hi, close(1e-9), 200, 0)
+        # would be ~1e-24 unit), and theta follows to first order (the second is ~1e-24 too)
+        t0, dt0, th0, dth0 = self._time(s0, angles=True)
+        step = (t - t0) / dt0
+        s = s0 + step
+        if np.all(close(1e-9)(s, s0)):
+            return s, self.alpha0[:, None] + s[None, :] / self.fbar[:, None], th0 + dth0 * (step / self.fbar[:, None])
+        s = _monotone_newton(self._time, t, s0, lo, hi, close(1e-9), 200, 1)     # a poor table
         al = self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
-        th = np.array([o.theta(a) for o, a in zip(self.osc, al)])
-        return s, al, th
+        return s, al, np.array([o.theta(a) for o, a in zip(self.osc, al)])
 
 
 # -- the angle of the parallel-transported frame ---------------------------------------------------
@@ -492,15 +508,18 @@ class _AngleSeries:
         reg = np.where(lower[:, None], -reg, reg)
         C = np.where(lower, C.conj(), C)
         self.p = p.astype(int)
-        jj = (reg - self.p) // 2
+        jj = (reg - self.p) // 2                                   # j1 >= 0
+        self.box = None
         if reg.size:
-            self.j1 = np.arange(jj[:, 0].min(), jj[:, 0].max() + 1)
-            self.j2 = np.arange(jj[:, 1].min(), jj[:, 1].max() + 1)
-            box = np.zeros((self.j1.size, self.j2.size), complex)
-            np.add.at(box, (jj[:, 0] - self.j1[0], jj[:, 1] - self.j2[0]), C)
+            self.n1 = int(jj[:, 0].max())
+            self.n2 = int(np.abs(jj[:, 1]).max())
+            # columns j2 = 0, 1..n2 and -1..-n2 (conjugated: sum_k conj(b_{-k} e^{ikx}) = conj of a
+            # product with the same powers)
+            box = np.zeros((self.n1 + 1, 2 * self.n2 + 1), complex)
+            col = np.where(jj[:, 1] >= 0, jj[:, 1], self.n2 - jj[:, 1])
+            np.add.at(box, (jj[:, 0], col), np.where(jj[:, 1] >= 0, C, C.conj()))
             self.box = box
-        else:
-            self.box = None
+            self.blocks = _row_blocks(box, self.n2)
         self.n_modes = int(keep.sum())
 
     def __call__(self, s: np.ndarray, beta: np.ndarray) -> np.ndarray:
@@ -509,13 +528,42 @@ class _AngleSeries:
         if self.box is not None:
             beta = np.remainder(beta, 2 * np.pi)
             a = np.remainder(2.0 * beta, 2 * np.pi)                # e^{i j alpha} = e^{2 i j beta}
-            E1 = _exp_range(a[:, 0], self.j1[0], self.j1[-1])
-            E2 = _exp_range(a[:, 1], self.j2[0], self.j2[-1])
-            twist = np.exp(1j * (beta @ self.p))
-            out = out + (twist * np.einsum("jn,jn->n", self.box @ E2, E1)).real
+            n1, n2, box = self.n1, self.n2, self.box
+            G = np.broadcast_to(box[:, :1], (n1 + 1, s.size)).astype(complex)
+            if n2:
+                E2 = _powers(a[:, 1], n2)
+                for r0, r1, pos, neg in self.blocks:
+                    w = pos.shape[1]
+                    G[r0:r1] += pos @ E2[:w] + (neg @ E2[:w]).conj()
+            val = G[0] + (np.einsum("jn,jn->n", G[1:], _powers(a[:, 0], n1)) if n1 else 0.0)
+            out = out + (np.exp(1j * (beta @ self.p)) * val).real
         for Cr, D in zip(self.C_res, self.D_res):
             out = out + (Cr * s * np.exp(0.5j * D * s) * np.sinc(D * s / (2 * np.pi))).real
         return out
+
+
+def _row_blocks(box: np.ndarray, n2: int, overhead: int = 256):
+    """Split the rows of the angle box (columns 0, 1..n2, -1..-n2) into runs with their own column
+    width w (rows far from j1 = 0 need few j2): (r0, r1, positive part, conjugated negative part),
+    the runs chosen to minimize the entries multiplied plus ``overhead`` per run."""
+    nz = box != 0
+    cols = np.arange(1, n2 + 1)
+    wr = np.array([max(cols[nz[r, 1:n2 + 1]].max(initial=0), cols[nz[r, n2 + 1:]].max(initial=0))
+                   for r in range(box.shape[0])])
+    R = wr.size
+    best, cut = np.zeros(R + 1), np.zeros(R + 1, int)
+    for r1 in range(1, R + 1):
+        costs = [best[r0] + (r1 - r0) * 2 * wr[r0:r1].max() + overhead for r0 in range(r1)]
+        cut[r1] = int(np.argmin(costs))
+        best[r1] = costs[cut[r1]]
+    blocks, r1 = [], R
+    while r1 > 0:
+        r0 = cut[r1]
+        w = int(wr[r0:r1].max())
+        if w:
+            blocks.append((r0, r1, box[r0:r1, 1:w + 1].copy(), box[r0:r1, n2 + 1:n2 + 1 + w].copy()))
+        r1 = r0
+    return blocks[::-1]
 
 
 def _frame(x: np.ndarray, c: int):
