@@ -659,6 +659,7 @@ def _genus2_motion(T: _NeumannTorus, ref: int, e10: np.ndarray):
         x, dx, gap = T.state(th[0], th[1])
         return x, dx / gap[:, None], _transported(x, ref, phi0 + ang(s, 0.5 * al.T))
 
+    motion.torus, motion.angle = T, ang                # for the tests of the time map
     info = {"genus": 2, "reference_axis": ref, "angle_modes": ang.n_modes, "angle_grid": ang.n,
             "frequencies_s": nu.copy(), "time_drift": float(T.drift),
             "series_terms": [int(o_.f.size) for o_ in T.osc]}
