@@ -24,7 +24,8 @@ apply.  The mechanics is solved directly instead (docs/neumann.md has the deriva
   ``t(s) = int (u2 - u1) ds`` and
   ``x_i = prod_k sqrt(k_i - u_k) / sqrt(prod_{j != i} (k_i - k_j))`` (signed square roots that are
   smooth in theta) follow.  A time ``t`` is mapped to ``s`` by a safeguarded Newton solve of the
-  monotone ``t(s) = <u2 - u1> s + bounded``: a far time costs what ``t = 1`` costs.
+  monotone ``t(s) = <u2 - u1> s + bounded`` on cubic Hermite tables of the two bounded parts, then
+  one Newton step on the series: a far time costs what ``t = 1`` costs.
 * The rest of the attitude: with ``omega_3 = 0`` the space angular velocity is
   ``gamma x gammadot`` and the body axis ``e1 = Q P e_1`` is parallel-transported along gamma.
   Its angle phi from the frame ``f1 = c x gamma / |c x gamma|``, ``f2 = gamma x f1`` (``c`` the
@@ -32,7 +33,9 @@ apply.  The mechanics is solved directly instead (docs/neumann.md has the deriva
   ``phidot = -(gamma.c)(c.(gamma x gammadot)) / (1 - (gamma.c)^2)``: a function on the real torus,
   sampled on a grid, transformed by FFT and integrated term by term along the linear flow
   (``phi = phi0 + <G> s + sum G_m e^{i m beta0} (e^{i m nu s} - 1) / (i m nu)``, the near-resonant
-  terms in the form ``s sinc`` that keeps ``min(s, 1/|m nu|)`` as their amplification).
+  terms in the form ``s sinc`` that keeps ``min(s, 1/|m nu|)`` as their amplification).  Only the
+  real part is used, so the mode ``-m`` is folded onto ``m`` and the sum is a few matrix products
+  of the coefficients with powers ``e^{i j alpha}`` (computed by doubling).
 
 Hand-written because no library has Neumann's problem; the theta-function solution (Moser,
 Mumford's Tata lectures II) would need the same quadrature for the angle and its genus-2 curve
