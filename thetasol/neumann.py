@@ -24,7 +24,8 @@ apply.  The mechanics is solved directly instead (docs/neumann.md has the deriva
   ``t(s) = int (u2 - u1) ds`` and
   ``x_i = prod_k sqrt(k_i - u_k) / sqrt(prod_{j != i} (k_i - k_j))`` (signed square roots that are
   smooth in theta) follow.  A time ``t`` is mapped to ``s`` by a safeguarded Newton solve of the
-  monotone ``t(s) = <u2 - u1> s + bounded``: a far time costs what ``t = 1`` costs.
+  monotone ``t(s) = <u2 - u1> s + bounded`` on cubic Hermite tables of the two bounded parts, then
+  one Newton step on the series: a far time costs what ``t = 1`` costs.
 * The rest of the attitude: with ``omega_3 = 0`` the space angular velocity is
   ``gamma x gammadot`` and the body axis ``e1 = Q P e_1`` is parallel-transported along gamma.
   Its angle phi from the frame ``f1 = c x gamma / |c x gamma|``, ``f2 = gamma x f1`` (``c`` the
@@ -32,7 +33,9 @@ apply.  The mechanics is solved directly instead (docs/neumann.md has the deriva
   ``phidot = -(gamma.c)(c.(gamma x gammadot)) / (1 - (gamma.c)^2)``: a function on the real torus,
   sampled on a grid, transformed by FFT and integrated term by term along the linear flow
   (``phi = phi0 + <G> s + sum G_m e^{i m beta0} (e^{i m nu s} - 1) / (i m nu)``, the near-resonant
-  terms in the form ``s sinc`` that keeps ``min(s, 1/|m nu|)`` as their amplification).
+  terms in the form ``s sinc`` that keeps ``min(s, 1/|m nu|)`` as their amplification).  Only the
+  real part is used, so the mode ``-m`` is folded onto ``m`` and the sum is a few matrix products
+  of the coefficients with powers ``e^{i j alpha}`` (computed by doubling).
 
 Hand-written because no library has Neumann's problem; the theta-function solution (Moser,
 Mumford's Tata lectures II) would need the same quadrature for the angle and its genus-2 curve
@@ -96,7 +99,7 @@ def _fit_series(fun, what: str, floor: float = 0.0):
 
 def _sum_series(E: np.ndarray, c: np.ndarray):
     """``Re(c_0 + 2 sum c_n e^{inx})`` from the powers ``E = _powers(x, >= c.size - 1)``."""
-    return c[0].real + 2.0 * (E[..., :c.size - 1] @ c[1:]).real
+    return c[0].real + 2.0 * np.tensordot(c[1:], E[:c.size - 1], 1).real
 
 
 def _eval_series(c: np.ndarray, x: np.ndarray, derivative: bool = False):
@@ -105,19 +108,37 @@ def _eval_series(c: np.ndarray, x: np.ndarray, derivative: bool = False):
     val = _sum_series(E, c)
     if not derivative:
         return val
-    return val, 2.0 * (E @ (1j * np.arange(1, c.size) * c[1:])).real
+    return val, 2.0 * np.tensordot(1j * np.arange(1, c.size) * c[1:], E, 1).real
 
 
 def _powers(x: np.ndarray, n: int) -> np.ndarray:
-    """``e^{i k x}`` for k = 1..n, shape x.shape + (n,): products of one exponential (the rounding of
-    the k-th power grows like k eps, on coefficients that decay geometrically)."""
-    if n <= 8:
-        return np.exp(1j * np.multiply.outer(np.remainder(x, 2 * np.pi), np.arange(1, n + 1)))
-    # powers by repeated squaring blocks: e^{ikx} = e^{i(k mod 8)x} e^{i 8 (k div 8) x}
-    base = np.exp(1j * np.multiply.outer(np.remainder(x, 2 * np.pi), np.arange(1, 9)))
-    step = np.cumprod(np.broadcast_to(base[..., 7:8], x.shape + ((n + 7) // 8 - 1,)), axis=-1)
-    blocks = np.concatenate([np.ones(x.shape + (1,), complex), step], -1)
-    return (blocks[..., :, None] * base[..., None, :]).reshape(x.shape + (-1,))[..., :n]
+    """``e^{i k x}`` for k = 1..n, shape (n,) + x.shape (the times last: every product below is one
+    vectorized pass).  By doubling, ``e^{i(m + j)x} = e^{imx} e^{ijx}`` with ``e^{imx}`` (m a power of
+    two) from cos/sin of the exact ``m x``: the k-th power carries at most log2(k) roundings."""
+    x = np.remainder(np.asarray(x, float), 2 * np.pi)
+    E = np.empty((max(n, 1),) + x.shape, complex)
+    E[0] = np.cos(x) + 1j * np.sin(x)
+    m = 1
+    while m < n:
+        k = min(m, n - m)
+        mx = m * x                                     # exact: m is a power of two
+        E[m:m + k] = E[:k] * (np.cos(mx) + 1j * np.sin(mx))
+        m += k
+    return E[:n]
+
+
+def _exp_range(x: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """``e^{i j x}`` for j = lo..hi (x real, 1-d), shape (hi - lo + 1, x.size), from :func:`_powers`."""
+    n = max(abs(lo), abs(hi), 1)
+    pw = _powers(x, n)
+    parts = []
+    if lo < 0:
+        parts.append(pw[-lo - 1::-1].conj() if hi >= -1 else pw[-lo - 1:-hi - 2:-1].conj())
+    if lo <= 0 <= hi:
+        parts.append(np.ones((1, x.size), complex))
+    if hi > 0:
+        parts.append(pw[max(lo, 1) - 1:hi])
+    return np.concatenate(parts, 0)
 
 
 def _integrated(c: np.ndarray) -> np.ndarray:
@@ -126,6 +147,46 @@ def _integrated(c: np.ndarray) -> np.ndarray:
     n = np.arange(1, c.size)
     out[1:] = c[1:] / (1j * n)
     return out
+
+
+class _HermiteTable:
+    """Piecewise-cubic Hermite interpolant of ``g(x) = Re(c_0 + 2 sum c_n e^{inx})`` on M uniform nodes
+    (values and derivatives from one inverse FFT each), M doubled until the error at the midpoints is
+    below ``tol``: a cheap model of a series for the first Newton steps (a gather and a Horner step
+    per point instead of n complex powers)."""
+
+    def __init__(self, c: np.ndarray, tol: float, mmax: int = 2 ** 16):
+        n = np.arange(c.size)
+        M = 8
+        while M < 8 * c.size:
+            M *= 2
+        while True:
+            X = np.zeros(M + 1, complex)                     # samples at the nodes and the midpoints
+            X[:c.size] = 2 * M * c
+            X[0] = 2 * M * c[0].real
+            dX = np.zeros(M + 1, complex)
+            dX[:c.size] = 2 * M * 1j * n * c
+            g, dg = np.fft.irfft(X, 2 * M), np.fft.irfft(dX, 2 * M)
+            v, d = np.append(g[::2], g[0]), np.append(dg[::2], dg[0])
+            h = 2 * np.pi / M
+            d0, d1 = h * d[:-1], h * d[1:]
+            dv = v[1:] - v[:-1]
+            # g = v0 + u (d0 + u (a2 + u a3)), u in [0, 1] on each interval
+            self.coef = np.stack([v[:-1], d0, 3 * dv - 2 * d0 - d1, d0 + d1 - 2 * dv], -1)
+            mid = self.coef @ np.array([1.0, 0.5, 0.25, 0.125])
+            self.error = float(np.abs(mid - g[1::2]).max())
+            if self.error <= tol or M >= mmax:
+                break
+            M *= 2
+        self.M, self.h = M, h
+
+    def __call__(self, x: np.ndarray):
+        """(g, dg/dx) at x."""
+        y = np.remainder(x, 2 * np.pi) / self.h
+        j = np.minimum(y.astype(np.intp), self.M - 1)
+        u = y - j
+        v0, d0, a2, a3 = self.coef[j].T
+        return v0 + u * (d0 + u * (a2 + u * a3)), (d0 + u * (2.0 * a2 + 3.0 * u * a3)) / self.h
 
 
 # -- one separated coordinate ----------------------------------------------------------------------
@@ -181,7 +242,7 @@ class _Oscillator:
 
         span = 2.0 * np.abs(self.A[1:]).sum() + 1e-300
         return _monotone_newton(fun, al, al.copy(), al - span, al + span,
-                                lambda new, th: np.all(np.abs(new - th) <= 1e-9), 100, 2)
+                                lambda new, th: np.abs(new - th) <= 1e-9, 100, 2)
 
     def theta(self, al):
         return al + _eval_series(self.B, al)
@@ -191,21 +252,27 @@ class _Oscillator:
 
 
 def _monotone_newton(fun, y, x, lo, hi, converged, maxiter: int, polish: int):
-    """x with fun(x)[0] = y for an increasing fun (returning value and derivative): Newton steps,
-    bisection of the bracket [lo, hi] where a step leaves it, until ``converged(new, old)``; then
-    ``polish`` plain steps (quadratic convergence reaches rounding)."""
+    """x with fun(x)[0] = y for an increasing fun (returning value and derivative; 1-d arrays):
+    Newton steps, bisection of the bracket [lo, hi] where a step leaves it, each point until
+    ``converged(new, old)`` (elementwise) holds for it (the others go on alone); then ``polish``
+    plain steps on all (quadratic convergence reaches rounding)."""
+    x = np.array(x, float)
+    idx = np.arange(x.size)
+    xa, ya = x, y
+    lo, hi = np.broadcast_to(lo, x.shape), np.broadcast_to(hi, x.shape)
     for _ in range(maxiter):
-        f, df = fun(x)
-        r = f - y
-        lo = np.where(r < 0, x, lo)
-        hi = np.where(r > 0, x, hi)
-        step = x - r / df
+        f, df = fun(xa)
+        r = f - ya
+        lo = np.where(r < 0, xa, lo)
+        hi = np.where(r > 0, xa, hi)
+        step = xa - r / df
         bad = (step < lo) | (step > hi) | ~np.isfinite(step)
         new = np.where(bad, 0.5 * (lo + hi), step)
-        close = converged(new, x)
-        x = new
-        if close:
+        more = ~converged(new, xa)
+        x[idx] = new
+        if not more.any():
             break
+        idx, xa, ya, lo, hi = idx[more], new[more], ya[more], lo[more], hi[more]
     for _ in range(polish):
         f, df = fun(x)
         x = x - (f - y) / df
@@ -310,6 +377,10 @@ class _NeumannTorus:
         self.drift = self.cu[1][0].real - self.cu[0][0].real
         self.P0 = np.array([_eval_series(P, a) for P, a in zip(self.P, self.alpha0)])
         self.Pspan = sum(2 * f * np.abs(P).sum() for f, P in zip(self.fbar, self.P)) * 2
+        # cheap models of the two bounded parts of t(s) (to 1e-12 of the time scale 1/drift): Newton
+        # on them, then one step on the series
+        self.tables = [_HermiteTable(f * P, 1e-12 / self.drift) for f, P in zip(self.fbar, self.P)]
+        self.table0 = [tab(a)[0] for tab, a in zip(self.tables, self.alpha0)]
 
     # -- the state on the torus ------------------------------------------------------------------
     def _rho(self, i, kk, th):
@@ -345,27 +416,53 @@ class _NeumannTorus:
         return np.stack(np.broadcast_arrays(*xs), -1), np.stack(np.broadcast_arrays(*dxs), -1), gap
 
     # -- time -> s ---------------------------------------------------------------------------------
-    def _time(self, s):
-        """t(s) and dt/ds = u2 - u1 at s (one set of powers e^{i n alpha} per coordinate)."""
+    def _time(self, s, angles: bool = False):
+        """t(s) and dt/ds = u2 - u1 at s (one set of powers e^{i n alpha} per coordinate); with
+        ``angles`` also theta_k(alpha_k(s)) and dtheta_k/dalpha_k."""
         al = self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
         t = self.drift * s
-        u = []
+        u, th, dth = [], [], []
         for kk, (o, P) in enumerate(zip(self.osc, self.P)):
             E = _powers(al[kk], max(P.size, o.B.size) - 1)
             t = t + (1 if kk else -1) * self.fbar[kk] * (_sum_series(E, P) - self.P0[kk])
-            u.append(o.u(al[kk] + o.B[0].real + 2.0 * (E[:, :o.B.size - 1] @ o.B[1:]).real))
+            th.append(al[kk] + _sum_series(E, o.B))
+            u.append(o.u(th[-1]))
+            if angles:
+                dth.append(1.0 + 2.0 * np.tensordot(1j * np.arange(1, o.B.size) * o.B[1:], E[:o.B.size - 1], 1).real)
+        if angles:
+            return t, u[1] - u[0], np.array(th), np.array(dth)
         return t, u[1] - u[0]
 
+    def _time_model(self, s):
+        """t(s) and dt/ds from the Hermite tables of the bounded parts."""
+        t, dt = self.drift * s, self.drift
+        for kk, (tab, f, a0) in enumerate(zip(self.tables, self.fbar, self.alpha0)):
+            g, dg = tab(a0 + s / f)
+            sgn = 1 if kk else -1
+            t, dt = t + sgn * (g - self.table0[kk]), dt + sgn * dg / f
+        return t, dt
+
     def s_of_t(self, t: np.ndarray):
-        """s with t(s) = t (safeguarded Newton, one polishing step; t(s) is increasing); also
+        """s with t(s) = t (t(s) is increasing): safeguarded Newton on the tables of t(s), then on
+        the series until the step is below 1e-9 / drift or the rounding of s (64 eps |s|); also
         alpha(s), theta(s)."""
-        s = _monotone_newton(self._time, t, t / self.drift, (t - self.Pspan) / self.drift,
-                             (t + self.Pspan) / self.drift,
-                             lambda new, s: np.all(np.abs(new - s) <= 1e-8 * (np.abs(s) + 1.0 / self.drift)),
-                             200, 1)
+        lo, hi = (t - self.Pspan) / self.drift, (t + self.Pspan) / self.drift
+        unit = 1.0 / self.drift
+
+        def close(tol):
+            return lambda new, s: np.abs(new - s) <= np.maximum(tol * unit, 64 * _EPS * np.abs(s))
+
+        s0 = _monotone_newton(self._time_model, t, t / self.drift, lo, hi, close(1e-10), 200, 0)
+        # the tables are good to 1e-12 unit: one series step lands at rounding (the step after it
+        # would be ~1e-24 unit), and theta follows to first order (the second is ~1e-24 too)
+        t0, dt0, th0, dth0 = self._time(s0, angles=True)
+        step = (t - t0) / dt0
+        s = s0 + step
+        if np.all(close(1e-9)(s, s0)):
+            return s, self.alpha0[:, None] + s[None, :] / self.fbar[:, None], th0 + dth0 * (step / self.fbar[:, None])
+        s = _monotone_newton(self._time, t, s0, lo, hi, close(1e-9), 200, 1)     # a poor table
         al = self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
-        th = np.array([o.theta(a) for o, a in zip(self.osc, al)])
-        return s, al, th
+        return s, al, np.array([o.theta(a) for o, a in zip(self.osc, al)])
 
 
 # -- the angle of the parallel-transported frame ---------------------------------------------------
@@ -407,28 +504,69 @@ class _AngleSeries:
         reg = modes[~res]
         C = coef[~res] / (1j * D[~res])
         self.const = (C * np.exp(1j * (reg @ beta0))).sum().real
-        # dense box of the regular terms: exp(i m1 b1) @ C @ exp(i m2 b2) is two small matrix products
+        # only Re(sum) is needed: the mode -m is folded onto m (Re(c e^{-i m.b}) = Re(conj(c) e^{i m.b})),
+        # so the box holds the half plane m1 > 0 or (m1 = 0, m2 > 0); and m = 2 j + p (the twist), so
+        # it is indexed by the alpha harmonics j: a quarter of the beta box, half of it kept
+        lower = (reg[:, 0] < 0) | ((reg[:, 0] == 0) & (reg[:, 1] < 0))
+        reg = np.where(lower[:, None], -reg, reg)
+        C = np.where(lower, C.conj(), C)
+        self.p = p.astype(int)
+        jj = (reg - self.p) // 2                                   # j1 >= 0
+        self.box = None
         if reg.size:
-            self.m1 = np.arange(reg[:, 0].min(), reg[:, 0].max() + 1)
-            self.m2 = np.arange(reg[:, 1].min(), reg[:, 1].max() + 1)
-            box = np.zeros((self.m1.size, self.m2.size), complex)
-            np.add.at(box, (reg[:, 0] - self.m1[0], reg[:, 1] - self.m2[0]), C)
+            self.n1 = int(jj[:, 0].max())
+            self.n2 = int(np.abs(jj[:, 1]).max())
+            # columns j2 = 0, 1..n2 and -1..-n2 (conjugated: sum_k conj(b_{-k} e^{ikx}) = conj of a
+            # product with the same powers)
+            box = np.zeros((self.n1 + 1, 2 * self.n2 + 1), complex)
+            col = np.where(jj[:, 1] >= 0, jj[:, 1], self.n2 - jj[:, 1])
+            np.add.at(box, (jj[:, 0], col), np.where(jj[:, 1] >= 0, C, C.conj()))
             self.box = box
-        else:
-            self.box = None
+            self.blocks = _row_blocks(box, self.n2)
         self.n_modes = int(keep.sum())
 
     def __call__(self, s: np.ndarray, beta: np.ndarray) -> np.ndarray:
         """int_0^s H, with beta = beta(s) given (shape (n, 2), any representative mod 2 pi)."""
-        beta = np.remainder(beta, 2 * np.pi)
         out = self.mean * s - self.const
         if self.box is not None:
-            E1 = np.exp(1j * np.multiply.outer(beta[:, 0], self.m1))
-            E2 = np.exp(1j * np.multiply.outer(beta[:, 1], self.m2))
-            out = out + np.einsum("nj,nj->n", E1 @ self.box, E2).real
+            beta = np.remainder(beta, 2 * np.pi)
+            a = np.remainder(2.0 * beta, 2 * np.pi)                # e^{i j alpha} = e^{2 i j beta}
+            n1, n2, box = self.n1, self.n2, self.box
+            G = np.broadcast_to(box[:, :1], (n1 + 1, s.size)).astype(complex)
+            if n2:
+                E2 = _powers(a[:, 1], n2)
+                for r0, r1, pos, neg in self.blocks:
+                    w = pos.shape[1]
+                    G[r0:r1] += pos @ E2[:w] + (neg @ E2[:w]).conj()
+            val = G[0] + (np.einsum("jn,jn->n", G[1:], _powers(a[:, 0], n1)) if n1 else 0.0)
+            out = out + (np.exp(1j * (beta @ self.p)) * val).real
         for Cr, D in zip(self.C_res, self.D_res):
             out = out + (Cr * s * np.exp(0.5j * D * s) * np.sinc(D * s / (2 * np.pi))).real
         return out
+
+
+def _row_blocks(box: np.ndarray, n2: int, overhead: int = 256):
+    """Split the rows of the angle box (columns 0, 1..n2, -1..-n2) into runs with their own column
+    width w (rows far from j1 = 0 need few j2): (r0, r1, positive part, conjugated negative part),
+    the runs chosen to minimize the entries multiplied plus ``overhead`` per run."""
+    nz = box != 0
+    cols = np.arange(1, n2 + 1)
+    wr = np.array([max(cols[nz[r, 1:n2 + 1]].max(initial=0), cols[nz[r, n2 + 1:]].max(initial=0))
+                   for r in range(box.shape[0])])
+    R = wr.size
+    best, cut = np.zeros(R + 1), np.zeros(R + 1, int)
+    for r1 in range(1, R + 1):
+        costs = [best[r0] + (r1 - r0) * 2 * wr[r0:r1].max() + overhead for r0 in range(r1)]
+        cut[r1] = int(np.argmin(costs))
+        best[r1] = costs[cut[r1]]
+    blocks, r1 = [], R
+    while r1 > 0:
+        r0 = cut[r1]
+        w = int(wr[r0:r1].max())
+        if w:
+            blocks.append((r0, r1, box[r0:r1, 1:w + 1].copy(), box[r0:r1, n2 + 1:n2 + 1 + w].copy()))
+        r1 = r0
+    return blocks[::-1]
 
 
 def _frame(x: np.ndarray, c: int):
@@ -524,6 +662,7 @@ def _genus2_motion(T: _NeumannTorus, ref: int, e10: np.ndarray):
         x, dx, gap = T.state(th[0], th[1])
         return x, dx / gap[:, None], _transported(x, ref, phi0 + ang(s, 0.5 * al.T))
 
+    motion.torus, motion.angle = T, ang                # for the tests of the time map
     info = {"genus": 2, "reference_axis": ref, "angle_modes": ang.n_modes, "angle_grid": ang.n,
             "frequencies_s": nu.copy(), "time_drift": float(T.drift),
             "series_terms": [int(o_.f.size) for o_ in T.osc]}
