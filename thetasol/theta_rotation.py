@@ -49,9 +49,13 @@ Degenerate data (only what the scene needs)
   ``Q = Q~ R(t)^T``, ``omega = R omega~ + spin e``; the exponents' difference at the node (the
   rate of the turn about the axis) is exact, from the third-kind differential ``E^2 dE / f_w``
   (:func:`_node_exponent_gap`).  Without axial spin the branches touch
-  (a tacnode; the axis moves as in Neumann's problem): not handled.  A spin below
-  ``MIN_AXIAL_SPIN`` of ``|omega0| + sqrt|a|`` is refused at once (ClosedFormUnavailable); up to a
-  few times that the set-up may still fail, and says so.
+  (a tacnode; the axis moves as in Neumann's problem, :mod:`thetasol.neumann`).  A small spin puts two
+  branch points near ``|E| ~ 1 / spin``; the expansions at the node's branches then grow like
+  ``spin^-k``, so the quantities read there (``U``, the exponent gap) come in closed form (Euler-Jacobi,
+  :func:`_velocity_at_infinity`) and the canonical divisor avoids them.  Measured to
+  ``MIN_AXIAL_SPIN = 3e-4`` of ``|omega0| + sqrt|a|`` (docs/theta_rotation.md); below it, or with the
+  farthest branch point beyond ``MAX_FAR_BRANCH`` (nearly spherical bodies), the data are refused at
+  once (ClosedFormUnavailable).
 """
 from __future__ import annotations
 
@@ -78,8 +82,12 @@ __all__ = ["ThetaRotation"]
 SNAP_TOL = 1e-12
 #: Nearly degenerate data refused at once (measured limits, docs/theta_rotation.md): a symmetric body's
 #: axial spin relative to |omega0| + sqrt|a|, and the relative gap of two principal second moments.
-MIN_AXIAL_SPIN = 1e-3
+MIN_AXIAL_SPIN = 3e-4
 MIN_J_GAP = 2e-8
+#: A symmetric body is also refused at once when its farthest branch point lies beyond this in units
+#: of sqrt(max |eig a|) / max J (a small axial spin puts two of them near |E| ~ 1 / spin; nearly
+#: spherical bodies have them farther still): at 2.5e4 and 1.4e5 the curve engine took over a minute.
+MAX_FAR_BRANCH = 2e4
 #: Points on the circles of the Cauchy means, and Gauss-Legendre nodes on their radii.
 N_CIRCLE = 32
 N_RAY = 16
@@ -490,6 +498,23 @@ def _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit):
     return k0, k1, float(cand[order[0]])
 
 
+def _farthest_branch_point(Jp: np.ndarray, M: np.ndarray, u: np.ndarray) -> float:
+    """max |E| over the finite branch points of (4.12) for a symmetric body, before the curve is built:
+    the roots of the discriminant in w, from the exact coefficients (~10 ms)."""
+    from .spectral import _exact_coefficients
+
+    Js = Jp.copy()
+    i = int(np.argmin(np.diff(Js)))
+    Js[i] = Js[i + 1] = 0.5 * (Js[i] + Js[i + 1])           # snapped as spectral_curve does
+    C = _exact_coefficients(np.diag(Js), M, u)
+    E, w = sp.symbols("E w")
+    f = sp.Poly({(k, l): sp.Rational(c.numerator, c.denominator)
+                 for k, row in enumerate(C) for l, c in enumerate(row) if c}, E, w)
+    disc = sp.Poly(sp.discriminant(f.as_expr(), w), E)
+    cf = np.array([float(c) for c in disc.all_coeffs()])
+    return float(np.abs(np.roots(cf)).max()) if len(cf) > 1 else 0.0
+
+
 def _symmetry_axis(Jp: np.ndarray):
     """Index of the symmetry axis of a symmetric body (two equal ascending Jp), else None."""
     if np.min(np.diff(Jp)) > SNAP_TOL * Jp[-1]:
@@ -514,14 +539,23 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         spin = float(w0p[axis])
         scale = np.linalg.norm(w0p) + np.sqrt(np.abs(np.linalg.eigvalsh(a)).max())
         if abs(spin) < MIN_AXIAL_SPIN * scale:
-            # Without spin the two places over E = infinity touch (a tacnode, genus 2: not
-            # implemented); for a small spin branch points run off to |E| ~ 1 / spin: the set-up
-            # failed from relative spin 8e-4 and took minutes at 4e-5 (measured), so refuse at once.
+            # Without spin the two places over E = infinity touch (a tacnode, genus 2: Neumann's
+            # problem, dispatched before); for a small spin two branch points run off to |E| ~ 1 / spin.
+            # Measured on 16 random bodies at 3e-4: <= 4e-10 at t = 4002; at 1e-4 a rank-one a stops
+            # (the series at the node's branches, which its Abel images need, are too noisy) and at
+            # 3e-5 others do, so refuse at once.
             raise ClosedFormUnavailable(
                 f"symmetric body with little spin (or none) about its symmetry axis ({abs(spin) / scale:.1e} of "
                 f"|omega0| + sqrt|a|, below {MIN_AXIAL_SPIN:g}): the spectral curve is at or near a tacnode "
                 "over E = infinity (the axis moves as in Neumann's problem, genus 2), which is not "
                 "implemented; use thetasol.integrate_rotation")
+        far = _farthest_branch_point(Jp, hat(Ip @ w0p), -(Q0p.T @ a @ Q0p))
+        far *= Jp[-1] / np.sqrt(np.abs(np.linalg.eigvalsh(a)).max())
+        if far > MAX_FAR_BRANCH:
+            raise ClosedFormUnavailable(
+                f"symmetric body with branch points of its spectral curve at |E| ~ {far:.1e} sqrt|a| / J "
+                f"(above {MAX_FAR_BRANCH:g}; axial spin {abs(spin) / scale:.1e} of |omega0| + sqrt|a|): near a "
+                "tacnode over E = infinity, out of the curve engine's reach; use thetasol.integrate_rotation")
     else:
         gap = float(np.min(np.diff(Jp))) / Jp[-1]
         if gap < MIN_J_GAP:
