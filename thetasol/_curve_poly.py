@@ -252,21 +252,26 @@ class CurvePoly:
         # derivative coefficients (j a_j) in double-double
         dhi, dlo = _two_prod_c(Ahi[:, 1:], jj)
         dlo = dlo + Alo[:, 1:] * jj
-        delta = np.zeros_like(Y)
-        for _ in range(iters):
-            rh, rl = comp_horner(Ahi[:, None, :], Alo[:, None, :], Y)
-            fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
-            fy = fh + fl
-            with np.errstate(divide="ignore", invalid="ignore"):
-                step = (rh + rl) / fy
-            ok = np.isfinite(step) & (np.abs(step) < 0.1 * (np.abs(Y) + 1e-300) + 1e-300)
-            Ynew = np.where(ok, Y - step, Y)
-            # what the float64 root misses of the exact one: (Y - step) - fl(Y - step), exact
-            # subtraction of nearby floats minus the (tiny, accurately known) step
-            delta = np.where(ok, (Y - Ynew) - step, 0)
-            Y = Ynew
-            if not np.any(ok & (np.abs(step) > 1e-17 * np.abs(Y))):
-                break
+        Y, delta, step = _newton_dd(Ahi, Alo, dhi, dlo, Y, iters)
+        # A close pair of roots far from y = 0 (two sheets 6 apart at |y| ~ 1e8, next to the far
+        # branch points of a symmetric body with a small axial spin) can leave the companion matrix
+        # a third of the gap off or more: 4 Newton steps then stop 1e-3..0.1 short, and more of them
+        # can take both to the same root.  Those rows are finished by Ehrlich-Aberth steps (Newton
+        # repelled by the other roots), with the same compensated residuals.
+        m = Y.shape[1]
+        same = np.zeros(Y.shape[0], bool)
+        if m > 1:
+            gaps = np.abs(Y[:, :, None] - Y[:, None, :])
+            gaps[:, np.arange(m), np.arange(m)] = np.inf
+            close = gaps.min(axis=2) <= 1e-13 * np.abs(Y)
+            same = close.any(axis=1)
+        rows = np.nonzero((np.abs(step) > 1e-12 * np.abs(Y)).any(axis=1) | same)[0]
+        if rows.size and m == n:
+            Y, delta = Y.copy(), delta.copy()
+            Ys = Y[rows]
+            # roots that coincide in float64 are pulled apart first (Aberth needs distinct iterates)
+            Ys = np.where(close[rows], Ys * (1 + 1e-9 * np.exp(2j * np.arange(m)))[None, :], Ys)
+            Y[rows], delta[rows], _ = _newton_dd(Ahi[rows], Alo[rows], dhi[rows], dlo[rows], Ys, 60, aberth=True)
         fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
         fy = fh + fl
         # f_y at the exact root, not at its float64 rounding: where two sheets nearly coincide,
@@ -542,3 +547,31 @@ def _two_prod_c(a, k):
     pr, er = two_prod(a.real, k * 1.0)
     pi, ei = two_prod(a.imag, k * 1.0)
     return pr + 1j * pi, er + 1j * ei
+
+
+def _newton_dd(Ahi, Alo, dhi, dlo, Y, iters, aberth=False):
+    """Up to ``iters`` Newton steps on the roots Y (K, m) with compensated residuals (see
+    CurvePoly.polish_dd); returns (Y, delta, last step).  ``aberth``: Y holds all the roots of each
+    row and the steps are Ehrlich-Aberth's, N / (1 - N sum_j 1 / (y - y_j)) with N the Newton step."""
+    delta = np.zeros_like(Y)
+    step = np.zeros_like(Y)
+    for _ in range(iters):
+        rh, rl = comp_horner(Ahi[:, None, :], Alo[:, None, :], Y)
+        fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
+        fy = fh + fl
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = (rh + rl) / fy
+            if aberth:
+                diff = Y[:, :, None] - Y[:, None, :]
+                diff[:, np.arange(Y.shape[1]), np.arange(Y.shape[1])] = np.inf
+                step = step / (1 - step * (1 / diff).sum(axis=2))
+        ok = np.isfinite(step) & (np.abs(step) < 0.1 * (np.abs(Y) + 1e-300) + 1e-300)
+        step = np.where(ok, step, 0)
+        Ynew = np.where(ok, Y - step, Y)
+        # what the float64 root misses of the exact one: (Y - step) - fl(Y - step), exact
+        # subtraction of nearby floats minus the (tiny, accurately known) step
+        delta = np.where(ok, (Y - Ynew) - step, 0)
+        Y = Ynew
+        if not np.any(ok & (np.abs(step) > 1e-17 * np.abs(Y))):
+            break
+    return Y, delta, step

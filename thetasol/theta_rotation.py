@@ -49,9 +49,13 @@ Degenerate data (only what the scene needs)
   ``Q = Q~ R(t)^T``, ``omega = R omega~ + spin e``; the exponents' difference at the node (the
   rate of the turn about the axis) is exact, from the third-kind differential ``E^2 dE / f_w``
   (:func:`_node_exponent_gap`).  Without axial spin the branches touch
-  (a tacnode; the axis moves as in Neumann's problem): not handled.  A spin below
-  ``MIN_AXIAL_SPIN`` of ``|omega0| + sqrt|a|`` is refused at once (ClosedFormUnavailable); up to a
-  few times that the set-up may still fail, and says so.
+  (a tacnode; the axis moves as in Neumann's problem, :mod:`thetasol.neumann`).  A small spin puts two
+  branch points near ``|E| ~ 1 / spin``; the expansions at the node's branches then grow like
+  ``spin^-k``, so the quantities read there (``U``, the exponent gap) come in closed form (Euler-Jacobi,
+  :func:`_velocity_at_infinity`) and the canonical divisor avoids them.  Measured to
+  ``MIN_AXIAL_SPIN = 3e-4`` of ``|omega0| + sqrt|a|`` (docs/theta_rotation.md); below it, or with the
+  farthest branch point beyond ``MAX_FAR_BRANCH`` (nearly spherical bodies), the data are refused at
+  once (ClosedFormUnavailable).
 """
 from __future__ import annotations
 
@@ -78,8 +82,12 @@ __all__ = ["ThetaRotation"]
 SNAP_TOL = 1e-12
 #: Nearly degenerate data refused at once (measured limits, docs/theta_rotation.md): a symmetric body's
 #: axial spin relative to |omega0| + sqrt|a|, and the relative gap of two principal second moments.
-MIN_AXIAL_SPIN = 1e-3
+MIN_AXIAL_SPIN = 3e-4
 MIN_J_GAP = 2e-8
+#: A symmetric body is also refused at once when its farthest branch point lies beyond this in units
+#: of sqrt(max |eig a|) / max J (a small axial spin puts two of them near |E| ~ 1 / spin; nearly
+#: spherical bodies have them farther still): at 2.5e4 and 1.4e5 the curve engine took over a minute.
+MAX_FAR_BRANCH = 2e4
 #: Points on the circles of the Cauchy means, and Gauss-Legendre nodes on their radii.
 N_CIRCLE = 32
 N_RAY = 16
@@ -273,14 +281,41 @@ def _velocity_at_infinity(curve, nums, places, Jinf) -> np.ndarray:
 
     e2 = J1 J2 + J1 J3 + J2 J3.  The terms of the sum grow like 1 / (J_1 - J_2) for a nearly
     symmetric body and cancel; the divided difference does not (at J2/J1 = 1 + 1e-6 the sum lost
-    six digits: U was 1e-10 off).  Otherwise (the node at infinity of a symmetric body) the sum of
-    the t^0 coefficients of the expansions in t = 1/E at the places.
+    six digits: U was 1e-10 off).
+
+    Symmetric body (x_a = x_b = x_p at the node's two branches, x_s at the third place): the g_i
+    have degree <= 1 in w, so by Euler-Jacobi sum_l g_i(E, w_l) / f_w(E, w_l) = 0 for every E and
+    the t^0 coefficients at the three places add up to 0; the sum is (J_s - J_p) times the
+    coefficient at inf_s, which has the closed form above:
+
+        sum_j J_j omega_i / ds (inf_j) = -h_i(x_s) / (lc (J_s + J_p)(x_s - x_p)).
+
+    The expansions at the node's branches are not used: their coefficients grow like spin^-k
+    (branch points at |E| ~ 1 / spin, the axial spin) and the FFT lost 5e-12 of the t^0 sum at
+    relative spin 4e-4 (measured against a 40-digit contour integral), a rate error of U.
     """
+    E, w = curve.x, curve.y
+    lc = float(sp.Poly(curve._poly.sympy_expr(), w).LC())
+    if curve.symmetric_body:
+        x = np.asarray(curve.J2, float)
+        s_ = [i for i in range(3) if np.sum(x == x[i]) == 1]
+        if len(s_) != 1:
+            raise RuntimeError(f"symmetric body without a single distinct J^2 ({x}; internal error)")
+        s_ = s_[0]
+        xp = x[(s_ + 1) % 3]
+        Js, Jp_ = np.sqrt(x[s_]), np.sqrt(xp)
+        out = np.zeros(len(nums))
+        for i, gnum in enumerate(nums):
+            pol = sp.Poly(sp.sympify(gnum), E, w)
+            if pol.degree(w) > 1:
+                raise RuntimeError(f"holomorphic differential {gnum} of degree > 1 in w (internal error)")
+            alpha = sum(float(cf) for (me, mw), cf in pol.terms() if (me, mw) == (2, 0))
+            beta = sum(float(cf) for (me, mw), cf in pol.terms() if (me, mw) == (0, 1))
+            out[i] = -(alpha + beta * x[s_]) / (lc * (Js + Jp_) * (x[s_] - xp))
+        return out
     J = np.asarray(Jinf, float)
     J2 = J * J
     if min(abs(J2[i] - J2[j]) for i in range(3) for j in range(i)) > SNAP_TOL * J2.max():
-        E, w = curve.x, curve.y
-        lc = float(sp.Poly(curve._poly.sympy_expr(), w).LC())
         e2 = J[0] * J[1] + J[0] * J[2] + J[1] * J[2]
         den = lc * (J[0] + J[1]) * (J[0] + J[2]) * (J[1] + J[2])
         out = np.zeros(len(nums))
@@ -290,18 +325,22 @@ def _velocity_at_infinity(curve, nums, places, Jinf) -> np.ndarray:
             beta = sum(float(cf) for (me, mw), cf in pol.terms() if (me, mw) == (0, 1))
             out[i] = -(beta * e2 - alpha) / den
         return out
-    out = np.zeros((len(nums), len(places)), complex)
-    for j, Pl in enumerate(places):
-        for i, gnum in enumerate(nums):
-            k, c = Pl.expand(gnum, order=3)
-            out[i, j] = c[k == 0][0] if np.any(k == 0) else 0.0
-    return out @ J
+    raise RuntimeError(f"J at infinity {J} nearly but not exactly symmetric (internal error)")
 
 
 def _zero_order(Pl, numerator) -> int:
-    """Order of vanishing of numerator dE / f_w at the place (from its expansion)."""
+    """Order of vanishing of numerator dE / f_w at the place (from its expansion).
+
+    A coefficient is significant against the largest term c_k t0^k on the sampling circle |t| = |t0|,
+    not against the largest c_k: near a tacnode (a symmetric body with little axial spin) two branch
+    points sit at |E| ~ 1 / spin, the series in t = 1/E converges only for |t| < ~spin and c_k grows
+    like spin^-k, so the unscaled test dropped the order-0 term at the node's branches (read 2 for 0
+    from relative spin 1e-3: a canonical divisor of degree 8 on genus 3, and no Riemann constant).
+    """
     k, c = Pl.expand(numerator, order=4)
-    sig = np.abs(c) > 1e-10 * np.abs(c).max()
+    t0 = abs(Pl.curve._place_data(Pl, None, None)[1])
+    F = np.abs(c) * t0 ** k.astype(float)
+    sig = F > 1e-10 * F.max()
     return int(k[np.argmax(sig)])
 
 
@@ -434,11 +473,13 @@ def _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit):
     if len(pair) != 2:
         raise RuntimeError(f"no node over E = infinity (J at infinity {Jinf}; internal error)")
     om = curve.x ** 2
-    res, c0 = np.zeros(3, complex), np.zeros(3, complex)
+    res = np.zeros(3, complex)
     for j, Pl in enumerate(Pinf):
         k, c = Pl.expand(om, order=3)
         res[j] = c[k == -1][0] if np.any(k == -1) else 0.0
-        c0[j] = c[k == 0][0] if np.any(k == 0) else 0.0
+    # sum_j J_j c_j in closed form (Euler-Jacobi, see _velocity_at_infinity): the t^0 coefficients
+    # at the node's branches grow like 1 / spin and the FFT loses them for a small axial spin
+    Jc0 = _velocity_at_infinity(curve, [om], Pinf, Jinf)[0]
     k0, k1 = pair
     r = res[k0]
     if abs(r) == 0 or abs(res[k1] + r) > 1e-8 * abs(r) or abs(res[3 - k0 - k1]) > 1e-8 * abs(r):
@@ -446,7 +487,7 @@ def _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit):
                            "differential (internal error)")
     g = curve.genus
     pa = (np.asarray(curve.period_matrix(differentials=[om])) @ G).ravel()[:g] / r
-    value = float(((Jinf @ c0) / r - pa @ U).imag)
+    value = float((Jc0 / r - pa @ U).imag)
     fitted = float(nu_fit[0, k1] - nu_fit[0, k0])
     n = np.array(np.meshgrid(*[np.arange(-3, 4)] * rdim, indexing="ij")).reshape(rdim, -1).T
     cand = value + 2 * np.pi * n @ U[:rdim]
@@ -455,6 +496,23 @@ def _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit):
     if miss[order[0]] > 1e-8 * (1 + abs(fitted)) or (len(miss) > 1 and miss[order[1]] <= 1e-4):
         return None
     return k0, k1, float(cand[order[0]])
+
+
+def _farthest_branch_point(Jp: np.ndarray, M: np.ndarray, u: np.ndarray) -> float:
+    """max |E| over the finite branch points of (4.12) for a symmetric body, before the curve is built:
+    the roots of the discriminant in w, from the exact coefficients (~10 ms)."""
+    from .spectral import _exact_coefficients
+
+    Js = Jp.copy()
+    i = int(np.argmin(np.diff(Js)))
+    Js[i] = Js[i + 1] = 0.5 * (Js[i] + Js[i + 1])           # snapped as spectral_curve does
+    C = _exact_coefficients(np.diag(Js), M, u)
+    E, w = sp.symbols("E w")
+    f = sp.Poly({(k, l): sp.Rational(c.numerator, c.denominator)
+                 for k, row in enumerate(C) for l, c in enumerate(row) if c}, E, w)
+    disc = sp.Poly(sp.discriminant(f.as_expr(), w), E)
+    cf = np.array([float(c) for c in disc.all_coeffs()])
+    return float(np.abs(np.roots(cf)).max()) if len(cf) > 1 else 0.0
 
 
 def _symmetry_axis(Jp: np.ndarray):
@@ -481,14 +539,23 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         spin = float(w0p[axis])
         scale = np.linalg.norm(w0p) + np.sqrt(np.abs(np.linalg.eigvalsh(a)).max())
         if abs(spin) < MIN_AXIAL_SPIN * scale:
-            # Without spin the two places over E = infinity touch (a tacnode, genus 2: not
-            # implemented); for a small spin branch points run off to |E| ~ 1 / spin: the set-up
-            # failed from relative spin 8e-4 and took minutes at 4e-5 (measured), so refuse at once.
+            # Without spin the two places over E = infinity touch (a tacnode, genus 2: Neumann's
+            # problem, dispatched before); for a small spin two branch points run off to |E| ~ 1 / spin.
+            # Measured on 16 random bodies at 3e-4: <= 4e-10 at t = 4002; at 1e-4 a rank-one a stops
+            # (the series at the node's branches, which its Abel images need, are too noisy) and at
+            # 3e-5 others do, so refuse at once.
             raise ClosedFormUnavailable(
                 f"symmetric body with little spin (or none) about its symmetry axis ({abs(spin) / scale:.1e} of "
                 f"|omega0| + sqrt|a|, below {MIN_AXIAL_SPIN:g}): the spectral curve is at or near a tacnode "
                 "over E = infinity (the axis moves as in Neumann's problem, genus 2), which is not "
                 "implemented; use thetasol.integrate_rotation")
+        far = _farthest_branch_point(Jp, hat(Ip @ w0p), -(Q0p.T @ a @ Q0p))
+        far *= Jp[-1] / np.sqrt(np.abs(np.linalg.eigvalsh(a)).max())
+        if far > MAX_FAR_BRANCH:
+            raise ClosedFormUnavailable(
+                f"symmetric body with branch points of its spectral curve at |E| ~ {far:.1e} sqrt|a| / J "
+                f"(above {MAX_FAR_BRANCH:g}; axial spin {abs(spin) / scale:.1e} of |omega0| + sqrt|a|): near a "
+                "tacnode over E = infinity, out of the curve engine's reach; use thetasol.integrate_rotation")
     else:
         gap = float(np.min(np.diff(Jp))) / Jp[-1]
         if gap < MIN_J_GAP:
@@ -550,6 +617,12 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         canon = {Pl: 1 for Pl in P0_reg}
         for Pl in Pinf:
             canon[Pl] = 1 if not curve.symmetric_body else _zero_order(Pl, curve.x)   # curve.x: E, not sympy's e
+    if sum(canon.values()) != 2 * g - 2:
+        raise RuntimeError(f"canonical divisor of E dE / f_w of degree {sum(canon.values())} on genus {g} "
+                           "(orders read off the expansions at infinity; internal error)")
+    # order 0 at the node's branches: no Abel image needed there (their series carry the noise of
+    # E^2 - w / J_1^2 cancelling on w ~ J_1^2 E^2 for a small axial spin)
+    canon = {Pl: m for Pl, m in canon.items() if m != 0}
     K = _riemann_constant(abel, th, canon, Jp, M, u, curve)
     Xtmp = np.column_stack([right_eigenvector(u, Pl.y) if getattr(Pl, "_slope", None) is None
                             else np.ones(3) for Pl in P0])
