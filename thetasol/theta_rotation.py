@@ -304,13 +304,14 @@ def _velocity_at_infinity(curve, nums, places, Jinf) -> np.ndarray:
         s_ = s_[0]
         xp = x[(s_ + 1) % 3]
         Js, Jp_ = np.sqrt(x[s_]), np.sqrt(xp)
-        out = np.zeros(len(nums))
+        # the normalization's differentials come from the adjoint conditions: complex coefficients
+        out = np.zeros(len(nums), complex)
         for i, gnum in enumerate(nums):
             pol = sp.Poly(sp.sympify(gnum), E, w)
             if pol.degree(w) > 1:
                 raise RuntimeError(f"holomorphic differential {gnum} of degree > 1 in w (internal error)")
-            alpha = sum(float(cf) for (me, mw), cf in pol.terms() if (me, mw) == (2, 0))
-            beta = sum(float(cf) for (me, mw), cf in pol.terms() if (me, mw) == (0, 1))
+            alpha = sum(complex(cf) for (me, mw), cf in pol.terms() if (me, mw) == (2, 0))
+            beta = sum(complex(cf) for (me, mw), cf in pol.terms() if (me, mw) == (0, 1))
             out[i] = -(alpha + beta * x[s_]) / (lc * (Js + Jp_) * (x[s_] - xp))
         return out
     J = np.asarray(Jinf, float)
