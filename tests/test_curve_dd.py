@@ -140,3 +140,26 @@ def test_local_samples_fall_back_to_mpmath_only_where_double_double_loses_digits
     a, _ = _accurate_samples(no_mp, xs2, start2.copy(), None)
     b, _ = _accurate_samples(no_mp, xs2, start2.copy(), np.full(8, 1e-3))
     assert np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("start", [[1e8 + 2, 1e8 + 2.5, 1.0],     # both a third of the gap off
+                                   [1e8 + 1.5, 1e8 + 4.5, 1.0],   # a quarter off
+                                   [1e8 + 3, 1e8 + 3, 1.0]])      # merged into one float
+def test_polish_separates_a_close_pair_far_from_zero(start):
+    """Roots 1e8 and 1e8 + 6 (the far branch points of a symmetric body with a small axial spin):
+    from starts that four compensated Newton steps do not fix (checked below), polish_dd (Ehrlich-Aberth
+    finish) returns both roots exactly."""
+    import sympy as sp
+
+    from thetasol._curve_poly import CurvePoly, _newton_dd, _two_prod_c
+
+    x, y = sp.symbols("x y")
+    exact = np.array([1.0, 1e8, 1e8 + 6], complex)
+    poly = CurvePoly(sp.expand((y - 10**8 - x) * (y - (10**8 + 6)) * (y - 1)), x, y)
+    Ahi, Alo = poly.coeff_polys_dd(np.array([0j]))
+    Y0 = np.array([start], complex)
+    Y, _ = poly.polish_dd(Ahi, Alo, Y0.copy())
+    assert np.array_equal(np.sort_complex(Y[0]), exact)
+    dhi, dlo = _two_prod_c(Ahi[:, 1:], np.arange(1, 4))
+    plain, _, _ = _newton_dd(Ahi, Alo, dhi, dlo + Alo[:, 1:] * np.arange(1, 4), Y0.copy(), 4)
+    assert np.abs(np.sort_complex(plain[0]) - exact).max() > 1e-8

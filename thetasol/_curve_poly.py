@@ -259,13 +259,12 @@ class CurvePoly:
         # can take both to the same root.  Those rows are finished by Ehrlich-Aberth steps (Newton
         # repelled by the other roots), with the same compensated residuals.
         m = Y.shape[1]
-        same = np.zeros(Y.shape[0], bool)
+        close = np.zeros(Y.shape, bool)
         if m > 1:
             gaps = np.abs(Y[:, :, None] - Y[:, None, :])
             gaps[:, np.arange(m), np.arange(m)] = np.inf
             close = gaps.min(axis=2) <= 1e-13 * np.abs(Y)
-            same = close.any(axis=1)
-        rows = np.nonzero((np.abs(step) > 1e-12 * np.abs(Y)).any(axis=1) | same)[0]
+        rows = np.nonzero((np.abs(step) > 1e-12 * np.abs(Y)).any(axis=1) | close.any(axis=1))[0]
         if rows.size and m == n:
             Y, delta = Y.copy(), delta.copy()
             Ys = Y[rows]
