@@ -208,12 +208,9 @@ class _Nodes:
 
 def _collision_times(R, Dt, sep):
     """sep / |d(gap)/dtau| for the nearest other root of every root (inf where the gap is constant)."""
-    n = R.shape[1]
-    if n == 1:
+    if R.shape[1] == 1:
         return np.full(R.shape, np.inf)
-    D = np.abs(R[:, :, None] - R[:, None, :])
-    D[:, np.arange(n), np.arange(n)] = np.inf
-    nn = np.argmin(D, axis=2)
+    nn = np.argmin(_gaps(R), axis=2)
     rate = np.abs(Dt - np.take_along_axis(Dt, nn, axis=1))
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where(rate > 0, sep / rate, np.inf)
@@ -263,12 +260,7 @@ def _pair_hermite(P, Pd, P2, ip, R, D, D2, dt, h2):
     m, n = R.shape
     ar = np.arange(m)
 
-    def nearest(V):
-        G = np.abs(V[:, :, None] - V[:, None, :])
-        G[:, np.arange(n), np.arange(n)] = np.inf
-        return np.argmin(G, axis=2)
-
-    nnP, nnR = nearest(P), nearest(R)
+    nnP, nnR = np.argmin(_gaps(P), axis=2), np.argmin(_gaps(R), axis=2)
     kp = nnP[ar, ip]
     # midpoint predictions of the mean and half-difference from the previous node
     Mp = 0.5 * (P[ar, ip] + P[ar, kp]) + 0.25 * dt * (Pd[ar, ip] + Pd[ar, kp]) + 0.5 * h2 * (P2[ar, ip] + P2[ar, kp])
@@ -301,13 +293,18 @@ def _pair_hermite(P, Pd, P2, ip, R, D, D2, dt, h2):
     return pick, ok
 
 
-def _separations(R):
+def _gaps(R):
+    """|R_i - R_j| for the roots of every row (K, n, n), infinite on the diagonal."""
     n = R.shape[1]
-    if n == 1:
+    G = np.abs(R[:, :, None] - R[:, None, :])
+    G[:, np.arange(n), np.arange(n)] = np.inf
+    return G
+
+
+def _separations(R):
+    if R.shape[1] == 1:
         return np.full(R.shape, np.inf)
-    D = np.abs(R[:, :, None] - R[:, None, :])
-    D[:, np.arange(n), np.arange(n)] = np.inf
-    return D.min(axis=2)
+    return _gaps(R).min(axis=2)
 
 
 class Tracker:
