@@ -269,7 +269,7 @@ def _infinity_data(curve, J2, M):
     return places, np.array(Js), B
 
 
-def _velocity_at_infinity(curve, nums, places, Jinf) -> np.ndarray:
+def _velocity_at_infinity(curve, nums) -> np.ndarray:
     """sum_j J_j omega_i / ds at the places over E = infinity (s = 1/E), omega_i = g_i dE / f_w.
 
     Distinct J_j: in closed form.  f = lc prod_l (w - w_l) with w_l = x_l E^2 + O(E), x_l = J_l^2, so
@@ -296,37 +296,27 @@ def _velocity_at_infinity(curve, nums, places, Jinf) -> np.ndarray:
     """
     E, w = curve.x, curve.y
     lc = float(sp.Poly(curve._poly.sympy_expr(), w).LC())
+    x = np.asarray(curve.J2, float)                     # exact J_j^2 (snapped), not read off the places
+    # the weight-2 part of each numerator: its E^2 and w coefficients (complex: on a symmetric body's
+    # normalization the differentials come from the adjoint conditions)
+    h = []
+    for gnum in nums:
+        pol = sp.Poly(sp.sympify(gnum), E, w)
+        if pol.degree(w) > 1:
+            raise RuntimeError(f"holomorphic differential {gnum} of degree > 1 in w (internal error)")
+        cf = dict(pol.terms())
+        h.append((complex(cf.get((2, 0), 0)), complex(cf.get((0, 1), 0))))
     if curve.symmetric_body:
-        x = np.asarray(curve.J2, float)
         s_ = [i for i in range(3) if np.sum(x == x[i]) == 1]
         if len(s_) != 1:
             raise RuntimeError(f"symmetric body without a single distinct J^2 ({x}; internal error)")
-        s_ = s_[0]
-        xp = x[(s_ + 1) % 3]
-        Js, Jp_ = np.sqrt(x[s_]), np.sqrt(xp)
-        # the normalization's differentials come from the adjoint conditions: complex coefficients
-        out = np.zeros(len(nums), complex)
-        for i, gnum in enumerate(nums):
-            pol = sp.Poly(sp.sympify(gnum), E, w)
-            if pol.degree(w) > 1:
-                raise RuntimeError(f"holomorphic differential {gnum} of degree > 1 in w (internal error)")
-            alpha = sum(complex(cf) for (me, mw), cf in pol.terms() if (me, mw) == (2, 0))
-            beta = sum(complex(cf) for (me, mw), cf in pol.terms() if (me, mw) == (0, 1))
-            out[i] = -(alpha + beta * x[s_]) / (lc * (Js + Jp_) * (x[s_] - xp))
-        return out
-    J = np.asarray(Jinf, float)
-    J2 = J * J
-    if min(abs(J2[i] - J2[j]) for i in range(3) for j in range(i)) > SNAP_TOL * J2.max():
-        e2 = J[0] * J[1] + J[0] * J[2] + J[1] * J[2]
-        den = lc * (J[0] + J[1]) * (J[0] + J[2]) * (J[1] + J[2])
-        out = np.zeros(len(nums))
-        for i, gnum in enumerate(nums):
-            pol = sp.Poly(sp.sympify(gnum), E, w)
-            alpha = sum(float(cf) for (me, mw), cf in pol.terms() if (me, mw) == (2, 0))
-            beta = sum(float(cf) for (me, mw), cf in pol.terms() if (me, mw) == (0, 1))
-            out[i] = -(beta * e2 - alpha) / den
-        return out
-    raise RuntimeError(f"J at infinity {J} nearly but not exactly symmetric (internal error)")
+        xs, xp = x[s_[0]], x[(s_[0] + 1) % 3]
+        den = lc * (np.sqrt(xs) + np.sqrt(xp)) * (xs - xp)
+        return np.array([-(alpha + beta * xs) / den for alpha, beta in h])
+    J = np.sqrt(x)
+    e2 = J[0] * J[1] + J[0] * J[2] + J[1] * J[2]
+    den = lc * (J[0] + J[1]) * (J[0] + J[2]) * (J[1] + J[2])
+    return np.array([-(beta.real * e2 - alpha.real) / den for alpha, beta in h])
 
 
 def _zero_order(Pl, numerator) -> int:
@@ -480,7 +470,7 @@ def _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit):
         res[j] = c[k == -1][0] if np.any(k == -1) else 0.0
     # sum_j J_j c_j in closed form (Euler-Jacobi, see _velocity_at_infinity): the t^0 coefficients
     # at the node's branches grow like 1 / spin and the FFT loses them for a small axial spin
-    Jc0 = _velocity_at_infinity(curve, [om], Pinf, Jinf)[0]
+    Jc0 = _velocity_at_infinity(curve, [om])[0]
     k0, k1 = pair
     r = res[k0]
     if abs(r) == 0 or abs(res[k1] + r) > 1e-8 * abs(r) or abs(res[3 - k0 - k1]) > 1e-8 * abs(r):
@@ -538,11 +528,12 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         # E^0 term at the node over E = infinity and the Baker-Akhiezer function has no
         # third-kind singularity there (docs/theta_rotation.md).
         spin = float(w0p[axis])
-        scale = np.linalg.norm(w0p) + np.sqrt(np.abs(np.linalg.eigvalsh(a)).max())
+        sqrt_a = np.sqrt(np.abs(np.linalg.eigvalsh(a)).max())
+        scale = np.linalg.norm(w0p) + sqrt_a
         if abs(spin) < MIN_AXIAL_SPIN * scale:
             # Without spin the two places over E = infinity touch (a tacnode, genus 2: Neumann's
             # problem, dispatched before); for a small spin two branch points run off to |E| ~ 1 / spin.
-            # Measured on 16 random bodies at 3e-4: <= 4e-10 at t = 4002; at 1e-4 a rank-one a stops
+            # Measured on 23 random bodies at 3e-4: <= 3.9e-10 at t = 4002; at 1e-4 a rank-one a stops
             # (the series at the node's branches, which its Abel images need, are too noisy) and at
             # 3e-5 others do, so refuse at once.
             raise ClosedFormUnavailable(
@@ -551,7 +542,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
                 "over E = infinity (the axis moves as in Neumann's problem, genus 2), which is not "
                 "implemented; use thetasol.integrate_rotation")
         far = _farthest_branch_point(Jp, hat(Ip @ w0p), -(Q0p.T @ a @ Q0p))
-        far *= Jp[-1] / np.sqrt(np.abs(np.linalg.eigvalsh(a)).max())
+        far *= Jp[-1] / sqrt_a
         if far > MAX_FAR_BRANCH:
             raise ClosedFormUnavailable(
                 f"symmetric body with branch points of its spectral curve at |E| ~ {far:.1e} sqrt|a| / J "
@@ -585,7 +576,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
 
     Pinf, Jinf, B = _infinity_data(curve, curve.J2, M)
     Bc = B.conj()                                            # psi -> components: psi @ conj(B)
-    U = Ainv @ _velocity_at_infinity(curve, nums, Pinf, Jinf)
+    U = Ainv @ _velocity_at_infinity(curve, nums)
     scaleU = np.abs(U).max()
     if np.abs(U.imag).max() > 1e-10 * scaleU or np.abs(U[rdim:]).max() > 1e-10 * scaleU:
         raise RuntimeError("the flow velocity is not real in the adapted basis: inaccurate periods")
