@@ -102,13 +102,18 @@ def _sum_series(E: np.ndarray, c: np.ndarray):
     return c[0].real + 2.0 * np.tensordot(c[1:], E[:c.size - 1], 1).real
 
 
+def _sum_series_derivative(E: np.ndarray, c: np.ndarray):
+    """The x-derivative of :func:`_sum_series`, from the same powers."""
+    return 2.0 * np.tensordot(1j * np.arange(1, c.size) * c[1:], E[:c.size - 1], 1).real
+
+
 def _eval_series(c: np.ndarray, x: np.ndarray, derivative: bool = False):
     """``Re(c_0 + 2 sum c_n e^{inx})`` (and its derivative) at real ``x`` (any shape)."""
     E = _powers(x, c.size - 1)
     val = _sum_series(E, c)
     if not derivative:
         return val
-    return val, 2.0 * np.tensordot(1j * np.arange(1, c.size) * c[1:], E, 1).real
+    return val, _sum_series_derivative(E, c)
 
 
 def _powers(x: np.ndarray, n: int) -> np.ndarray:
@@ -125,20 +130,6 @@ def _powers(x: np.ndarray, n: int) -> np.ndarray:
         E[m:m + k] = E[:k] * (np.cos(mx) + 1j * np.sin(mx))
         m += k
     return E[:n]
-
-
-def _exp_range(x: np.ndarray, lo: int, hi: int) -> np.ndarray:
-    """``e^{i j x}`` for j = lo..hi (x real, 1-d), shape (hi - lo + 1, x.size), from :func:`_powers`."""
-    n = max(abs(lo), abs(hi), 1)
-    pw = _powers(x, n)
-    parts = []
-    if lo < 0:
-        parts.append(pw[-lo - 1::-1].conj() if hi >= -1 else pw[-lo - 1:-hi - 2:-1].conj())
-    if lo <= 0 <= hi:
-        parts.append(np.ones((1, x.size), complex))
-    if hi > 0:
-        parts.append(pw[max(lo, 1) - 1:hi])
-    return np.concatenate(parts, 0)
 
 
 def _integrated(c: np.ndarray) -> np.ndarray:
@@ -416,10 +407,14 @@ class _NeumannTorus:
         return np.stack(np.broadcast_arrays(*xs), -1), np.stack(np.broadcast_arrays(*dxs), -1), gap
 
     # -- time -> s ---------------------------------------------------------------------------------
+    def _alpha(self, s):
+        """The two angles alpha_k(s), linear in s: shape (2, s.size)."""
+        return self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
+
     def _time(self, s, angles: bool = False):
         """t(s) and dt/ds = u2 - u1 at s (one set of powers e^{i n alpha} per coordinate); with
         ``angles`` also theta_k(alpha_k(s)) and dtheta_k/dalpha_k."""
-        al = self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
+        al = self._alpha(s)
         t = self.drift * s
         u, th, dth = [], [], []
         for kk, (o, P) in enumerate(zip(self.osc, self.P)):
@@ -428,7 +423,7 @@ class _NeumannTorus:
             th.append(al[kk] + _sum_series(E, o.B))
             u.append(o.u(th[-1]))
             if angles:
-                dth.append(1.0 + 2.0 * np.tensordot(1j * np.arange(1, o.B.size) * o.B[1:], E[:o.B.size - 1], 1).real)
+                dth.append(1.0 + _sum_series_derivative(E, o.B))
         if angles:
             return t, u[1] - u[0], np.array(th), np.array(dth)
         return t, u[1] - u[0]
@@ -443,9 +438,10 @@ class _NeumannTorus:
         return t, dt
 
     def s_of_t(self, t: np.ndarray):
-        """s with t(s) = t (t(s) is increasing): safeguarded Newton on the tables of t(s), then on
-        the series until the step is below 1e-9 / drift or the rounding of s (64 eps |s|); also
-        alpha(s), theta(s)."""
+        """s with t(s) = t (t(s) is increasing) and alpha(s), theta(s): safeguarded Newton on the
+        tables of t(s), then one Newton step on the series; if a step is above 1e-9 / drift and the
+        rounding of s (64 eps |s|), a table was poor (it stopped at its node limit) and the
+        safeguarded Newton goes on on the series."""
         lo, hi = (t - self.Pspan) / self.drift, (t + self.Pspan) / self.drift
         unit = 1.0 / self.drift
 
@@ -459,9 +455,9 @@ class _NeumannTorus:
         step = (t - t0) / dt0
         s = s0 + step
         if np.all(close(1e-9)(s, s0)):
-            return s, self.alpha0[:, None] + s[None, :] / self.fbar[:, None], th0 + dth0 * (step / self.fbar[:, None])
+            return s, self._alpha(s), th0 + dth0 * (step / self.fbar[:, None])
         s = _monotone_newton(self._time, t, s0, lo, hi, close(1e-9), 200, 1)     # a poor table
-        al = self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
+        al = self._alpha(s)
         return s, al, np.array([o.theta(a) for o, a in zip(self.osc, al)])
 
 
@@ -512,7 +508,7 @@ class _AngleSeries:
         C = np.where(lower, C.conj(), C)
         self.p = p.astype(int)
         jj = (reg - self.p) // 2                                   # j1 >= 0
-        self.box = None
+        self.col0 = None                                           # the column j2 = 0
         if reg.size:
             self.n1 = int(jj[:, 0].max())
             self.n2 = int(np.abs(jj[:, 1]).max())
@@ -521,18 +517,18 @@ class _AngleSeries:
             box = np.zeros((self.n1 + 1, 2 * self.n2 + 1), complex)
             col = np.where(jj[:, 1] >= 0, jj[:, 1], self.n2 - jj[:, 1])
             np.add.at(box, (jj[:, 0], col), np.where(jj[:, 1] >= 0, C, C.conj()))
-            self.box = box
+            self.col0 = box[:, 0].copy()
             self.blocks = _row_blocks(box, self.n2)
         self.n_modes = int(keep.sum())
 
     def __call__(self, s: np.ndarray, beta: np.ndarray) -> np.ndarray:
         """int_0^s H, with beta = beta(s) given (shape (n, 2), any representative mod 2 pi)."""
         out = self.mean * s - self.const
-        if self.box is not None:
+        if self.col0 is not None:
             beta = np.remainder(beta, 2 * np.pi)
             a = np.remainder(2.0 * beta, 2 * np.pi)                # e^{i j alpha} = e^{2 i j beta}
-            n1, n2, box = self.n1, self.n2, self.box
-            G = np.broadcast_to(box[:, :1], (n1 + 1, s.size)).astype(complex)
+            n1, n2 = self.n1, self.n2
+            G = np.repeat(self.col0[:, None], s.size, 1)
             if n2:
                 E2 = _powers(a[:, 1], n2)
                 for r0, r1, pos, neg in self.blocks:
@@ -662,7 +658,7 @@ def _genus2_motion(T: _NeumannTorus, ref: int, e10: np.ndarray):
         x, dx, gap = T.state(th[0], th[1])
         return x, dx / gap[:, None], _transported(x, ref, phi0 + ang(s, 0.5 * al.T))
 
-    motion.torus, motion.angle = T, ang                # for the tests of the time map
+    motion.torus = T                                   # for the tests of the time map
     info = {"genus": 2, "reference_axis": ref, "angle_modes": ang.n_modes, "angle_grid": ang.n,
             "frequencies_s": nu.copy(), "time_drift": float(T.drift),
             "series_terms": [int(o_.f.size) for o_ in T.osc]}
