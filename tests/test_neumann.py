@@ -220,7 +220,7 @@ def test_near_separatrix_is_refused_not_wrong():
 def test_powers_against_mpmath():
     """e^{ikx} by doubling (thetasol.neumann._powers): at most log2(k) roundings, measured 4e-16 to k = 460
     (x in [0, 2 pi): larger x are reduced by the float 2 pi, a relative change of x of order eps)."""
-    mpmath = pytest.importorskip("mpmath")
+    import mpmath                                      # a core dependency
     from thetasol.neumann import _powers
     x = np.random.default_rng(7).uniform(0.0, 2 * np.pi, 40)
     E = _powers(x, 460)
@@ -233,7 +233,7 @@ def test_powers_against_mpmath():
 
 
 @pytest.mark.parametrize("label", ["oblate-saddle", "near-unstable", "prolate-rest"])
-def test_time_map_tables_and_fallback(label):
+def test_time_map_tables_and_fallback(label, monkeypatch):
     """s(t): Newton on the Hermite tables then one series step.  The result solves the series equation
     t(s) = t to rounding and theta(s) from the step's linearization equals the direct series; with
     useless tables the safeguarded series Newton takes over and gives the same s and angles.
@@ -243,19 +243,21 @@ def test_time_map_tables_and_fallback(label):
 
     J, a, Q0, w0 = next(c[1:5] for c in CASES if c[0] == label)
     T = solve_rotation(J, a, Q0, w0)._c["axis_motion"].torus
+    assert all(tab.error <= 1e-12 / T.drift for tab in T.tables)
+    series = T._time
+    calls = []
+    monkeypatch.setattr(T, "_time", lambda *args, **kw: calls.append(1) or series(*args, **kw))
     t = np.concatenate([np.linspace(-50.0, 50.0, 41), np.geomspace(50.0, 1e6, 40)])
     s, al, th = T.s_of_t(t)
-    t_s, _ = T._time(s)
+    assert len(calls) == 1                             # the tables' path: one series evaluation
+    t_s, _ = series(s)
     assert np.all(np.abs(t_s - t) <= 1e-15 * (np.abs(t) + 1.0 / T.drift))
     th_direct = np.array([o.theta(x) for o, x in zip(T.osc, al)])
     assert np.all(np.abs(th - th_direct) <= 2e-15 * (1.0 + np.abs(al)))
-    good = T.tables
-    try:
-        # tables of zero: the model is t = drift s, off by up to Pspan
-        T.tables, T.table0 = [_HermiteTable(np.zeros(2, complex), 1.0)] * 2, [0.0, 0.0]
-        s2, al2, th2 = T.s_of_t(t)
-    finally:
-        T.tables = good
-        T.table0 = [tab(a0)[0] for tab, a0 in zip(good, T.alpha0)]
+    # tables of zero: the model is t = drift s, off by up to Pspan
+    monkeypatch.setattr(T, "tables", [_HermiteTable(np.zeros(2, complex), 1.0)] * 2)
+    monkeypatch.setattr(T, "table0", [0.0, 0.0])
+    s2, al2, th2 = T.s_of_t(t)
+    assert len(calls) > 2                              # the series Newton took over
     assert np.all(np.abs(s2 - s) <= 4e-15 * (1.0 / T.drift + np.abs(s)))
     assert np.all(np.abs(th2 - th) <= 2e-15 * (1.0 + np.abs(al)))
