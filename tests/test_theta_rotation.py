@@ -297,9 +297,9 @@ def test_symmetric_body_with_little_axial_spin_is_refused_at_once(monkeypatch):
 
 
 def test_nearly_spherical_symmetric_body_with_small_spin_is_refused_at_once(monkeypatch):
-    """J gap 0.25 %, axial spin 1e-3 relative: branch points at |E| ~ 4e4 sqrt|a| / J (the curve took
-    0.9 s and the set-up 9 s; at spin 3e-4, 1.4e5, the curve alone took 114 s): refused before the
-    curve is built."""
+    """J gap 0.25 %, axial spin 1e-3 relative: branch points at |E| ~ 4.2e4 sqrt|a| / J (the set-up
+    took 4.8 s CPU with the guard lifted; at spin 3e-4, 1.4e5, the curve alone took 114 s): refused
+    before the curve is built."""
     import thetasol.theta_rotation as tr
 
     def no_curve(*args, **kwargs):

@@ -86,7 +86,8 @@ MIN_AXIAL_SPIN = 3e-4
 MIN_J_GAP = 2e-8
 #: A symmetric body is also refused at once when its farthest branch point lies beyond this in units
 #: of sqrt(max |eig a|) / max J (a small axial spin puts two of them near |E| ~ 1 / spin; nearly
-#: spherical bodies have them farther still): at 2.5e4 and 1.4e5 the curve engine took over a minute.
+#: spherical bodies have them farther still): the J gap 0.25 % body of the tests took 4.8 s CPU at 4.2e4
+#: (relative spin 1e-3) and 114 s for the curve alone at 1.4e5 (3e-4).
 MAX_FAR_BRANCH = 2e4
 #: Points on the circles of the Cauchy means, and Gauss-Legendre nodes on their radii.
 N_CIRCLE = 32
@@ -491,7 +492,7 @@ def _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit):
 
 def _farthest_branch_point(Jp: np.ndarray, M: np.ndarray, u: np.ndarray) -> float:
     """max |E| over the finite branch points of (4.12) for a symmetric body, before the curve is built:
-    the roots of the discriminant in w, from the exact coefficients (~10 ms)."""
+    the roots of the discriminant in w, from the exact coefficients (3-6 ms)."""
     from .spectral import _exact_coefficients
 
     Js = Jp.copy()
@@ -533,9 +534,9 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         if abs(spin) < MIN_AXIAL_SPIN * scale:
             # Without spin the two places over E = infinity touch (a tacnode, genus 2: Neumann's
             # problem, dispatched before); for a small spin two branch points run off to |E| ~ 1 / spin.
-            # Measured on 23 random bodies at 3e-4: <= 3.9e-10 at t = 4002; at 1e-4 a rank-one a stops
-            # (the series at the node's branches, which its Abel images need, are too noisy) and at
-            # 3e-5 others do, so refuse at once.
+            # Measured on 23 random bodies at 3e-4: <= 3.9e-10 at t = 4002 (but 2 of 4 further rank-one a
+            # stopped at 3.3e-4 and one reached 1.1e-9, docs); at 1e-4 a rank-one a stops (the series at the
+            # node's branches, which its Abel images need, are too noisy) and at 3e-5 others do: refuse at once.
             raise ClosedFormUnavailable(
                 f"symmetric body with little spin (or none) about its symmetry axis ({abs(spin) / scale:.1e} of "
                 f"|omega0| + sqrt|a|, below {MIN_AXIAL_SPIN:g}): the spectral curve is at or near a tacnode "
