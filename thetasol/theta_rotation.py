@@ -378,6 +378,14 @@ def _circle_data(curve, place, radius, Jp, nums_arr):
     return Ec, wc, local
 
 
+def _drop_node_point(Ez: np.ndarray, wz: np.ndarray):
+    """The points of an eigenvector divisor on the normalization: the one at the node E = 0 removed."""
+    k = int(np.argmin(np.abs(Ez)))
+    if abs(Ez[k]) > 1e-8 * (1 + np.abs(Ez).max()):
+        raise RuntimeError("expected the eigenvector divisor to pass through the node")
+    return np.delete(Ez, k), np.delete(wz, k)
+
+
 def _radius(curve, E_poles: np.ndarray, E_zeros: np.ndarray) -> float:
     """Radius of the Cauchy circles around E = 0.
 
@@ -622,10 +630,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     alpha = _choose_alpha(Xtmp)
     Ed, wd = eigenvector_poles(Jp, M, u, alpha)
     if curve.node is not None:
-        drop = int(np.argmin(np.abs(Ed)))
-        if abs(Ed[drop]) > 1e-8 * (1 + np.abs(Ed).max()):
-            raise RuntimeError("expected the eigenvector divisor to pass through the node")
-        Ed, wd = np.delete(Ed, drop), np.delete(wd, drop)
+        Ed, wd = _drop_node_point(Ed, wd)
     if len(Ed) != g + 2:
         raise RuntimeError(f"eigenvector divisor of degree {len(Ed)}, expected g + 2 = {g + 2}")
     if curve.node is None:
@@ -639,10 +644,18 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     # B, alpha = conj(b_k)): the places where psi_k vanishes
     comp_alpha = [Bc[:, k] if curve.symmetric_body else np.eye(3)[k] for k in range(3)]
     comp_zeros = [eigenvector_poles(Jp, M, u, al) for al in comp_alpha]
+    r = _radius(curve, Ed, np.concatenate([Ez for Ez, _ in comp_zeros]))
+    if curve.node is not None:
+        # the node is a zero of every <alpha, v> (a base point, as for D0 above): on the normalization it
+        # cancels in psi_k = v_k / <alpha, v>, and Z_k keeps g points
+        comp_zeros = [_drop_node_point(Ez, wz) for Ez, wz in comp_zeros]
     R = float(np.abs(curve.branch_points).max())
     # A zero without a w (NaN) is where v_k vanishes on two sheets at once: the axis e_k is an
     # eigenvector of u, and the zeros sit at places over E = 0; those k take the other formula below.
-    use_zeros = [curve.node is None and len(Ez) == g and np.abs(Ez).max() <= 10.0 * R and np.all(np.isfinite(wz))
+    # (distinct J with a node at E = 0, rank-one a: the places at infinity are far from every branch
+    # point and their Abel images are the more accurate, measured 1.5e-12 against 6.7e-12 at t = 4002)
+    by_zeros = curve.node is None or curve.symmetric_body
+    use_zeros = [by_zeros and len(Ez) == g and np.abs(Ez).max() <= 10.0 * R and np.all(np.isfinite(wz))
                  for Ez, wz in comp_zeros]
     # np.roots leaves the points a few ulps off: next to a tight pair of branch points (near a relative
     # equilibrium) that moved their Abel images by up to 6e-11
@@ -663,14 +676,15 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     for k, use in enumerate(use_zeros):
         if use:
             AZ[k], pos = A_all[pos:pos + g].sum(axis=0), pos + g
-    if curve.node is None:
+    if by_zeros:
         # psi_k vanishes at inf_j (j != k): div(psi_k) = Z_k + sum_{j != k} inf_j - D0 with Z_k the g
         # finite zeros of v_k, so e_k = A(Z_k) + K; and div(E) = sum P_s - sum inf_j turns
         # d_k = A(inf_k) - e_k into sum_s A(P_s) - A(D0) - K.  No Abel image at infinity is needed.
         # Where a zero of v_k runs off towards infinity (v_3 of a nearly symmetric body has one at
         # E ~ 1 / (J_2 - J_1)) use e_k = A(D0) - sum_s A(P_s) + A(inf_k) + K instead: inf_k is then
         # the place away from the cluster.  The same holds on the normalization of a symmetric
-        # body's curve (its node over E = infinity; measured 1.5-2.5x closer to the references).
+        # body's curve (its node over E = infinity; measured 1.5-2.5x closer to the references), with
+        # a node at E = 0 too (rank-one a: the node branches' Abel images at infinity lose ~1 / spin^2).
         e = np.empty((3, g), complex)
         for k in range(3):
             if use_zeros[k]:
@@ -684,7 +698,6 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         d = Ainf - e                                             # (3, g)
     ed_, vd_, gd_ = th.jet(d, order=1, separated=True)
     dlog_d = (gd_ @ U) / vd_
-    r = _radius(curve, Ed, np.concatenate([Ez for Ez, _ in comp_zeros]))
 
     def constants(radius):
         X0 = np.zeros((3, 3), complex)
