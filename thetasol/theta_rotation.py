@@ -336,9 +336,52 @@ def _zero_order(Pl, numerator) -> int:
     return int(k[np.argmax(sig)])
 
 
+def _node_branch(curve, slope, Es: np.ndarray):
+    """(w, unit right eigenvector) on the node branch of slope ``slope`` at the small values Es.
+
+    There L(E) - w = (u - lam) + E (M - (w - lam) / E) + E^2 J^2 has two rows parallel to O(E): its
+    null vector and eigenvalue taken from L(E) in float64 carry ~eps |L| / (|mu_1 - mu_2| |E|) (1e-13
+    on circles of radius 1e-2 around the node).  In the frame T = [k_1, k_2, n] of u (u - lam = lam_n n n^T)
+    with v = T (y_1, y_2, E y_3) and w = lam + E x the rows divided by E are O(1):
+    X(x) = [[M' + E J2' - x]_kk, E (M' + E J2')_kn; (M' + E J2')_nk, lam_n + E (M' - x + E J2')_nn],
+    whose root x (Newton on det X from the float64 eigenvalue) and null vector y are accurate to eps.
+    """
+    lam, V = np.linalg.eigh(curve.u)
+    lb = curve.node[1]
+    order = np.argsort(np.abs(lam - lb))
+    T = V[:, order]
+    lam_n = lam[order[2]] - lb
+    Mp = T.T @ curve.M @ T
+    J2p = T.T @ np.diag(np.asarray(curve.J2, float)) @ T
+    Ev = np.asarray(Es, complex)
+    A = Mp + Ev[..., None, None] * J2p                                 # (..., 3, 3)
+    X0 = A.copy()
+    X0[..., :2, 2] *= Ev[..., None]
+    X0[..., 2, 2] = lam_n + Ev * A[..., 2, 2]
+    dX = -np.stack([np.ones_like(Ev), np.ones_like(Ev), Ev], -1)          # d X / dx, diagonal
+    W = np.linalg.eigvals(lax_matrix(np.sqrt(curve.J2), curve.M, curve.u, Ev))
+    idx = np.argmin(np.abs(W - (lb + slope * Ev)[..., None]), axis=-1)
+    x = (np.take_along_axis(W, idx[..., None], axis=-1)[..., 0] - lb) / Ev      # the branch, to ~eps / |E|
+    for _ in range(8):
+        X = X0 + dX[..., :, None] * np.eye(3) * x[..., None, None]
+        minors = np.stack([X[..., 1, 1] * X[..., 2, 2] - X[..., 1, 2] * X[..., 2, 1],
+                           X[..., 0, 0] * X[..., 2, 2] - X[..., 0, 2] * X[..., 2, 0],
+                           X[..., 0, 0] * X[..., 1, 1] - X[..., 0, 1] * X[..., 1, 0]], -1)
+        step = np.linalg.det(X) / (minors * dX).sum(-1)
+        x = x - step
+        if np.all(np.abs(step) <= 4 * np.finfo(float).eps * (1 + np.abs(x))):
+            break
+    X = X0 + dX[..., :, None] * np.eye(3) * x[..., None, None]
+    y = right_eigenvector(X, np.zeros(x.shape))
+    v = np.einsum("ij,...j->...i", T, y * np.stack([np.ones_like(Ev), np.ones_like(Ev), Ev], -1))
+    return lb + Ev * x, v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
 def _local_branch(curve, place, Es: np.ndarray) -> np.ndarray:
     """w on the branch of ``place`` (over E = 0) at the small values Es (same shape)."""
     Lc = curve
+    if getattr(place, "_slope", None) is not None:
+        return _node_branch(curve, place._slope, Es)[0]
     W = np.linalg.eigvals(lax_matrix(np.sqrt(Lc.J2), Lc.M, Lc.u, Es))
     w0 = place.y
     slope = getattr(place, "_slope", None)
@@ -392,7 +435,10 @@ def _radius(curve, E_poles: np.ndarray, E_zeros: np.ndarray) -> float:
     The poles of rho_k (the divisor D0) and the branch points must lie outside, with margin 3
     (trapezoidal error ~ 3^-N); the zeros of the eigenvector components, whose poles cancel only to
     rounding between the two terms of the mean, must not lie near the circle.  Among radii
-    r_max 2^-j the one farthest (in log scale) from those zeros is taken.
+    r_max 2^-j the one farthest (in log scale) from those zeros is taken; with a node at E = 0
+    (rank-one a) the largest one with no zero within a factor 2: on the node's branches the two
+    eigenvalues of L(E) are ~|E| apart, so eigenvectors and w there carry ~eps / r (r_max / 128 left
+    a rank-one body 3.7e-9 off at t = 4002, r_max 1.3e-10).
     """
     bp = np.abs(np.asarray(curve.branch_points))
     far = np.concatenate([bp[bp > 0], np.abs(E_poles[np.abs(E_poles) > 0])])
@@ -400,9 +446,13 @@ def _radius(curve, E_poles: np.ndarray, E_zeros: np.ndarray) -> float:
     zeros = np.abs(E_zeros[np.isfinite(E_zeros)])
     zeros = zeros[zeros > 0]
     best, margin = r_max, -np.inf
+    if curve.node is not None:
+        zeros = zeros[zeros > 1e-8 * r_max]                 # the node's base point itself
     for j in range(8):
         r = r_max * 2.0 ** -j
         m = np.min(np.abs(np.log(zeros / r))) if zeros.size else np.inf
+        if curve.node is not None and m >= np.log(2.0):
+            return r
         if m > margin + 0.3:           # prefer larger radii unless clearly better placed
             best, margin = r, m
     return best
@@ -420,12 +470,17 @@ def _parities(curve, nums) -> np.ndarray:
     return np.array(out, float)
 
 
-def _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap=None):
+def _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap=None, conj=None):
     """Weighted least-squares fit of nu_sk = F_s - G_k (imaginary parts).
 
     The error model of an entry grows like (|psi| / |psi_k|)^2: where a component is small the
     directly computed exponent depends on the Abel images through two nearly cancelling poles.
     ``gap = (k0, k1, value)`` imposes G_k0 - G_k1 = value (known exactly, see _node_exponent_gap).
+    ``conj = (a, b, c, value)`` imposes F_a + F_b - 2 F_c = value: the node's branches a, b over
+    E = 0 are complex conjugate places, psi(P_b, t) = conj psi(P_a, t), c is the real place over
+    E = 0, and value is 2 pi n.U (the lattice shift conjugation makes in the theta quotients).
+    Fitted freely the relation held to ~3e-16, and the integrals (4.13) on the solution drifted by
+    that times t (6e-10 at t = 1e6); the real places of a curve without a node need no relation.
     Returns (fitted nu (3, 3), max residual in units of the error model).
     """
     hs = np.abs(X0) / np.linalg.norm(X0, axis=0, keepdims=True)       # [k, s]
@@ -442,11 +497,19 @@ def _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap=None):
     A = np.zeros((len(rows) + 1, nF + 3))
     rhs = np.zeros(len(rows) + 1)
     for i, (s_, k, val, er) in enumerate(fit_rows):
-        A[i, s_], A[i, nF + k], rhs[i] = 1.0 / er, -1.0 / er, val / er
+        if conj is not None and s_ == conj[1]:
+            # F_b = 2 F_c - F_a + value eliminated like G_k1 above
+            A[i, conj[2]], A[i, conj[0]] = 2.0 / er, -1.0 / er
+            val = val - conj[3]
+        else:
+            A[i, s_] = 1.0 / er
+        A[i, nF + k], rhs[i] = -1.0 / er, val / er
     A[-1, nF] = 1.0 / min(r[3] for r in rows)                          # gauge G_0 = 0
     x, *_ = np.linalg.lstsq(A, rhs, rcond=None)
     if gap is not None:
         x[nF + k1] = x[nF + k0] - gval
+    if conj is not None:
+        x[conj[1]] = 2.0 * x[conj[2]] - x[conj[0]] + conj[3]
     resid = max(abs(x[s_] - x[nF + k] - val) / er for s_, k, val, er in rows)
     return x[:3][:, None] - x[nF:][None, :], float(resid)
 
@@ -488,14 +551,20 @@ def _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit):
     g = curve.genus
     pa = (np.asarray(curve.period_matrix(differentials=[om])) @ G).ravel()[:g] / r
     value = float((Jc0 / r - pa @ U).imag)
-    fitted = float(nu_fit[0, k1] - nu_fit[0, k0])
+    snapped = _snap_rate(float(nu_fit[0, k1] - nu_fit[0, k0]), value, U, rdim)
+    return None if snapped is None else (k0, k1, snapped)
+
+
+def _snap_rate(fitted: float, value: float, U: np.ndarray, rdim: int):
+    """The rate value + 2 pi n.U (n integer, |n_i| <= 3) the fitted one points at, or None when no single
+    n is within 1e-8 (the next candidate at least 1e-4 away)."""
     n = np.array(np.meshgrid(*[np.arange(-3, 4)] * rdim, indexing="ij")).reshape(rdim, -1).T
     cand = value + 2 * np.pi * n @ U[:rdim]
     miss = np.abs(fitted - cand)
     order = np.argsort(miss)
     if miss[order[0]] > 1e-8 * (1 + abs(fitted)) or (len(miss) > 1 and miss[order[1]] <= 1e-4):
         return None
-    return k0, k1, float(cand[order[0]])
+    return float(cand[order[0]])
 
 
 def _farthest_branch_point(Jp: np.ndarray, M: np.ndarray, u: np.ndarray) -> float:
@@ -706,7 +775,10 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         for s_, Pl in enumerate(P0):
             Ec, wc, local = _circle_data(curve, Pl, radius, Jp, nums_arr)
             A_loc = AP0[s_][None, :] + local @ Ainv.T         # (N, g)
-            v = right_eigenvector(lax_matrix(Jp, M, u, Ec), wc)
+            if getattr(Pl, "_slope", None) is not None:
+                v = _node_branch(curve, Pl._slope, Ec)[1]
+            else:
+                v = right_eigenvector(lax_matrix(Jp, M, u, Ec), wc)
             psi = v / (v @ alpha)[:, None]
             dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * Ec[:, None, None] + W0[None], psi) @ Bc
             psi = psi @ Bc
@@ -719,13 +791,19 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     X0, rho, nu = constants(r)
     X0b, rhob, nub = constants(0.5 * r)
     nu_aux, h_aux = _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d, Bc)
-    nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux)
+    conj = None
+    if curve.node is not None:
+        a_, b_ = [i for i, Pl in enumerate(P0) if getattr(Pl, "_slope", None) is not None]
+        c_ = 3 - a_ - b_
+        value = _snap_rate(float(np.median((nu[a_] + nu[b_] - 2 * nu[c_]).imag)), 0.0, U, rdim)
+        conj = None if value is None else (a_, b_, c_, value)
+    nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux, conj=conj)
     gap = _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit) if curve.symmetric_body else None
     node_gap_change = None
     if gap is not None:
         k0, k1, val = gap
         node_gap_change = float(nu_fit[0, k1] - nu_fit[0, k0]) - val
-        nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap)
+        nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap, conj)
     scale_nu = 1 + np.abs(nu).max()
     if np.abs(nu.real).max() > 1e-6 * scale_nu:
         raise RuntimeError(f"exponents are not imaginary (max |Re| {np.abs(nu.real).max():.2g}): "
