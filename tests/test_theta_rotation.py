@@ -360,7 +360,8 @@ def test_symmetric_rank_one_exponents_obey_the_exact_relations():
 def test_symmetric_rank_one_small_axial_spin_against_heyoka():
     """Rank-one a, axial spin 3.3e-4 of |omega0| + sqrt|a|.  With the exponents fitted from theta
     derivatives (circle means at the node's branches biased by ~1e-12) the attitude drifted linearly:
-    2.1e-9 at t = 4002 against heyoka 80-bit; with the exact relations 1.6e-11."""
+    2.1e-9 at t = 4002 against heyoka 80-bit; with the exact relations 1.6e-11, and with the periods
+    summed in double-double 1.8e-12."""
     pytest.importorskip("heyoka")
     J, a, Q0, w0 = _rank_one_symmetric_body(7.3e-4)
     sol = solve_rotation(J, a, Q0, w0)
@@ -368,7 +369,7 @@ def test_symmetric_rank_one_small_axial_spin_against_heyoka():
     wr, Qr = integrate_rotation(J, a, Q0, w0, t, rtol=1e-19, method="heyoka", dtype="ldbl")
     w, Q = sol(t)
     err = np.maximum(np.abs(w - wr).max(axis=1), np.abs(Q - Qr).max(axis=(1, 2)))
-    assert np.all(err <= 5e-11), err
+    assert np.all(err <= 8e-12), err
 
 
 def test_node_velocity_closed_form_against_a_contour_integral():
