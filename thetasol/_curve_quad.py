@@ -631,6 +631,8 @@ class Tracked:
         self.tp = tp
         self.choice = choice
         self.rel = None
+        # every line interval in double-double (set by a caller that needs periods beyond float64 sums)
+        self.dd_all = False
 
     def values(self, p):
         """(x nodes, y values (m, L)) of the tracks of piece p."""
@@ -666,7 +668,8 @@ class Tracked:
                 jit = eps * (abs(pc.dx(mid)) * abs(mid) + max(abs(xl), abs(xh)))
                 rel = float(np.max(self.rel[k:k + N])) if self.rel is not None else 0.0
                 m_int = float(mass[k:k + N].sum())
-                if ell > 0 and (jit / ell * m_int > thr or rel * m_int > 10 * thr):
+                if ell > 0 and ((self.dd_all and pc.kind == "line") or jit / ell * m_int > thr
+                                or rel * m_int > 10 * thr):
                     out.append((p, k, (lo, hi, N)))
                 k += N
         return out

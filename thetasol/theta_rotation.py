@@ -567,6 +567,68 @@ def _snap_rate(fitted: float, value: float, U: np.ndarray, rdim: int):
     return float(cand[order[0]])
 
 
+def _symmetric_nodal_exponents(curve, P0, gap, G, U, rdim, nu_fit):
+    """The exponents nu_sk = F_s - G_k of a symmetric body with rank-one a, all from exact relations.
+
+    Such a curve has nodes at E = 0 (branches P_a, P_b, swapped by sigma; P_r the third place over
+    E = 0, fixed) and over E = infinity (inf_k0, inf_k1 swapped; inf_ks fixed).  sigma: E -> -E maps
+    Omega to -Omega + const (its principal parts -J_j E change sign, the a-periods stay zero), so
+    nu_{sigma s, sigma k} = -nu_sk: F_r = G_ks, F_a + F_b = G_k0 + G_k1 = 2 G_ks.  The two differences
+    left are rates of third-kind integrals: G_k0 - G_k1 (``gap``, :func:`_node_exponent_gap`) and
+    F_a - F_b from dE / f_w, which is of the third kind with simple poles only at P_a, P_b (f_w ~ E on
+    the node's branches; at infinity it vanishes): by Riemann's bilinear relation as in
+    _node_exponent_gap, F_a - F_b = -Im(p.U) with p its a-periods / residue at P_a (its t^0 terms at
+    infinity are zero).  Each relation holds modulo 2 pi n.U; n is taken from the fitted ``nu_fit``.
+
+    The fit alone was not enough: the circle means at the node's branches are biased by up to 6e-12
+    (relative axial spin 2e-4; the same at two radii), the fitted rates were off by up to 6e-13 and
+    the attitude drifted linearly (8.6e-10 at t = 4002).  Returns nu (3, 3), or None where a relation
+    points at no single n (the fit is then kept).
+    """
+    k0, k1, gval = gap
+    ks = 3 - k0 - k1
+    node = [s_ for s_, Pl in enumerate(P0) if getattr(Pl, "_slope", None) is not None]
+    if len(node) != 2:
+        return None
+    sa, sb = node
+    sr = 3 - sa - sb
+    one = sp.Integer(1)
+    res = []
+    for s_ in node:
+        k, c = P0[s_].expand(one, order=2)
+        res.append(complex(c[k == -1][0]) if np.any(k == -1) else 0.0)
+    r = res[0]
+    if abs(r) == 0 or abs(res[1] + r) > 1e-8 * abs(r):
+        raise RuntimeError(f"dE / f_w has residues {res} at the node's branches: not a third-kind "
+                           "differential (internal error)")
+    g = curve.genus
+    pa = (np.asarray(curve.period_matrix(differentials=[one])) @ G).ravel()[:g] / r
+    zgap = float((-(pa @ U)).imag)
+    f = nu_fit
+    # rows over (F_0, F_1, F_2, G_0, G_1, G_2): the five relations and the gauge G_ks = 0
+    rows, rhs = [], []
+    for coef, fitted, value in [
+            ({3 + k0: 1, 3 + k1: -1}, f[0, k1] - f[0, k0], gval),
+            ({sa: 1, sb: -1}, f[sa, 0] - f[sb, 0], zgap),
+            ({sr: 1, 3 + ks: -1}, f[sr, ks], 0.0),
+            ({sa: 1, sb: 1, 3 + ks: -2}, f[sa, ks] + f[sb, ks], 0.0),
+            ({3 + k0: 1, 3 + k1: 1, 3 + ks: -2}, 2 * f[sr, ks] - f[sr, k0] - f[sr, k1], 0.0)]:
+        target = _snap_rate(float(fitted), value, U, rdim)
+        if target is None:
+            return None
+        row = np.zeros(6)
+        for j, cj in coef.items():
+            row[j] = cj
+        rows.append(row)
+        rhs.append(target)
+    row = np.zeros(6)
+    row[3 + ks] = 1.0
+    rows.append(row)
+    rhs.append(0.0)
+    x = np.linalg.solve(np.array(rows), np.array(rhs))
+    return x[:3][:, None] - x[3:][None, :]
+
+
 def _farthest_branch_point(Jp: np.ndarray, M: np.ndarray, u: np.ndarray) -> float:
     """max |E| over the finite branch points of (4.12) for a symmetric body, before the curve is built:
     the roots of the discriminant in w, from the exact coefficients (3-6 ms)."""
@@ -637,6 +699,12 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
                 "points near |E| ~ 1 / gap, out of the curve engine's reach; use thetasol.integrate_rotation")
     curve = spectral_curve(np.diag(Jp), hat(Ip @ w0p), -(Q0p.T @ a @ Q0p), tol=SNAP_TOL)
     M, u = curve.M, curve.u
+    if curve.symmetric_body and curve.node is not None:
+        # The rates of this curve's exponents (_symmetric_nodal_exponents) and U are read off periods: the
+        # float64 sums of the cycles' intervals left them ~2e-15 relative off (far branch points at
+        # |E| ~ 1 / spin), 3.4e-11 at t = 4002 at relative spin 5e-4; every interval in double-double
+        # gives 2e-16 and 1.5e-12, for ~0.05 s.
+        curve._edge_tracks.dd_all = True
     W0 = hat(w0p - spin * np.eye(3)[axis]) if axis is not None else hat(w0p)
     g = curve.genus
     nums = curve.holomorphic_differentials()
@@ -804,6 +872,12 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         k0, k1, val = gap
         node_gap_change = float(nu_fit[0, k1] - nu_fit[0, k0]) - val
         nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap, conj)
+    nu_exact_change = None
+    if gap is not None and curve.node is not None:
+        nu_ex = _symmetric_nodal_exponents(curve, P0, gap, G, U, rdim, nu_fit)
+        if nu_ex is not None:
+            nu_exact_change = float(np.abs(nu_ex - nu_fit).max())
+            nu_fit = nu_ex
     scale_nu = 1 + np.abs(nu).max()
     if np.abs(nu.real).max() > 1e-6 * scale_nu:
         raise RuntimeError(f"exponents are not imaginary (max |Re| {np.abs(nu.real).max():.2g}): "
@@ -843,6 +917,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         "nu_real_part": float(np.abs(nu.real).max()),
         "nu_fit_residual": resid,
         "node_gap_change": node_gap_change,
+        "nu_exact_change": nu_exact_change,
         "rho_two_radii": float(np.max(np.abs(rho - rhob) / np.maximum(np.abs(rho), 1e-300))),
         "X0_two_radii": float(np.max(np.abs(X0 - X0b))),
         "circle_radius": r,
