@@ -567,66 +567,66 @@ def _snap_rate(fitted: float, value: float, U: np.ndarray, rdim: int):
     return float(cand[order[0]])
 
 
-def _symmetric_nodal_exponents(curve, P0, gap, G, U, rdim, nu_fit):
-    """The exponents nu_sk = F_s - G_k of a symmetric body with rank-one a, all from exact relations.
+def _exact_exponents(curve, P0, gap, G, U, rdim, nu_fit):
+    """The exponents nu_sk = F_s - G_k (imaginary parts) from exact relations; the fit picks the integers.
 
-    Such a curve has nodes at E = 0 (branches P_a, P_b, swapped by sigma; P_r the third place over
-    E = 0, fixed) and over E = infinity (inf_k0, inf_k1 swapped; inf_ks fixed).  sigma: E -> -E maps
-    Omega to -Omega + const (its principal parts -J_j E change sign, the a-periods stay zero), so
-    nu_{sigma s, sigma k} = -nu_sk: F_r = G_ks, F_a + F_b = G_k0 + G_k1 = 2 G_ks.  The two differences
-    left are rates of third-kind integrals: G_k0 - G_k1 (``gap``, :func:`_node_exponent_gap`) and
-    F_a - F_b from dE / f_w, which is of the third kind with simple poles only at P_a, P_b (f_w ~ E on
-    the node's branches; at infinity it vanishes): by Riemann's bilinear relation as in
-    _node_exponent_gap, F_a - F_b = -Im(p.U) with p its a-periods / residue at P_a (its t^0 terms at
-    infinity are zero).  Each relation holds modulo 2 pi n.U; n is taken from the fitted ``nu_fit``.
+    sigma: (E, w) -> (-E, w) maps the curve to itself (L(-E) = L(E)^T) and Omega to -Omega + const (its
+    principal parts -J_j E change sign, the a-periods stay zero), so nu_{sigma s, sigma k} = -nu_sk
+    modulo 2 pi n.U (the lattice shift of the theta quotients).  sigma fixes the regular places over
+    E = 0 and the places over infinity with distinct J_j, and swaps the two branches of a node (P_a, P_b
+    at E = 0 for a rank-one a; inf_k0, inf_k1 over infinity for a symmetric body).  A fixed pair gives
+    2 (F_s - G_k) = 2 pi n.U: on a curve without nodes every exponent is a half lattice rate.  A node
+    leaves one difference free, the rate of a third-kind integral: G_k0 - G_k1 (``gap``,
+    :func:`_node_exponent_gap`) and F_a - F_b from dE / f_w, of the third kind with simple poles only at
+    P_a, P_b (f_w ~ E on the node's branches; O(t^2) dt at infinity): by Riemann's bilinear relation as
+    in _node_exponent_gap, F_a - F_b = -Im(p.U) with p its a-periods / residue at P_a.
 
-    The fit alone was not enough: the circle means at the node's branches are biased by up to 6e-12
-    (relative axial spin 2e-4; the same at two radii), the fitted rates were off by up to 6e-13 and
-    the attitude drifted linearly (8.6e-10 at t = 4002).  Returns nu (3, 3), or None where a relation
-    points at no single n (the fit is then kept).
+    The fit alone was not enough: the circle means at a node's branches are biased by up to 6e-12
+    (symmetric body, relative axial spin 2e-4; the same at two radii) and the fitted rates were off by
+    up to 6e-13 (4.8e-13 for the fast-spin reference): the attitude drifted linearly.  Returns nu (3, 3),
+    or None where a relation points at no single n or a node gap is unknown (the fit is then kept).
     """
-    k0, k1, gval = gap
-    ks = 3 - k0 - k1
-    node = [s_ for s_, Pl in enumerate(P0) if getattr(Pl, "_slope", None) is not None]
-    if len(node) != 2:
+    swap0 = [s_ for s_, Pl in enumerate(P0) if getattr(Pl, "_slope", None) is not None]
+    if curve.symmetric_body and gap is None:
         return None
-    sa, sb = node
-    sr = 3 - sa - sb
-    one = sp.Integer(1)
-    res = []
-    for s_ in node:
-        k, c = P0[s_].expand(one, order=2)
-        res.append(complex(c[k == -1][0]) if np.any(k == -1) else 0.0)
-    r = res[0]
-    if abs(r) == 0 or abs(res[1] + r) > 1e-8 * abs(r):
-        raise RuntimeError(f"dE / f_w has residues {res} at the node's branches: not a third-kind "
-                           "differential (internal error)")
-    g = curve.genus
-    pa = (np.asarray(curve.period_matrix(differentials=[one])) @ G).ravel()[:g] / r
-    zgap = float((-(pa @ U)).imag)
     f = nu_fit
-    # rows over (F_0, F_1, F_2, G_0, G_1, G_2): the five relations and the gauge G_ks = 0
-    rows, rhs = [], []
-    for coef, fitted, value in [
-            ({3 + k0: 1, 3 + k1: -1}, f[0, k1] - f[0, k0], gval),
-            ({sa: 1, sb: -1}, f[sa, 0] - f[sb, 0], zgap),
-            ({sr: 1, 3 + ks: -1}, f[sr, ks], 0.0),
-            ({sa: 1, sb: 1, 3 + ks: -2}, f[sa, ks] + f[sb, ks], 0.0),
-            ({3 + k0: 1, 3 + k1: 1, 3 + ks: -2}, 2 * f[sr, ks] - f[sr, k0] - f[sr, k1], 0.0)]:
-        target = _snap_rate(float(fitted), value, U, rdim)
-        if target is None:
+    sig_s, dF = list(range(3)), np.zeros(3)          # sigma on the places over E = 0; F_s - F_sigma(s)
+    sig_k, dG = list(range(3)), np.zeros(3)          # sigma on the places at infinity; G_k - G_sigma(k)
+    if gap is not None:
+        k0, k1, gval = gap
+        sig_k[k0], sig_k[k1] = k1, k0
+        dG[k0], dG[k1] = gval, -gval
+    if swap0:
+        sa, sb = swap0
+        one = sp.Integer(1)
+        res = []
+        for s_ in swap0:
+            k, c = P0[s_].expand(one, order=2)
+            res.append(complex(c[k == -1][0]) if np.any(k == -1) else 0.0)
+        r = res[0]
+        if abs(r) == 0 or abs(res[1] + r) > 1e-8 * abs(r):
+            raise RuntimeError(f"dE / f_w has residues {res} at the node's branches: not a third-kind "
+                               "differential (internal error)")
+        pa = (np.asarray(curve.period_matrix(differentials=[one])) @ G).ravel()[:curve.genus] / r
+        zgap = _snap_rate(float(f[sa, 0] - f[sb, 0]), float((-(pa @ U)).imag), U, rdim)
+        if zgap is None:
             return None
-        row = np.zeros(6)
-        for j, cj in coef.items():
-            row[j] = cj
-        rows.append(row)
-        rhs.append(target)
-    row = np.zeros(6)
-    row[3 + ks] = 1.0
-    rows.append(row)
-    rhs.append(0.0)
-    x = np.linalg.solve(np.array(rows), np.array(rhs))
-    return x[:3][:, None] - x[3:][None, :]
+        sig_s[sa], sig_s[sb] = sb, sa
+        dF[sa], dF[sb] = zgap, -zgap
+    # nu_sk + nu_{sigma s, sigma k} = 2 pi n.U and nu_sk - nu_{sigma s, sigma k} = dF_s - dG_k: each entry
+    # from one snapped sum and the gaps (fewer roundings than a solve over all relations)
+    nu = np.empty((3, 3))
+    for s_ in range(3):
+        for k in range(3):
+            total = _snap_rate(float(f[s_, k] + f[sig_s[s_], sig_k[k]]), 0.0, U, rdim)
+            if total is None:
+                return None
+            nu[s_, k] = 0.5 * (total + dF[s_] - dG[k])
+    # the F_s - G_k form is implied: nu_sk - nu_s0 - nu_0k + nu_00 = 0
+    form = nu - nu[:, :1] - nu[:1, :] + nu[0, 0]
+    if np.abs(form).max() > 1e-12 * (1 + np.abs(nu).max()):
+        raise RuntimeError("the exact exponents are not of the form F_s - G_k (internal error)")
+    return nu
 
 
 def _farthest_branch_point(Jp: np.ndarray, M: np.ndarray, u: np.ndarray) -> float:
@@ -700,7 +700,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     curve = spectral_curve(np.diag(Jp), hat(Ip @ w0p), -(Q0p.T @ a @ Q0p), tol=SNAP_TOL)
     M, u = curve.M, curve.u
     if curve.symmetric_body and curve.node is not None:
-        # The rates of this curve's exponents (_symmetric_nodal_exponents) and U are read off periods: the
+        # The rates of this curve's exponents (_exact_exponents) and U are read off periods: the
         # float64 sums of the cycles' intervals left them ~2e-15 relative off (far branch points at
         # |E| ~ 1 / spin), 3.4e-11 at t = 4002 at relative spin 5e-4; every interval in double-double
         # gives 2e-16 and 1.5e-12, for ~0.05 s.
@@ -873,11 +873,10 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         node_gap_change = float(nu_fit[0, k1] - nu_fit[0, k0]) - val
         nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap, conj)
     nu_exact_change = None
-    if gap is not None and curve.node is not None:
-        nu_ex = _symmetric_nodal_exponents(curve, P0, gap, G, U, rdim, nu_fit)
-        if nu_ex is not None:
-            nu_exact_change = float(np.abs(nu_ex - nu_fit).max())
-            nu_fit = nu_ex
+    nu_ex = _exact_exponents(curve, P0, gap, G, U, rdim, nu_fit)
+    if nu_ex is not None:
+        nu_exact_change = float(np.abs(nu_ex - nu_fit).max())
+        nu_fit = nu_ex
     scale_nu = 1 + np.abs(nu).max()
     if np.abs(nu.real).max() > 1e-6 * scale_nu:
         raise RuntimeError(f"exponents are not imaginary (max |Re| {np.abs(nu.real).max():.2g}): "
