@@ -44,14 +44,21 @@ class FlowTheta:
             ranges = [np.arange(math.floor(-c[i] - half[i]), math.ceil(-c[i] + half[i]) + 1) for i in range(g)]
             m = np.stack(np.meshgrid(*ranges, indexing="ij"), axis=-1).reshape(-1, g).astype(float)
             d = m + c
-            keep = math.pi * np.einsum("ni,ij,nj->n", d, Y, d) <= R2
+            keep = math.pi * ((d @ Y) * d).sum(axis=1) <= R2            # (einsum over 3 operands: 5x slower)
             m = m[keep]
-            expo = 1j * math.pi * np.einsum("ni,ij,nj->n", m, tau, m) + 2j * math.pi * m @ s - self.e[j]
+            expo = 1j * math.pi * ((m @ tau) * m).sum(axis=1) + 2j * math.pi * m @ s - self.e[j]
             keys.append(m[:, :r].astype(np.int64))
             terms.append(np.exp(expo))
             rows.append(np.full(len(m), j))
         # group the terms by their first r indices (the Fourier mode), in one pass for all shifts
-        modes, inv = np.unique(np.concatenate(keys), axis=0, return_inverse=True)
+        # (np.unique over rows sorts structured records, ~0.1 s here: rows coded as mixed-radix integers
+        # with the first index most significant keep the same lexicographic order)
+        K = np.concatenate(keys)
+        klo = K.min(axis=0)
+        radix = K.max(axis=0) - klo + 1
+        stride = np.concatenate([np.cumprod(radix[::-1])[::-1][1:], [1]]).astype(np.int64)
+        codes, inv = np.unique((K - klo) @ stride, return_inverse=True)
+        modes = klo + (codes[:, None] // stride[None, :]) % radix[None, :]
         D = np.zeros((S, len(modes)), complex)
         np.add.at(D, (np.concatenate(rows), inv.ravel()), np.concatenate(terms))
         self.modes = modes.reshape(len(modes), r)
