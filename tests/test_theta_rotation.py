@@ -504,9 +504,9 @@ def test_node_branch_eigenvectors_against_mpmath():
 
 
 def test_rank_one_node_next_to_branch_points_against_dop853():
-    """The Cauchy circles around the places over E = 0 shrank to r = 8e-5 here (every zero of the
-    eigenvector components outside the largest admissible radius), where the float64 eigenvectors on the
-    node's branches lost eps / r: 1.9e-11 at t = 17.3 and 3.7e-9 at t = 4002 against heyoka 80-bit.
-    With the node's scaled eigenproblem and the largest radius: 6.1e-14 and 1.2e-11.  DOP853 at rtol
-    1e-13 is itself 3.5e-13 off here."""
+    """The Cauchy circles around the places over E = 0 are small here (r = 8e-5: every zero of the
+    eigenvector components lies outside the largest admissible radius), where the float64 eigenvectors
+    on the node's branches lost eps / r: 1.9e-11 at t = 17.3 and 3.7e-9 at t = 4002 against heyoka
+    80-bit.  With the node's scaled eigenproblem (and the exact exponents): 1.3e-14 and 1.9e-12.
+    DOP853 at rtol 1e-13 is itself 3.5e-13 off here."""
     _check_against_dop853(*_NODE_NEAR_BRANCH, "theta/nodal-genus-3", [0.0, 3.1, 17.3], 1e-12)

@@ -25,7 +25,10 @@ places over ``E = 0`` gives ``Phi(0, t)``, hence ``Q(t)`` and ``omega = vee(-Phi
 around the place, so they stay exact where a component of the initial eigenvector vanishes
 (``rho_k`` then has a removable 0/0).  The exponents satisfy ``c_k(P_s) = F_s - G_k`` exactly
 (``Omega(P_s) - Omega(inf_k)``); they are fitted in that form by weighted least squares, each entry
-weighted by its conditioning, with auxiliary points near the branch points where eigenvectors mix.
+weighted by its conditioning, with auxiliary points near the branch points where eigenvectors mix,
+and the fit only picks the integers of their exact values (:func:`_exact_exponents`: sigma makes
+every exponent a half lattice rate ``pi n.U`` up to the third-kind rates of the nodes).  The periods
+behind ``U`` are summed in double-double.
 
 Everything is computed in a homology basis adapted to the real Liouville torus
 (:mod:`thetasol._adapted_basis`): there ``V`` is real and has only as many non-zero coordinates as
@@ -37,7 +40,8 @@ Degenerate data (only what the scene needs)
 -------------------------------------------
 * ``a`` with a repeated eigenvalue (the gravity gradient of Section 7): the curve has a node at
   ``E = 0`` and the same construction runs on its genus-3 normalization, the node's two branches
-  taking the place of two of the points over ``E = 0``.
+  taking the place of two of the points over ``E = 0``; there ``L(E) - w`` has two rows parallel to
+  ``O(E)``, so eigenvalue and eigenvector come from a scaled eigenproblem (:func:`_node_branch`).
 * ``a`` isotropic or zero, or a spherical body: no torque; :func:`thetasol.solve_rotation` uses the
   Euler top instead.
 * a symmetric body (two equal ``J_i``): the spin about the symmetry axis is an integral and the
@@ -435,10 +439,10 @@ def _radius(curve, E_poles: np.ndarray, E_zeros: np.ndarray) -> float:
     The poles of rho_k (the divisor D0) and the branch points must lie outside, with margin 3
     (trapezoidal error ~ 3^-N); the zeros of the eigenvector components, whose poles cancel only to
     rounding between the two terms of the mean, must not lie near the circle.  Among radii
-    r_max 2^-j the one farthest (in log scale) from those zeros is taken; with a node at E = 0
-    (rank-one a) the largest one with no zero within a factor 2: on the node's branches the two
-    eigenvalues of L(E) are ~|E| apart, so eigenvectors and w there carry ~eps / r (r_max / 128 left
-    a rank-one body 3.7e-9 off at t = 4002, r_max 1.3e-10).
+    r_max 2^-j the one farthest (in log scale) from those zeros is taken.  (On a node's branches small
+    circles once cost eps / r in the eigenvectors, 3.7e-9 at t = 4002 for a rank-one body at r_max / 128;
+    since :func:`_node_branch` the error is the same at every radius, and the largest admissible one
+    made a symmetric rank-one body's eigenvalue picking on the regular place's circle fail.)
     """
     bp = np.abs(np.asarray(curve.branch_points))
     far = np.concatenate([bp[bp > 0], np.abs(E_poles[np.abs(E_poles) > 0])])
@@ -446,13 +450,9 @@ def _radius(curve, E_poles: np.ndarray, E_zeros: np.ndarray) -> float:
     zeros = np.abs(E_zeros[np.isfinite(E_zeros)])
     zeros = zeros[zeros > 0]
     best, margin = r_max, -np.inf
-    if curve.node is not None:
-        zeros = zeros[zeros > 1e-8 * r_max]                 # the node's base point itself
     for j in range(8):
         r = r_max * 2.0 ** -j
         m = np.min(np.abs(np.log(zeros / r))) if zeros.size else np.inf
-        if curve.node is not None and m >= np.log(2.0):
-            return r
         if m > margin + 0.3:           # prefer larger radii unless clearly better placed
             best, margin = r, m
     return best
