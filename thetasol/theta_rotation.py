@@ -673,9 +673,9 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
         if abs(spin) < MIN_AXIAL_SPIN * scale:
             # Without spin the two places over E = infinity touch (a tacnode, genus 2: Neumann's
             # problem, dispatched before); for a small spin two branch points run off to |E| ~ 1 / spin.
-            # Measured on 23 random bodies at 3e-4: <= 3.9e-10 at t = 4002 (but 2 of 4 further rank-one a
-            # stopped at 3.3e-4 and one reached 1.1e-9, docs); at 1e-4 a rank-one a stops (the series at the
-            # node's branches, which its Abel images need, are too noisy) and at 3e-5 others do: refuse at once.
+            # Measured at 3e-4 on 23 random bodies (<= 3.9e-10 at t = 4002, before the exact exponents) and
+            # on 16 rank-one ones down to 1e-4 (<= 7.2e-12, docs); full-rank bodies below 3e-4 were not
+            # re-measured, and at 3e-5 the set-up failed or took minutes: refuse at once.
             raise ClosedFormUnavailable(
                 f"symmetric body with little spin (or none) about its symmetry axis ({abs(spin) / scale:.1e} of "
                 f"|omega0| + sqrt|a|, below {MIN_AXIAL_SPIN:g}): the spectral curve is at or near a tacnode "
