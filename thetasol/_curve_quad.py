@@ -72,7 +72,9 @@ class Piece:
     def x(self, tau):
         tau = np.asarray(tau, dtype=float)
         if self.kind == "line":
-            return self.a + (self.b - self.a) * tau
+            # the end exactly b: a + (b - a) is off by ~eps |a|, which a line from a far vertex
+            # (|a| ~ 1e7, nearly symmetric body) next to a branch point turned into 2e-7 in y
+            return np.where(tau == 1.0, self.b, self.a + (self.b - self.a) * tau)
         if self.kind == "circle":  # around b, starting at a; e = +1 ccw, -1 cw
             return self.b + (self.a - self.b) * np.exp(2j * np.pi * self.e * tau)
         u = 1.0 - tau
