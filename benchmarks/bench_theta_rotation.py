@@ -78,12 +78,53 @@ def bench_case(name, data, quick):
     return rows
 
 
+def plot(allrows, path):
+    """Error against total cost of the dense query: colour = case, marker = method."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+    kinds = [("theta", "o", 9), ("DOP853", "s", 6), ("splitting", "D", 6), ("heyoka", "^", 7)]
+    cases = list(dict.fromkeys(nm for nm, *_ in allrows))
+    colour = {nm: plt.cm.tab10(i) for i, nm in enumerate(cases)}
+    fig, ax = plt.subplots(figsize=(8, 4.8))
+    for nm, q, m, ts, tr, e in allrows:
+        if q == "dense":
+            marker, size = next((mk, sz) for key, mk, sz in kinds if m.startswith(key))
+            ax.loglog(ts + tr, max(e, 1e-16), marker, color=colour[nm], markersize=size, alpha=0.85)
+    ax.set_xlabel("total time for 2001 outputs on [0, 1000] (s)")
+    ax.set_ylabel("max error in omega and Q")
+    ax.grid(True, which="both", alpha=0.3)
+    first = ax.legend([Line2D([], [], ls="", marker="o", color=colour[nm]) for nm in cases], cases,
+                      fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), title="case")
+    ax.add_artist(first)
+    ax.legend([Line2D([], [], ls="", marker=mk, color="0.3") for _, mk, _ in kinds],
+              ["theta (set-up + run)", "DOP853 rtol 1e-8 .. 1e-13", "splitting, order 6", "heyoka float64"],
+              fontsize=7, loc="lower left", bbox_to_anchor=(1.01, 0.0), title="method")
+    fig.savefig(path, dpi=130, bbox_inches="tight")
+    print(f"\nplot written to {path}")
+
+
+def _rows_from_table(text):
+    """The rows of a table this script printed (for --replot)."""
+    rows = []
+    for line in text.splitlines():
+        f = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(f) == 7 and f[0] not in ("case", "---"):
+            rows.append((f[0], f[1], f[2], float(f[3]), float(f[4]), float(f[6])))
+    return rows
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="fewer tolerances, no splitting")
     ap.add_argument("--cases", default="generic,saddle,rank_one,near_stable_equilibrium")
     ap.add_argument("--plot", default=None, help="write an error-against-cost plot (needs matplotlib)")
+    ap.add_argument("--replot", default=None, help="only redraw --plot from a saved output of this script")
     args = ap.parse_args(argv)
+    if args.replot:
+        plot(_rows_from_table(open(args.replot).read()), args.plot or "bench_theta_rotation.png")
+        return
     refs = json.loads(REFS.read_text())
     print(f"machine: {machine_info('heyoka')}")
     print("errors: max over omega and Q against heyoka 80-bit (tol 1e-19); time in seconds (best of runs)\n")
@@ -98,22 +139,7 @@ def main(argv=None):
             allrows.append((name, q, m, ts, tr, e))
         sys.stdout.flush()
     if args.plot:
-        import matplotlib
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-        fig, ax = plt.subplots(figsize=(7, 4.5))
-        for name in args.cases.split(","):
-            pts = [(ts + tr, e, m) for (nm, q, m, ts, tr, e) in allrows if nm == name and q == "dense"]
-            for x, y, m in pts:
-                marker = "o" if m.startswith("theta") else ("s" if "DOP853" in m else "^")
-                ax.loglog(x, max(y, 1e-16), marker, label=f"{name}: {m}")
-        ax.set_xlabel("total time for 2001 outputs on [0, 1000] (s)")
-        ax.set_ylabel("max error in omega and Q")
-        ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=6, ncol=2)
-        fig.tight_layout()
-        fig.savefig(args.plot, dpi=130)
-        print(f"\nplot written to {args.plot}")
+        plot(allrows, args.plot)
 
 
 if __name__ == "__main__":
