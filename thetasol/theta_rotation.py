@@ -363,9 +363,7 @@ def _node_branch(curve, slope, Es: np.ndarray):
     X0[..., :2, 2] *= Ev[..., None]
     X0[..., 2, 2] = lam_n + Ev * A[..., 2, 2]
     dX = -np.stack([np.ones_like(Ev), np.ones_like(Ev), Ev], -1)          # d X / dx, diagonal
-    W = np.linalg.eigvals(lax_matrix(np.sqrt(curve.J2), curve.M, curve.u, Ev))
-    idx = np.argmin(np.abs(W - (lb + slope * Ev)[..., None]), axis=-1)
-    x = (np.take_along_axis(W, idx[..., None], axis=-1)[..., 0] - lb) / Ev      # the branch, to ~eps / |E|
+    x = (_nearest_eigenvalue(curve, Ev, lb + slope * Ev) - lb) / Ev       # the branch, to ~eps / |E|
     for _ in range(8):
         X = X0 + dX[..., :, None] * np.eye(3) * x[..., None, None]
         minors = np.stack([X[..., 1, 1] * X[..., 2, 2] - X[..., 1, 2] * X[..., 2, 1],
@@ -381,17 +379,18 @@ def _node_branch(curve, slope, Es: np.ndarray):
     return lb + Ev * x, v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
-def _local_branch(curve, place, Es: np.ndarray) -> np.ndarray:
-    """w on the branch of ``place`` (over E = 0) at the small values Es (same shape)."""
-    Lc = curve
-    if getattr(place, "_slope", None) is not None:
-        return _node_branch(curve, place._slope, Es)[0]
-    W = np.linalg.eigvals(lax_matrix(np.sqrt(Lc.J2), Lc.M, Lc.u, Es))
-    w0 = place.y
-    slope = getattr(place, "_slope", None)
-    target = w0 + (0.0 if slope is None else slope) * np.asarray(Es)
+def _nearest_eigenvalue(curve, Es: np.ndarray, target: np.ndarray) -> np.ndarray:
+    """The eigenvalue of L(Es) nearest to ``target`` (float64; same shape as Es)."""
+    W = np.linalg.eigvals(lax_matrix(np.sqrt(curve.J2), curve.M, curve.u, Es))
     idx = np.argmin(np.abs(W - target[..., None]), axis=-1)
     return np.take_along_axis(W, idx[..., None], axis=-1)[..., 0]
+
+
+def _local_branch(curve, place, Es: np.ndarray) -> np.ndarray:
+    """w on the branch of ``place`` (over E = 0) at the small values Es (same shape)."""
+    if getattr(place, "_slope", None) is not None:
+        return _node_branch(curve, place._slope, Es)[0]
+    return _nearest_eigenvalue(curve, Es, np.full(np.shape(Es), complex(place.y)))
 
 
 def _node_slopes(curve):
