@@ -35,35 +35,31 @@ class FlowTheta:
         S = shifts.shape[0]
         R2 = math.log(1.0 / tol) + 2.0 * math.log(10.0)
         self.e = np.empty(S)
+        half = np.sqrt(R2 / math.pi * np.diag(Yinv))
         keys, terms, rows = [], [], []
         for j, s in enumerate(shifts):
             y = s.imag
             c = Yinv @ y
             self.e[j] = math.pi * y @ Yinv @ y
-            half = np.sqrt(R2 / math.pi * np.diag(Yinv))
             ranges = [np.arange(math.floor(-c[i] - half[i]), math.ceil(-c[i] + half[i]) + 1) for i in range(g)]
             m = np.stack(np.meshgrid(*ranges, indexing="ij"), axis=-1).reshape(-1, g).astype(float)
             d = m + c
-            keep = math.pi * ((d @ Y) * d).sum(axis=1) <= R2            # (einsum over 3 operands: 5x slower)
+            keep = math.pi * ((d @ Y) * d).sum(axis=1) <= R2  # einsum over 3 operands: 1.1-4.4x slower (13 refs)
             m = m[keep]
             expo = 1j * math.pi * ((m @ tau) * m).sum(axis=1) + 2j * math.pi * m @ s - self.e[j]
             keys.append(m[:, :r].astype(np.int64))
             terms.append(np.exp(expo))
             rows.append(np.full(len(m), j))
         # group the terms by their first r indices (the Fourier mode), in one pass for all shifts
-        # (np.unique over rows sorts structured records, ~0.1 s here: rows coded as mixed-radix integers
-        # with the first index most significant keep the same lexicographic order)
+        # (np.unique over rows sorts structured records, ~0.1 s here: rows coded as C-order flat indices
+        # in the box lo .. lo + span - 1 keep the same lexicographic order)
         K = np.concatenate(keys)
-        klo = K.min(axis=0)
-        radix = K.max(axis=0) - klo + 1
-        stride = np.concatenate([np.cumprod(radix[::-1])[::-1][1:], [1]]).astype(np.int64)
-        codes, inv = np.unique((K - klo) @ stride, return_inverse=True)
-        modes = klo + (codes[:, None] // stride[None, :]) % radix[None, :]
-        D = np.zeros((S, len(modes)), complex)
-        np.add.at(D, (np.concatenate(rows), inv.ravel()), np.concatenate(terms))
-        self.modes = modes.reshape(len(modes), r)
-        self.lo = self.modes.min(axis=0)
-        self.span = self.modes.max(axis=0) - self.lo + 1
+        self.lo = K.min(axis=0)
+        self.span = K.max(axis=0) - self.lo + 1
+        codes, inv = np.unique(np.ravel_multi_index(tuple((K - self.lo).T), self.span), return_inverse=True)
+        self.modes = self.lo + np.stack(np.unravel_index(codes, self.span), axis=-1)
+        D = np.zeros((S, len(self.modes)), complex)
+        np.add.at(D, (np.concatenate(rows), inv), np.concatenate(terms))
         self.D = D
         self.Dd = D * (2j * math.pi * (self.modes @ u))[None, :]
         self.u = u
