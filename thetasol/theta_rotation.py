@@ -469,17 +469,12 @@ def _parities(curve, nums) -> np.ndarray:
     return np.array(out, float)
 
 
-def _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap=None, conj=None):
+def _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap=None):
     """Weighted least-squares fit of nu_sk = F_s - G_k (imaginary parts).
 
     The error model of an entry grows like (|psi| / |psi_k|)^2: where a component is small the
     directly computed exponent depends on the Abel images through two nearly cancelling poles.
     ``gap = (k0, k1, value)`` imposes G_k0 - G_k1 = value (known exactly, see _node_exponent_gap).
-    ``conj = (a, b, c, value)`` imposes F_a + F_b - 2 F_c = value: the node's branches a, b over
-    E = 0 are complex conjugate places, psi(P_b, t) = conj psi(P_a, t), c is the real place over
-    E = 0, and value is 2 pi n.U (the lattice shift conjugation makes in the theta quotients).
-    Fitted freely the relation held to ~3e-16, and the integrals (4.13) on the solution drifted by
-    that times t (6e-10 at t = 1e6); the real places of a curve without a node need no relation.
     Returns (fitted nu (3, 3), max residual in units of the error model).
     """
     hs = np.abs(X0) / np.linalg.norm(X0, axis=0, keepdims=True)       # [k, s]
@@ -496,19 +491,11 @@ def _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap=None, conj=None):
     A = np.zeros((len(rows) + 1, nF + 3))
     rhs = np.zeros(len(rows) + 1)
     for i, (s_, k, val, er) in enumerate(fit_rows):
-        if conj is not None and s_ == conj[1]:
-            # F_b = 2 F_c - F_a + value eliminated like G_k1 above
-            A[i, conj[2]], A[i, conj[0]] = 2.0 / er, -1.0 / er
-            val = val - conj[3]
-        else:
-            A[i, s_] = 1.0 / er
-        A[i, nF + k], rhs[i] = -1.0 / er, val / er
+        A[i, s_], A[i, nF + k], rhs[i] = 1.0 / er, -1.0 / er, val / er
     A[-1, nF] = 1.0 / min(r[3] for r in rows)                          # gauge G_0 = 0
     x, *_ = np.linalg.lstsq(A, rhs, rcond=None)
     if gap is not None:
         x[nF + k1] = x[nF + k0] - gval
-    if conj is not None:
-        x[conj[1]] = 2.0 * x[conj[2]] - x[conj[0]] + conj[3]
     resid = max(abs(x[s_] - x[nF + k] - val) / er for s_, k, val, er in rows)
     return x[:3][:, None] - x[nF:][None, :], float(resid)
 
@@ -858,19 +845,13 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     X0, rho, nu = constants(r)
     X0b, rhob, nub = constants(0.5 * r)
     nu_aux, h_aux = _auxiliary_rows(curve, abel, th, Jp, M, u, W0, alpha, e, U, dlog_d, Bc)
-    conj = None
-    if curve.node is not None:
-        a_, b_ = [i for i, Pl in enumerate(P0) if getattr(Pl, "_slope", None) is not None]
-        c_ = 3 - a_ - b_
-        value = _snap_rate(float(np.median((nu[a_] + nu[b_] - 2 * nu[c_]).imag)), 0.0, U, rdim)
-        conj = None if value is None else (a_, b_, c_, value)
-    nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux, conj=conj)
+    nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux)
     gap = _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit) if curve.symmetric_body else None
     node_gap_change = None
     if gap is not None:
         k0, k1, val = gap
         node_gap_change = float(nu_fit[0, k1] - nu_fit[0, k0]) - val
-        nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap, conj)
+        nu_fit, resid = _fit_exponents(nu, nub, X0, nu_aux, h_aux, gap)
     nu_exact_change = None
     nu_ex = _exact_exponents(curve, P0, gap, G, U, rdim, nu_fit)
     if nu_ex is not None:
