@@ -522,23 +522,29 @@ def _node_exponent_gap(curve, Pinf, Jinf, G, U, rdim, nu_fit):
     if len(pair) != 2:
         raise RuntimeError(f"no node over E = infinity (J at infinity {Jinf}; internal error)")
     om = curve.x ** 2
-    res = np.zeros(3, complex)
-    for j, Pl in enumerate(Pinf):
-        k, c = Pl.expand(om, order=3)
-        res[j] = c[k == -1][0] if np.any(k == -1) else 0.0
+    k0, k1 = pair
+    r, pa = _third_kind_periods(curve, [Pinf[k0], Pinf[k1], Pinf[3 - k0 - k1]], om, G)
     # sum_j J_j c_j in closed form (Euler-Jacobi, see _velocity_at_infinity): the t^0 coefficients
     # at the node's branches grow like 1 / spin and the FFT loses them for a small axial spin
     Jc0 = _velocity_at_infinity(curve, [om])[0]
-    k0, k1 = pair
-    r = res[k0]
-    if abs(r) == 0 or abs(res[k1] + r) > 1e-8 * abs(r) or abs(res[3 - k0 - k1]) > 1e-8 * abs(r):
-        raise RuntimeError(f"E^2 dE / f_w has residues {res} at infinity: not the node's third-kind "
-                           "differential (internal error)")
-    g = curve.genus
-    pa = (np.asarray(curve.period_matrix(differentials=[om])) @ G).ravel()[:g] / r
     value = float((Jc0 / r - pa @ U).imag)
     snapped = _snap_rate(float(nu_fit[0, k1] - nu_fit[0, k0]), value, U, rdim)
     return None if snapped is None else (k0, k1, snapped)
+
+
+def _third_kind_periods(curve, places, numerator, G) -> tuple:
+    """(r, p) of the third-kind differential numerator dE / f_w with residues +-r at places[0], places[1]
+    (checked: zero at any further place given) and a-periods r p in the adapted basis G."""
+    res = []
+    for Pl in places:
+        k, c = Pl.expand(numerator, order=3)
+        res.append(complex(c[k == -1][0]) if np.any(k == -1) else 0.0)
+    r = res[0]
+    if abs(r) == 0 or abs(res[1] + r) > 1e-8 * abs(r) or any(abs(x) > 1e-8 * abs(r) for x in res[2:]):
+        raise RuntimeError(f"{numerator} dE / f_w has residues {res}: not the node's third-kind differential "
+                           "(internal error)")
+    pa = (np.asarray(curve.period_matrix(differentials=[numerator])) @ G).ravel()[:curve.genus]
+    return r, pa / r
 
 
 def _snap_rate(fitted: float, value: float, U: np.ndarray, rdim: int):
@@ -584,16 +590,7 @@ def _exact_exponents(curve, P0, gap, G, U, rdim, nu_fit):
         dG[k0], dG[k1] = gval, -gval
     if swap0:
         sa, sb = swap0
-        one = sp.Integer(1)
-        res = []
-        for s_ in swap0:
-            k, c = P0[s_].expand(one, order=2)
-            res.append(complex(c[k == -1][0]) if np.any(k == -1) else 0.0)
-        r = res[0]
-        if abs(r) == 0 or abs(res[1] + r) > 1e-8 * abs(r):
-            raise RuntimeError(f"dE / f_w has residues {res} at the node's branches: not a third-kind "
-                               "differential (internal error)")
-        pa = (np.asarray(curve.period_matrix(differentials=[one])) @ G).ravel()[:curve.genus] / r
+        _, pa = _third_kind_periods(curve, [P0[sa], P0[sb]], sp.Integer(1), G)
         zgap = _snap_rate(float(f[sa, 0] - f[sb, 0]), float((-(pa @ U)).imag), U, rdim)
         if zgap is None:
             return None
