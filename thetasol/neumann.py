@@ -336,20 +336,17 @@ class _NeumannTorus:
                     row.append(("above", d[i] - vals[i_hi]))
             self.role.append(row)
         self.norm = np.array([np.sqrt(abs((d[i] - d[j]) * (d[i] - d[l]))) for i, (j, l) in enumerate(jl)])
-        # initial angles: cos theta from the position, sin theta from the velocity (both absolute-accurate)
+        # initial angles: cos theta from the position, sin theta from the velocity (both absolute-accurate):
+        # du/ds = (u2 - u1) du/dt = (w/2) sin(theta) dtheta/ds = w sin(theta) sqrt(prod_others |u - r|)
         th0 = []
-        ud = []
-        for kk in range(2):
-            z = zu[kk]
-            dN = 2.0 * a2 * z + a1
-            ud.append(-sum(2.0 * x0[i] * y0[i] * (z - d[j]) * (z - d[l]) for i, (j, l) in enumerate(jl)) / dN)
         gap0 = zu[1] - zu[0]
         for kk, o in enumerate(self.osc):
             z = zu[kk]
+            udot = -sum(2.0 * x0[i] * y0[i] * (z - d[j]) * (z - d[l])
+                        for i, (j, l) in enumerate(jl)) / (2.0 * a2 * z + a1)
             cos_th = ((o.hi - z) - (z - o.lo)) / o.w
-            dist = np.array([abs(z - r) for r in [vals[m] for m in range(5)
-                                                  if m not in ivals[kk]]])
-            sin_th = 2.0 * gap0 * ud[kk] / (o.w * 2.0 * np.sqrt(np.prod(dist)))
+            dist = [abs(z - vals[m]) for m in range(5) if m not in ivals[kk]]
+            sin_th = gap0 * udot / (o.w * np.sqrt(np.prod(dist)))
             th0.append(np.arctan2(sin_th, cos_th))
         self.th0 = np.array(th0)
         self.sigma = np.ones(3)
