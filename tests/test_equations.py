@@ -10,7 +10,7 @@ import pytest
 import sympy as sp
 
 from thetasol import integrate_rotation, invariants, spectral_coefficients
-from thetasol._so3 import hat, rodrigues
+from thetasol._so3 import rodrigues
 from thetasol.equations import paper_variables
 
 

@@ -22,7 +22,7 @@ import numpy as np
 
 from ._so3 import rotation_about
 from .elliptic import ellipf, ellipj, ellipk
-from .equations import inertia_from_moments, invariants as _invariants
+from .equations import invariants as _invariants
 from .rotation import RotationSolution
 
 __all__ = ["PendulumRotation"]
