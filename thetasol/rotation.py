@@ -39,9 +39,10 @@ __all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]
 class ClosedFormUnavailable(NotImplementedError):
     """No closed form could be built for these (valid) data; the message says why.
 
-    Raised for the cases a closed form does not cover (a symmetric body in a potential) and where
-    the curve computations cannot reach the accuracy the solution promises (for example data
-    within rounding of a degeneration).  :func:`thetasol.integrate_rotation` always applies.
+    Raised for the cases a closed form does not cover (a symmetric body with little but non-zero
+    spin about its axis in a potential) and where the curve computations cannot reach the accuracy
+    the solution promises (for example data within rounding of a degeneration).
+    :func:`thetasol.integrate_rotation` always applies.
     """
 
 
@@ -204,7 +205,7 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
         the size is stated): errors of that size are to be expected.  The check cannot see an
         error of the torus position along the real torus (near an unstable relative equilibrium
         1.5e-8 went unseen before the curve engine's fix for clustered branch points; the reference
-        case is at 6.1e-12 since: docs/theta_rotation.md).
+        case is at 6.7e-12 at ``t = 4002`` since: docs/theta_rotation.md).
 
     Examples
     --------
