@@ -772,10 +772,7 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     R = float(np.abs(curve.branch_points).max())
     # A zero without a w (NaN) is where v_k vanishes on two sheets at once: the axis e_k is an
     # eigenvector of u, and the zeros sit at places over E = 0; those k take the other formula below.
-    # (distinct J with a node at E = 0, rank-one a: the places at infinity are far from every branch
-    # point and their Abel images are the more accurate, measured 1.5e-12 against 6.7e-12 at t = 4002)
-    by_zeros = curve.node is None or curve.symmetric_body
-    use_zeros = [by_zeros and len(Ez) == g and np.abs(Ez).max() <= 10.0 * R and np.all(np.isfinite(wz))
+    use_zeros = [len(Ez) == g and np.abs(Ez).max() <= 10.0 * R and np.all(np.isfinite(wz))
                  for Ez, wz in comp_zeros]
     # np.roots leaves the points a few ulps off: next to a tight pair of branch points (near a relative
     # equilibrium) that moved their Abel images by up to 6e-11
@@ -796,26 +793,22 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
     for k, use in enumerate(use_zeros):
         if use:
             AZ[k], pos = A_all[pos:pos + g].sum(axis=0), pos + g
-    if by_zeros:
-        # psi_k vanishes at inf_j (j != k): div(psi_k) = Z_k + sum_{j != k} inf_j - D0 with Z_k the g
-        # finite zeros of v_k, so e_k = A(Z_k) + K; and div(E) = sum P_s - sum inf_j turns
-        # d_k = A(inf_k) - e_k into sum_s A(P_s) - A(D0) - K.  No Abel image at infinity is needed.
-        # Where a zero of v_k runs off towards infinity (v_3 of a nearly symmetric body has one at
-        # E ~ 1 / (J_2 - J_1)) use e_k = A(D0) - sum_s A(P_s) + A(inf_k) + K instead: inf_k is then
-        # the place away from the cluster.  The same holds on the normalization of a symmetric
-        # body's curve (its node over E = infinity; measured 1.5-2.5x closer to the references), with
-        # a node at E = 0 too (rank-one a: the node branches' Abel images at infinity lose ~1 / spin^2).
-        e = np.empty((3, g), complex)
-        for k in range(3):
-            if use_zeros[k]:
-                e[k] = _reduce(AZ[k] + K, tau)
-            else:
-                e[k] = _reduce(AD0 - AP0.sum(axis=0) + abel([Pinf[k]])[0] + K, tau)
-        d = np.repeat(_reduce(AP0.sum(axis=0) - AD0 - K, tau)[None, :], 3, axis=0)
-    else:
-        Ainf = np.array([_reduce(v, tau) for v in abel(Pinf)])
-        e = np.array([_reduce(AD0 - Ainf.sum(axis=0) + Ainf[k] + K, tau) for k in range(3)])
-        d = Ainf - e                                             # (3, g)
+    # psi_k vanishes at inf_j (j != k): div(psi_k) = Z_k + sum_{j != k} inf_j - D0 with Z_k the g
+    # finite zeros of v_k, so e_k = A(Z_k) + K; and div(E) = sum P_s - sum inf_j turns
+    # d_k = A(inf_k) - e_k into sum_s A(P_s) - A(D0) - K.  No Abel image at infinity is needed.
+    # Where a zero of v_k runs off towards infinity (v_3 of a nearly symmetric body has one at
+    # E ~ 1 / (J_2 - J_1)) use e_k = A(D0) - sum_s A(P_s) + A(inf_k) + K instead: inf_k is then
+    # the place away from the cluster.  The same holds on the normalization of a symmetric
+    # body's curve (its node over E = infinity; measured 1.5-2.5x closer to the references), and with
+    # a node at E = 0 (rank-one a: for a symmetric body the node branches' Abel images at infinity lose
+    # ~1 / spin^2; with distinct J both routes agree on the references since the exact exponents).
+    e = np.empty((3, g), complex)
+    for k in range(3):
+        if use_zeros[k]:
+            e[k] = _reduce(AZ[k] + K, tau)
+        else:
+            e[k] = _reduce(AD0 - AP0.sum(axis=0) + abel([Pinf[k]])[0] + K, tau)
+    d = np.repeat(_reduce(AP0.sum(axis=0) - AD0 - K, tau)[None, :], 3, axis=0)
     ed_, vd_, gd_ = th.jet(d, order=1, separated=True)
     dlog_d = (gd_ @ U) / vd_
 
