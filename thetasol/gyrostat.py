@@ -103,6 +103,8 @@ from .rotation import RotationSolution, solve_rotation
 __all__ = ["GyrostatSolution", "solve_gyrostat"]
 
 _EPS = np.finfo(float).eps
+#: An anchor whose torsion rate is below this fraction of its maximum over the orbit is degenerate.
+_MIN_TORSION_RATIO = 1e-2
 
 
 @dataclass(frozen=True, eq=False)
@@ -620,7 +622,7 @@ class _Elliptic:
     def anchor_is_degenerate(self) -> bool:
         """The orbit's torsion (nearly) vanishes at the anchor: dtheta_Z/dt = s0 ~ 0 there, and
         the pencil formula becomes 0/0 where the orbit meets the osculating plane again."""
-        return self.torsion_ratio() < 1e-2
+        return self.torsion_ratio() < _MIN_TORSION_RATIO
 
     def finish(self):
         self._pole()
@@ -909,7 +911,7 @@ def _reanchor(impl, mq):
     for ta in impl.anchor_candidates()[:6]:
         new = impl.reanchored(ta)
         ratio = new.torsion_ratio()
-        if ratio >= 1e-2:  # not anchor_is_degenerate
+        if ratio >= _MIN_TORSION_RATIO:
             best = new
             break
         if ratio > best_ratio:
@@ -984,9 +986,7 @@ def solve_gyrostat(J, N, Q0, omega0) -> GyrostatSolution:
         # a rotor momentum below the rounding of m: the Euler top of the same data (exact
         # to rounding; the rotor term's effect stays below eps |m| omega t)
         sol = solve_rotation(Jm, Z, Q0m, w0)
-        inv.update({k: sol.invariants[k] for k in ("period", "precession_rate")})
-        inv["error_estimate"] = _EPS
-        return GyrostatSolution(Jm, Z, Q0m, w0, sol.method, inv, None, N=n_body, _impl=_Delegate(sol))
+        return make(sol.method, _Delegate(sol), sol.invariants["period"], sol.invariants["precession_rate"])
     if not np.any(m_body):
         return make("rest", _Steady(Q0m, np.zeros(3)))
     hdot0 = np.cross(m_body, w0) + np.cross(n_body, w0)
