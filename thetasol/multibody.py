@@ -143,13 +143,14 @@ class _System:
         return np.concatenate([x.ravel(), v.ravel(), Q.ravel(), w.ravel()])
 
     def constraint(self, x, v, Q, w):
-        """Joint residuals g and gdot, shape (K, 3)."""
+        """Joint residuals g and gdot, shape (..., K, 3), of the states (..., N, ...) of :meth:`unpack`."""
         P, C = self.P, self.C
-        rP = np.einsum("kij,kj->ki", Q[P], self.rhoP)
-        rC = np.einsum("kij,kj->ki", Q[C], self.rhoC)
-        g = x[P] + rP - x[C] - rC
-        gd = (v[P] + np.einsum("kij,kj->ki", Q[P], cross(w[P], self.rhoP))
-              - v[C] - np.einsum("kij,kj->ki", Q[C], cross(w[C], self.rhoC)))
+        QP, QC, wP, wC = Q[..., P, :, :], Q[..., C, :, :], w[..., P, :], w[..., C, :]
+        rP = np.einsum("...kij,kj->...ki", QP, self.rhoP)
+        rC = np.einsum("...kij,kj->...ki", QC, self.rhoC)
+        g = x[..., P, :] + rP - x[..., C, :] - rC
+        gd = (v[..., P, :] + np.einsum("...kij,...kj->...ki", QP, cross(wP, self.rhoP))
+              - v[..., C, :] - np.einsum("...kij,...kj->...ki", QC, cross(wC, self.rhoC)))
         return g, gd
 
     def __call__(self, _t, y):
@@ -257,12 +258,10 @@ def integrate_multibody(config: Configuration, a, b, q0, v0, Q0: dict, omega0: d
         Y = np.tile(y0, (tt.size, 1))
         nfev = 0
     seconds = time.perf_counter() - start
-    X, Vel, Qs, W = (np.moveaxis(z, 0, 1) for z in sys.unpack(Y))  # body axis first: (N, T, ...)
+    states = sys.unpack(Y)  # (T, N, ...)
+    resid = float(np.max(np.abs(sys.constraint(*states)[0]), initial=0.0))
+    X, Vel, Qs, W = (np.moveaxis(z, 0, 1) for z in states)  # body axis first: (N, T, ...)
     ortho = float(np.max(np.abs(np.swapaxes(Qs, -1, -2) @ Qs - np.eye(3))))
-    resid = 0.0
-    for k in range(tt.size):
-        g, _ = sys.constraint(X[:, k], Vel[:, k], Qs[:, k], W[:, k])
-        resid = max(resid, float(np.max(np.abs(g), initial=0.0)))
     Qs = polar_orthonormalize(Qs)
     mc = np.einsum("n,nti->ti", sys.m, X) / sys.m.sum()
     mcv = np.einsum("n,nti->ti", sys.m, Vel) / sys.m.sum()
