@@ -16,8 +16,7 @@ import numpy as np
 import thetasol as ts
 from thetasol._so3 import rodrigues
 
-sys.path.insert(0, __file__.rsplit("/", 1)[0])
-from _common import machine_info  # noqa: E402
+from _common import machine_info
 
 T = np.array([0.7, 3.1, 17.3, 102.0, 997.0, 4002.0])
 KINDS = ["generic", "saddle", "fast", "slow", "nearly-symmetric", "rank-one", "near-eq", "symmetric",

@@ -118,7 +118,7 @@ def _rows_from_table(text):
 def main(argv=None):
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="fewer tolerances, no splitting")
-    ap.add_argument("--cases", default="generic,saddle,rank_one,near_stable_equilibrium")
+    ap.add_argument("--cases", default="generic,saddle,rank_one,near_stable_equilibrium,symmetric_oblate")
     ap.add_argument("--plot", default=None, help="write an error-against-cost plot (needs matplotlib)")
     ap.add_argument("--replot", default=None, help="only redraw --plot from a saved output of this script")
     args = ap.parse_args(argv)
