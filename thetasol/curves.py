@@ -9,7 +9,8 @@ the surface, whose intersection form gives a symplectic basis of H_1 by integer 
 (:mod:`thetasol._homology`).  The genus comes from Riemann-Hurwitz applied to the local monodromies
 and is cross-checked against the rank of the intersection form and the number of holomorphic
 differentials.  Periods are sums of Gauss-Legendre integrals along the edges (tolerance 1e-15 per
-edge, rules chosen from the Bernstein ellipse of each interval); the ``dps`` path redoes the
+edge, rules chosen from the Bernstein ellipse of each interval, each interval summed in
+double-double so that the many-edge sums keep float64 accuracy); the ``dps`` path redoes the
 quadrature on the same topology with mpmath from the exact coefficients.
 
 Hand-written rather than wrapping a library: the reference implementations (Sage's
@@ -346,7 +347,10 @@ class PlaneCurve:
         return C @ G @ C.T
 
     def _edge_integrals(self, P):
-        ints = self._edge_tracks.integrate(P)
+        # every interval in double-double: periods and potentials are sums over many edges, whose float64
+        # interval sums left them ~2e-15 relative off (too much for the rigid body's theta solution at
+        # t ~ 1e4: docs/theta_rotation.md); +3-16 ms per call on the Sage reference curves
+        ints = self._edge_tracks.integrate(P, dd_all=True)
         return np.concatenate(ints, axis=0)  # (ne * n, nd), row e * n + s
 
     def _period_matrix_mp(self, diffs, dps):
