@@ -360,6 +360,17 @@ def test_hyperelliptic_against_mpmath_quadrature(coeffs):
 
 
 # ---------------------------------------------------------------------- path independence
+def test_line_piece_ends_exactly_at_its_end_point():
+    """A line from a far vertex ends at b itself: a + (b - a) is off by ~eps |a| (here 7e-10), which
+    next to a branch point moved the next piece's starting sheet value off the curve."""
+    from thetasol._curve_quad import Piece
+
+    a, b = -1.2345678e7 + 3.3j, 1.2 + 0.1j
+    assert a + (b - a) * 1.0 != b
+    xs = Piece("line", a, b, [0j]).x(np.array([0.0, 0.5, 1.0]))
+    assert xs[0] == a and xs[2] == b
+
+
 @pytest.mark.parametrize("name", ["hyp_g3", "klein", "spectral_g4"])
 def test_two_path_choices_give_symplectically_equivalent_periods(name):
     """Extra dummy sites change the Voronoi graph, every path and the homology basis."""
