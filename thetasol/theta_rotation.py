@@ -613,8 +613,10 @@ def _exact_exponents(curve, P0, gap, G, U, rdim, nu_fit):
 
 
 def _farthest_branch_point(Jp: np.ndarray, M: np.ndarray, u: np.ndarray) -> float:
-    """max |E| over the finite branch points of (4.12) for a symmetric body, before the curve is built:
-    the roots of the discriminant in w, from the exact coefficients (3-6 ms)."""
+    """max |E| over the finite branch points of (4.12) for a symmetric body, before the curve is built
+    (which took minutes for the farthest ones): the roots of the curve engine's critical polynomial
+    from the exact coefficients (a few ms)."""
+    from ._curve_poly import CurvePoly
     from .spectral import _exact_coefficients
 
     Js = Jp.copy()
@@ -624,8 +626,8 @@ def _farthest_branch_point(Jp: np.ndarray, M: np.ndarray, u: np.ndarray) -> floa
     E, w = sp.symbols("E w")
     f = sp.Poly({(k, l): sp.Rational(c.numerator, c.denominator)
                  for k, row in enumerate(C) for l, c in enumerate(row) if c}, E, w)
-    disc = sp.Poly(sp.discriminant(f.as_expr(), w), E)
-    cf = np.array([float(c) for c in disc.all_coeffs()])
+    F = CurvePoly(f, E, w).critical_polynomial()[0]
+    cf = np.array([complex(c) for c in F.all_coeffs()])
     return float(np.abs(np.roots(cf)).max()) if len(cf) > 1 else 0.0
 
 
