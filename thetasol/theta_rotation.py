@@ -28,7 +28,7 @@ around the place, so they stay exact where a component of the initial eigenvecto
 weighted by its conditioning, with auxiliary points near the branch points where eigenvectors mix,
 and the fit only picks the integers of their exact values (:func:`_exact_exponents`: sigma makes
 every exponent a half lattice rate ``pi n.U`` up to the third-kind rates of the nodes).  The periods
-behind ``U`` are summed in double-double.
+behind ``U`` are summed in double-double (:mod:`thetasol.curves`).
 
 Everything is computed in a homology basis adapted to the real Liouville torus
 (:mod:`thetasol._adapted_basis`): there ``V`` is real and has only as many non-zero coordinates as
@@ -685,11 +685,6 @@ def _setup(Jm: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray):
                 "points near |E| ~ 1 / gap, out of the curve engine's reach; use thetasol.integrate_rotation")
     curve = spectral_curve(np.diag(Jp), hat(Ip @ w0p), -(Q0p.T @ a @ Q0p), tol=SNAP_TOL)
     M, u = curve.M, curve.u
-    # U and the exponents' rates are read off periods: the float64 sums of the cycles' intervals left them
-    # ~2e-15 relative off (symmetric rank-one body at relative spin 5e-4: 3.4e-11 at t = 4002, 1.5e-12
-    # with every interval in double-double; fast spin, random body: 1.6e-10 -> 1.4e-11; 45 random bodies
-    # of all kinds: worst 1.6e-10 -> 6.7e-11), for 0.01-0.04 s of set-up.
-    curve._edge_tracks.dd_all = True
     W0 = hat(w0p - spin * np.eye(3)[axis]) if axis is not None else hat(w0p)
     g = curve.genus
     nums = curve.holomorphic_differentials()
