@@ -7,8 +7,9 @@ output times.  :func:`solve_configuration` applies Theorem 2 (3.1):
 * the system mass centre ``q(t)`` in closed form (:mod:`thetasol.masscenter`);
 * every effective body (2.15), (3.7) rotates independently in ``1/2 x^T a x`` (3.3):
   ``thetasol.rotation.solve_rotation`` where a closed form exists (elliptic functions for
-  ``a = c 1`` and pendulum motions, theta functions otherwise), else (a symmetric body without
-  axial spin in a potential, data it refuses) the numerical reference :func:`thetasol.integrate_rotation`.
+  ``a = c 1`` and pendulum motions, Neumann's separation for a symmetric body without axial spin,
+  theta functions otherwise), else (data it refuses, e.g. a symmetric body with little but non-zero
+  axial spin) the numerical reference :func:`thetasol.integrate_rotation`.
   Which one was used, and why, is recorded per body;
 * every physical body follows down the tree (:meth:`Configuration.place`).
 
