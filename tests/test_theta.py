@@ -335,3 +335,31 @@ def test_bad_arguments():
         th.jet(np.zeros(2), order=3)
     with pytest.raises(ValueError, match="dps"):
         riemann_theta(np.zeros(2), th.tau, dps=0)
+
+
+@pytest.mark.parametrize("g, r", [(2, 1), (3, 2), (4, 3)])
+def test_flow_theta_against_riemann_theta(g, r):
+    """thetasol._theta_flow.FlowTheta (the Fourier series along a real flow that the rotation solver
+    evaluates per time) against RiemannTheta at s + t u, values and t-derivatives, at times up to 1e5
+    (where only the phases t u mod 1 enter)."""
+    from thetasol._theta_flow import FlowTheta
+
+    rng = np.random.default_rng(40 + g)
+    tau = random_tau(g, rng, small=0.4)
+    u = rng.normal(size=r)
+    shifts = rng.normal(size=(3, g)) + 0.3j * rng.normal(size=(3, g))
+    flow = FlowTheta(tau, u, shifts)
+    t = np.array([0.0, 0.37, 2.9, 41.3, 1e5 + 0.25])
+    e, v, dv = flow(t)
+    U = np.concatenate([u, np.zeros(g - r)])
+    th = RiemannTheta(tau)
+    for j, s in enumerate(shifts):
+        # theta at s + t u: only the phases t u mod 1 matter (integer shifts of a real argument)
+        ph = np.multiply.outer(t, U)
+        ph -= np.round(ph)
+        z = s[None, :] + ph
+        ref = th(z)
+        dref = th(z, derivs=[U])
+        # measured 2.1e-15 and 2.6e-15; one coefficient of the series off by 1e-11 shows as 1.1e-11
+        close(np.exp(e[j]) * v[:, j], ref, 1e-13, scale=np.abs(ref).max())
+        close(np.exp(e[j]) * dv[:, j], dref, 1e-13, scale=np.abs(dref).max())
