@@ -4,7 +4,7 @@ Run:  OPENBLAS_NUM_THREADS=1 /work/devenv/bin/python benchmarks/bench_curve_dd.p
 
 For every case of tests/data/rotation/refs.json with critical intervals (intervals whose float64
 Gauss-Legendre sum is not accurate enough): the time of re-summing them in double-double
-(thetasol._curve_dd, the default) and in mpmath at 20 digits (thetasol._curve_mp.interval_mp, the
+(thetasol.curves._dd, the default) and in mpmath at 20 digits (thetasol.curves._mp.interval_mp, the
 previous fallback), measured side by side in one run, the error of each against 30-digit mpmath sums
 of the same intervals (max |error| / max |interval sum| over all intervals, tracks and
 differentials, before rounding to complex128), and the whole set-up time of solve_rotation with each
@@ -24,9 +24,10 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, ROOT)
 
-from thetasol import _curve_quad, solve_rotation  # noqa: E402
-from thetasol._curve_dd import curve_to_cdd, intervals_dd, numerators_to_cdd  # noqa: E402
-from thetasol._curve_mp import interval_mp, numerators_mp  # noqa: E402
+from thetasol import solve_rotation
+from thetasol.curves import _quad as _curve_quad  # noqa: E402
+from thetasol.curves._dd import curve_to_cdd, intervals_dd, numerators_to_cdd  # noqa: E402
+from thetasol.curves._mp import interval_mp, numerators_mp  # noqa: E402
 from _common import best_of, machine_info  # noqa: E402
 
 REFS = json.load(open(os.path.join(ROOT, "tests", "data", "rotation", "refs.json")))

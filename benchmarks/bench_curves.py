@@ -24,9 +24,9 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, ROOT)
 
-from thetasol.curves import PlaneCurve  # noqa: E402
-from thetasol.spectral import spectral_curve  # noqa: E402
-from thetasol._so3 import hat  # noqa: E402
+from thetasol.curves.plane_curve import PlaneCurve  # noqa: E402
+from thetasol.curves.spectral import spectral_curve  # noqa: E402
+from thetasol.core.so3 import hat  # noqa: E402
 from _common import best_of, machine_info  # noqa: E402
 
 SAGE = "/work/sagevenv/bin/python"

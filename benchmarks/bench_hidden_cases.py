@@ -14,7 +14,7 @@ import warnings
 import numpy as np
 
 import thetasol as ts
-from thetasol._so3 import rodrigues
+from thetasol.core.so3 import rodrigues
 
 from _common import machine_info
 

@@ -1,9 +1,9 @@
 """Speed against error for the mechanics of issue 2 (results in docs/bench_mechanics.md).
 
-1. The mass centre (3.2) on 1000 times in [0, 100]: closed form (thetasol.masscenter) against
+1. The mass centre (3.2) on 1000 times in [0, 100]: closed form (thetasol.solutions.mass_center) against
    scipy DOP853 at several tolerances and scipy.linalg.expm per time; errors against mpmath's
    matrix exponential at 40 digits.
-2. The split against the unsplit multibody system (thetasol.multibody) for a 5-body
+2. The split against the unsplit multibody system (thetasol.integrators.multibody) for a 5-body
    C^2-central tree over t <= 60: multibody cost and gap at several tolerances, the split's
    cost with numerical rotations (DOP853 and heyoka if installed).
 3. The CLI demo, wall time.
@@ -20,12 +20,12 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
-from thetasol._so3 import rodrigues
-from thetasol.bodies import Body
-from thetasol.configuration import Configuration, Joint
-from thetasol.masscenter import mass_center
-from thetasol.multibody import integrate_multibody
-from thetasol.scene import solve_configuration
+from thetasol.core.so3 import rodrigues
+from thetasol.mechanics.bodies import Body
+from thetasol.mechanics.configuration import Configuration, Joint
+from thetasol.solutions.mass_center import mass_center
+from thetasol.integrators.multibody import integrate_multibody
+from thetasol.scenes.scene import solve_configuration
 
 from _common import best_of, machine_info
 

@@ -7,7 +7,7 @@ The same can be done from a scene file: `python -m thetasol solve examples/satel
 import numpy as np
 
 from thetasol import Body, Configuration, Joint, integrate_multibody, solve_configuration
-from thetasol._so3 import rodrigues
+from thetasol.core.so3 import rodrigues
 
 # Three bodies in a chain plus one on the side: a hub, an arm carrying a tool, a sensor.
 hub = Body(mass=8.0, I=[3.0, 4.0, 5.0], name="hub")

@@ -1,8 +1,8 @@
-"""Rigid bodies (thetasol.bodies) against brute-force sums over point masses."""
+"""Rigid bodies (thetasol.mechanics.bodies) against brute-force sums over point masses."""
 import numpy as np
 import pytest
 
-from thetasol.bodies import Body, principal_axes
+from thetasol.mechanics.bodies import Body, principal_axes
 
 
 def random_points(rng, n=7):

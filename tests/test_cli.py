@@ -6,7 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from thetasol.__main__ import main
+from thetasol.scenes.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
 EXAMPLE = ROOT / "examples" / "satellite_boom.toml"
@@ -77,7 +77,7 @@ def test_usage_errors(tmp_path, capsys):
 
 def test_failed_check_exits_1(tmp_path, capsys, monkeypatch):
     """A check beyond its tolerance makes the verdict FAILED and the exit status 1."""
-    import thetasol.scene as scene_mod
+    import thetasol.scenes.scene as scene_mod
 
     real = scene_mod.MassCenterMotion
 

@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from thetasol._so3 import hat, rodrigues
-from thetasol.bodies import Body
-from thetasol.configuration import Configuration, Joint
+from thetasol.core.so3 import hat, rodrigues
+from thetasol.mechanics.bodies import Body
+from thetasol.mechanics.configuration import Configuration, Joint
 
 TREE = [("A", "B"), ("B", "C"), ("A", "D"), ("D", "E"), ("A", "F")]  # depth 2, six bodies
 

@@ -2,14 +2,14 @@
 
 The reference integrates Newton's laws for the point masses in the space frame: total
 angular momentum about the mass centre, torque sum x_k x (-m_k grad phi), inertia
-recomputed from the point positions.  No formula of thetasol.equations is used.
+recomputed from the point positions.  No formula of thetasol.mechanics.equations is used.
 """
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
 from thetasol import integrate_rotation, invariants
-from thetasol._so3 import hat
+from thetasol.core.so3 import hat
 
 
 def point_mass_body(rng, n=6):
@@ -83,7 +83,7 @@ def test_paper_sign_described_as_documented():
 
 def test_so3_helpers_match_numpy():
     """hat(v) w = v x w; the cheap cross is np.cross bit for bit (multibody relies on it)."""
-    from thetasol._so3 import cross, rodrigues, vee
+    from thetasol.core.so3 import cross, rodrigues, vee
 
     rng = np.random.default_rng(9)
     u, v = rng.normal(size=(2, 4, 5, 3))

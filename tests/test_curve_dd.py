@@ -1,6 +1,6 @@
-"""Double-double fallback quadrature of the curve engine (thetasol._curve_dd).
+"""Double-double fallback quadrature of the curve engine (thetasol.curves._dd).
 
-References: the mpmath version of the same sums (thetasol._curve_mp.interval_mp, 30 digits) on the
+References: the mpmath version of the same sums (thetasol.curves._mp.interval_mp, 30 digits) on the
 critical intervals of a real spectral curve, and exact rational arithmetic for the primitives.
 """
 import json
@@ -11,10 +11,11 @@ import mpmath
 import numpy as np
 import pytest
 
-from thetasol import _curve_quad, solve_rotation
-from thetasol._curve_dd import curve_to_cdd, intervals_dd, numerators_to_cdd
-from thetasol._curve_mp import interval_mp, numerators_mp
-from thetasol._theta_dd import cdd_div, cdd_mul, dd_div
+from thetasol import solve_rotation
+from thetasol.curves import _quad as _curve_quad
+from thetasol.curves._dd import curve_to_cdd, intervals_dd, numerators_to_cdd
+from thetasol.curves._mp import interval_mp, numerators_mp
+from thetasol.core.dd import cdd_div, cdd_mul, dd_div
 
 REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
 
@@ -110,9 +111,9 @@ def test_local_samples_fall_back_to_mpmath_only_where_double_double_loses_digits
 
     import sympy as sp
 
-    from thetasol._curve_mp import ExactEvaluator
-    from thetasol._curve_places import _accurate_samples
-    from thetasol._curve_poly import CurvePoly
+    from thetasol.curves._mp import ExactEvaluator
+    from thetasol.curves._places import _accurate_samples
+    from thetasol.curves._poly import CurvePoly
 
     x, y = sp.symbols("x y")
     e2 = sp.Rational(1, 10**26)
@@ -151,7 +152,7 @@ def test_polish_separates_a_close_pair_far_from_zero(start):
     finish) returns both roots exactly."""
     import sympy as sp
 
-    from thetasol._curve_poly import CurvePoly, _newton_dd, _two_prod_c
+    from thetasol.curves._poly import CurvePoly, _newton_dd, _two_prod_c
 
     x, y = sp.symbols("x y")
     exact = np.array([1.0, 1e8, 1e8 + 6], complex)

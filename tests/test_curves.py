@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from thetasol.curves import PlaneCurve
+from thetasol.curves.plane_curve import PlaneCurve
 
 x, y = sp.symbols("x y")
 DATA = os.path.join(os.path.dirname(__file__), "data", "curves")
@@ -105,7 +105,7 @@ def test_holomorphic_differentials(name, expected):
 
 
 # ---------------------------------------------------------------------- Abel map, Riemann constant
-from thetasol._curve_theta import theta_normalized_abs  # noqa: E402
+from thetasol.curves._riemann_scan import theta_normalized_abs  # noqa: E402
 
 
 def _reduce(z, tau):
@@ -251,8 +251,8 @@ def test_edge_integrals_summed_in_double_double():
     """The edge integrals that periods and Abel potentials are summed from come out of double-double
     sums: each within 6e-16 of itself against 22-digit mpmath on the same edges (measured 3.8e-16,
     the quadrature's own error; the float64 interval sums were 1.9e-15 off on this spectral curve)."""
-    from thetasol._curve_mp import integrate_mp
-    from thetasol._curve_quad import Piece, Tracker
+    from thetasol.curves._mp import integrate_mp
+    from thetasol.curves._quad import Piece, Tracker
 
     _, f, diffs, _ = load_ref("spectral_g4")
     C = PlaneCurve(f, x, y)
@@ -363,7 +363,7 @@ def test_hyperelliptic_against_mpmath_quadrature(coeffs):
 def test_line_piece_ends_exactly_at_its_end_point():
     """A line from a far vertex ends at b itself: a + (b - a) is off by ~eps |a| (here 7e-10), which
     next to a branch point moved the next piece's starting sheet value off the curve."""
-    from thetasol._curve_quad import Piece
+    from thetasol.curves._quad import Piece
 
     a, b = -1.2345678e7 + 3.3j, 1.2 + 0.1j
     assert a + (b - a) * 1.0 != b
@@ -461,9 +461,9 @@ def test_poles_of_y_against_a_birational_model():
 
 @pytest.mark.parametrize("name", ["klein", "spectral_g4", "spectral_nodal_g3"])
 def test_riemann_constant_with_the_library_theta(name):
-    """The vanishing property checked with thetasol.theta (an independent theta implementation,
+    """The vanishing property checked with thetasol.theta.riemann (an independent theta implementation,
     with Siegel reduction) instead of the private sum used to select K."""
-    theta = pytest.importorskip("thetasol.theta")
+    theta = pytest.importorskip("thetasol.theta.riemann")
     _, f, _, _ = load_ref(name)
     C = PlaneCurve(f, x, y)
     g = C.genus
@@ -529,10 +529,10 @@ def test_sheets_turning_together_are_matched_without_refinement(monkeypatch):
     import json
     from unittest import mock
 
-    from thetasol import _curve_quad
-    from thetasol._curve_places import local_data
-    from thetasol._so3 import hat
-    from thetasol.spectral import spectral_curve
+    from thetasol.curves import _quad as _curve_quad
+    from thetasol.curves._places import local_data
+    from thetasol.core.so3 import hat
+    from thetasol.curves.spectral import spectral_curve
 
     with open(os.path.join(os.path.dirname(__file__), "data", "rotation", "refs.json")) as fh:
         r = json.load(fh)["nearly_symmetric"]

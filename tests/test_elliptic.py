@@ -1,11 +1,11 @@
-"""thetasol.elliptic against mpmath (an independent implementation, theta-function based),
+"""thetasol.special.elliptic against mpmath (an independent implementation, theta-function based),
 against scipy where scipy is right, and against identities."""
 import mpmath
 import numpy as np
 import pytest
 from scipy import special as sp
 
-from thetasol import elliptic as el
+from thetasol.special import elliptic as el
 
 EPS = np.finfo(float).eps
 

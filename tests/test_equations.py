@@ -2,7 +2,7 @@
 trajectories; integrate_rotation's shapes and bad input.
 
 The curve coefficients are checked against sympy's determinant (independent of the
-polynomial arithmetic in thetasol.equations) and the Lax pair (4.11) against finite
+polynomial arithmetic in thetasol.mechanics.equations) and the Lax pair (4.11) against finite
 differences along a trajectory.
 """
 import numpy as np
@@ -10,8 +10,8 @@ import pytest
 import sympy as sp
 
 from thetasol import integrate_rotation, invariants, spectral_coefficients
-from thetasol._so3 import rodrigues
-from thetasol.equations import paper_variables
+from thetasol.core.so3 import rodrigues
+from thetasol.mechanics.equations import paper_variables
 
 
 def random_case(seed, a_kind="generic"):
@@ -131,7 +131,7 @@ def test_extended_precision_references_integrate_the_body_of_the_data(dtype):
     hy = pytest.importorskip("heyoka")
     import mpmath
 
-    from thetasol.integrate import _working_precision_inertia
+    from thetasol.integrators.rotation import _working_precision_inertia
 
     fp, ulp = {"ldbl": (np.longdouble, 2.0 ** -63), "f128": (hy.real128, 2.0 ** -112)}[dtype]
     J, _, _, w0 = random_case(6)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from thetasol import integrate_rotation, solve_rotation
-from thetasol._so3 import hat
+from thetasol.core.so3 import hat
 
 from conftest import inertia, rand_Q
 

@@ -8,7 +8,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from thetasol import RotationSolution, solve_gyrostat, solve_rotation
-from thetasol._so3 import hat
+from thetasol.core.so3 import hat
 
 from conftest import inertia, rand_Q
 

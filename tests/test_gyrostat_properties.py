@@ -17,7 +17,7 @@ from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from thetasol import solve_gyrostat
-from thetasol._so3 import hat
+from thetasol.core.so3 import hat
 
 from conftest import rand_Q
 

@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from thetasol._so3 import rodrigues
-from thetasol.masscenter import MassCenterMotion, mass_center, stumpff
+from thetasol.core.so3 import rodrigues
+from thetasol.solutions.mass_center import MassCenterMotion, mass_center, stumpff
 
 
 def expm_reference(a, b, q0, v0, t, dps=40):

@@ -1,5 +1,5 @@
 """The split (Theorem 2, (3.1)) shown, not assumed: a whole C^2-central configuration integrated
-as ONE constrained multibody system (thetasol.multibody: maximal coordinates, Newton-Euler per
+as ONE constrained multibody system (thetasol.integrators.multibody: maximal coordinates, Newton-Euler per
 body, joint forces from the KKT system, no effective bodies) against the split solution
 (closed-form mass centre + integrate_rotation per effective body + the tree kinematics).
 
@@ -13,11 +13,11 @@ A non-central tree departs from the split by ~10x its joint offset.
 import numpy as np
 import pytest
 
-from thetasol._so3 import rodrigues
-from thetasol.bodies import Body
-from thetasol.configuration import Configuration, Joint
-from thetasol.multibody import initial_state, integrate_multibody
-from thetasol.scene import solve_configuration
+from thetasol.core.so3 import rodrigues
+from thetasol.mechanics.bodies import Body
+from thetasol.mechanics.configuration import Configuration, Joint
+from thetasol.integrators.multibody import initial_state, integrate_multibody
+from thetasol.scenes.scene import solve_configuration
 
 EDGES = [("A", "B"), ("B", "C"), ("A", "D"), ("D", "E")]  # C^2: chains of length 2
 

@@ -1,4 +1,4 @@
-"""Symmetric body without axial spin in a quadratic potential (Neumann's problem), thetasol.neumann.
+"""Symmetric body without axial spin in a quadratic potential (Neumann's problem), thetasol.solutions.neumann_rotation.
 
 References: DOP853 (rtol 1e-13) up to t = 40 and heyoka in 80-bit arithmetic up to t = 4002;
 the conserved quantities; the data at t = 0.
@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from thetasol import ClosedFormUnavailable, integrate_rotation, invariants, solve_rotation
-from thetasol._so3 import rodrigues
+from thetasol.core.so3 import rodrigues
 
 OBLATE = np.array([0.8, 0.8, 1.5])      # j3 > j
 PROLATE = np.array([1.1, 1.1, 0.4])     # j3 < j
@@ -236,10 +236,10 @@ def test_near_separatrix_is_refused_not_wrong():
 
 
 def test_powers_against_mpmath():
-    """e^{ikx} by doubling (thetasol.neumann._powers): at most log2(k) roundings, measured 4e-16 to k = 460
+    """e^{ikx} by doubling (thetasol.solutions.neumann_rotation._powers): at most log2(k) roundings, measured 4e-16 to k = 460
     (x in [0, 2 pi): larger x are reduced by the float 2 pi, a relative change of x of order eps)."""
     import mpmath                                      # a core dependency
-    from thetasol.neumann import _powers
+    from thetasol.solutions.neumann_rotation import _powers
     x = np.random.default_rng(7).uniform(0.0, 2 * np.pi, 40)
     E = _powers(x, 460)
     assert E.shape == (460, 40)
@@ -257,7 +257,7 @@ def test_time_map_tables_and_fallback(label, monkeypatch):
     useless tables the safeguarded series Newton takes over and gives the same s and angles.
     Measured (per point, relative to |t| + 1/drift, 1 + |s|/drift, 1 + |alpha|): <= 4.2e-16, 6.3e-16,
     1.5e-15, 7.1e-16 on these cases, t in [-50, 1e6]."""
-    from thetasol.neumann import _HermiteTable
+    from thetasol.solutions.neumann_rotation import _HermiteTable
 
     J, a, Q0, w0 = next(c[1:5] for c in CASES if c[0] == label)
     T = solve_rotation(J, a, Q0, w0)._c["axis_motion"].torus

@@ -4,7 +4,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from thetasol import integrate_rotation, invariants, solve_rotation
-from thetasol._so3 import rodrigues
+from thetasol.core.so3 import rodrigues
 
 J = np.array([0.7, 1.1, 1.9])
 A = np.diag([1.0, 2.0, 3.0])

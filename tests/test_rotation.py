@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from thetasol import RotationSolution, integrate_rotation, solve_rotation
-from thetasol._so3 import hat, vee
+from thetasol.core.so3 import hat, vee
 
 Z = np.zeros((3, 3))
 J = np.array([0.7, 1.1, 1.9])

@@ -1,4 +1,4 @@
-"""Scene files, the split pipeline and its report (thetasol.scene)."""
+"""Scene files, the split pipeline and its report (thetasol.scenes.scene)."""
 import sys
 import textwrap
 import types
@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from thetasol import integrate_rotation
-from thetasol.configuration import Trajectories
-from thetasol.multibody import initial_state
-from thetasol.scene import Scene, demo_scene_path, load_scene, rotation_kind, run, write_trajectories
+from thetasol.mechanics.trajectories import Trajectories, write_trajectories
+from thetasol.integrators.multibody import initial_state
+from thetasol.scenes.scene import Scene, demo_scene_path, load_scene, rotation_kind, run
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "satellite_boom.toml"
 
@@ -112,7 +112,7 @@ def test_run_report_and_checks(tmp_path):
 
 def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
     """With an isotropic a the rotations are Euler tops; a stand-in solve_rotation exercises the
-    closed-form branch of the pipeline (the real one lives in thetasol.rotation)."""
+    closed-form branch of the pipeline (the real one lives in thetasol.solutions.rotation)."""
     calls = []
 
     class Fake:
@@ -130,7 +130,7 @@ def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
             raise NotImplementedError("theta functions: issue 6")
         return Fake(J, a, Q0, w0)
 
-    monkeypatch.setitem(sys.modules, "thetasol.rotation", types.SimpleNamespace(solve_rotation=solve_rotation))
+    monkeypatch.setitem(sys.modules, "thetasol.solutions.rotation", types.SimpleNamespace(solve_rotation=solve_rotation))
     text = SMALL.replace("a = [[1.0, 0.2, 0.0], [0.2, 0.5, 0.0], [0.0, 0.0, -0.1]]",
                          "a = [[0.3, 0.0, 0.0], [0.0, 0.3, 0.0], [0.0, 0.0, 0.3]]")
     sc = load_scene(write(tmp_path, text))

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 import sympy as sp
 
-from thetasol._so3 import hat
-from thetasol.spectral import spectral_curve
+from thetasol.core.so3 import hat
+from thetasol.curves.spectral import spectral_curve
 
 from test_curves import assert_same_lattice, load_ref
 
@@ -147,7 +147,7 @@ def test_bad_input():
 
 
 # ---------------------------------------------------------------------- nearly degenerate data
-from thetasol.curves import PlaneCurve  # noqa: E402
+from thetasol.curves.plane_curve import PlaneCurve  # noqa: E402
 
 
 def _near_rank_one(eps, seed=3):
@@ -213,7 +213,7 @@ def test_nearly_reducible_data_are_handled_or_refused():
 def test_random_physical_spectral_curves():
     """60 random bodies and potentials (every 5th a rank-one gravity-gradient potential): genus,
     Riemann bilinear relations, path independence, Jacobi inversion with the Riemann constant."""
-    from thetasol._curve_theta import theta_normalized_abs
+    from thetasol.curves._riemann_scan import theta_normalized_abs
     for seed in range(60):
         rng = np.random.default_rng(1000 + seed)
         J = np.sort(rng.uniform(0.2, 3.0, 3))

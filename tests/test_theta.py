@@ -1,4 +1,4 @@
-"""thetasol.theta: identities, genus-1 closed forms (mpmath.jtheta), the mpmath path, the
+"""thetasol.theta.riemann: identities, genus-1 closed forms (mpmath.jtheta), the mpmath path, the
 Siegel reduction with the modular transformation law, API shapes and bad input.
 
 FLINT comparisons are in test_theta_flint.py.
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from thetasol import RiemannTheta, riemann_theta, riemann_theta_separated, siegel_reduce
-from thetasol._theta_core import group_jets, jet_layout
+from thetasol.theta._core import group_jets, jet_layout
 
 
 def random_tau(g, rng, small=0.05, re=1.0):
@@ -339,10 +339,10 @@ def test_bad_arguments():
 
 @pytest.mark.parametrize("g, r", [(2, 1), (3, 2), (4, 3)])
 def test_flow_theta_against_riemann_theta(g, r):
-    """thetasol._theta_flow.FlowTheta (the Fourier series along a real flow that the rotation solver
+    """thetasol.theta.flow.FlowTheta (the Fourier series along a real flow that the rotation solver
     evaluates per time) against RiemannTheta at s + t u, values and t-derivatives, at times up to 1e5
     (where only the phases t u mod 1 enter)."""
-    from thetasol._theta_flow import FlowTheta
+    from thetasol.theta.flow import FlowTheta
 
     rng = np.random.default_rng(40 + g)
     tau = random_tau(g, rng, small=0.4)

@@ -1,4 +1,4 @@
-"""thetasol.theta against python-flint's certified acb_theta (arb balls at 128 bits).
+"""thetasol.theta.riemann against python-flint's certified acb_theta (arb balls at 128 bits).
 
 Families of tau (g = 1..4): well conditioned; smallest eigenvalue of Im tau ~ 0.05; large
 Re tau; sheared Im tau (far from LLL-reduced); elongated Im tau (eigenvalues 0.05 .. 50).

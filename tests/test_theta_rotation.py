@@ -11,9 +11,9 @@ import numpy as np
 import pytest
 
 from thetasol import ClosedFormUnavailable, integrate_rotation, invariants, solve_rotation
-from thetasol._lax import eigenvector_poles
-from thetasol._so3 import hat
-from thetasol.theta_rotation import ThetaRotation, _lattice_coords
+from thetasol.mechanics.lax import eigenvector_poles
+from thetasol.core.so3 import hat
+from thetasol.solutions.theta_rotation import ThetaRotation, _lattice_coords
 
 REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
 # Every reference case passes.  The near-unstable-equilibrium case once "drifted" to 1.3e-9 against
@@ -218,7 +218,7 @@ def test_spectral_coefficients_are_exact_for_the_floats_given():
     # near an equilibrium |M|^2 ~ 1e-6 rides on O(1) terms: float64 coefficients lost it (U 3e-11 off)
     import sympy as sp
     from fractions import Fraction
-    from thetasol.spectral import spectral_curve
+    from thetasol.curves.spectral import spectral_curve
     rng = np.random.default_rng(11)
     J = np.array([0.6, 1.0, 1.7])
     M = hat(1e-3 * rng.normal(size=3))
@@ -240,8 +240,8 @@ def test_flow_velocity_divided_difference_equals_the_sum_over_the_places():
     # the closed form of sum_j J_j omega_i / ds (inf_j) against the plain sum of the per-place values
     # -h_i(x_j) / (lc prod_{l != j} (x_j - x_l)), well conditioned for well separated J
     import sympy as sp
-    from thetasol.spectral import spectral_curve
-    from thetasol.theta_rotation import _infinity_data, _velocity_at_infinity
+    from thetasol.curves.spectral import spectral_curve
+    from thetasol.solutions.theta_rotation import _infinity_data, _velocity_at_infinity
     J, a, Q0, w0, _ = _case("generic")
     C = spectral_curve(J, hat(J @ w0), -(Q0.T @ a @ Q0), tol=1e-12)
     nums = C.holomorphic_differentials()
@@ -265,7 +265,7 @@ def test_nearly_symmetric_bodies_down_to_the_refusal_limit():
     # bodies stopped in the set-up or ran for minutes.
     import warnings
 
-    from thetasol._so3 import rodrigues
+    from thetasol.core.so3 import rodrigues
     rng = np.random.default_rng(3)
     a = rng.normal(size=(3, 3))
     a = 0.5 * (a + a.T)
@@ -304,8 +304,8 @@ def test_nearly_symmetric_body_with_far_cell_vertices_against_dop853():
 def test_symmetric_body_with_little_axial_spin_is_refused_at_once(monkeypatch):
     # below MIN_AXIAL_SPIN (relative) the curve engine's set-up grows to minutes: refused before the curve
     # (the message of a failed set-up also says "little spin": the curve must not be built at all)
-    import thetasol.theta_rotation as tr
-    from thetasol.theta_rotation import MIN_AXIAL_SPIN
+    import thetasol.solutions.theta_rotation as tr
+    from thetasol.solutions.theta_rotation import MIN_AXIAL_SPIN
 
     def no_curve(*args, **kwargs):
         raise AssertionError("the spectral curve was built")
@@ -320,7 +320,7 @@ def test_nearly_spherical_symmetric_body_with_small_spin_is_refused_at_once(monk
     """J gap 0.25 %, axial spin 1e-3 relative: branch points at |E| ~ 4.2e4 sqrt|a| / J (the set-up
     took 4.8 s CPU with the guard lifted; at spin 3e-4, 1.4e5, the curve alone took 114 s): refused
     before the curve is built."""
-    import thetasol.theta_rotation as tr
+    import thetasol.solutions.theta_rotation as tr
 
     def no_curve(*args, **kwargs):
         raise AssertionError("the spectral curve was built")
@@ -332,7 +332,7 @@ def test_nearly_spherical_symmetric_body_with_small_spin_is_refused_at_once(monk
 
 
 def _small_spin_body(spin):
-    from thetasol._so3 import rodrigues
+    from thetasol.core.so3 import rodrigues
 
     r = np.random.default_rng(6).normal(size=(3, 3))
     return np.diag([0.6, 0.6, 1.1]), r + r.T, rodrigues(np.array([0.3, -0.5, 0.2])), np.array([0.3, 0.2, spin])
@@ -362,7 +362,7 @@ def _check_against_heyoka(J, a, Q0, w0, method, tol):
 
 
 def _rank_one_symmetric_body(spin):
-    from thetasol._so3 import rodrigues
+    from thetasol.core.so3 import rodrigues
 
     n = np.array([0.47, -0.87, 0.105])
     n /= np.linalg.norm(n)
@@ -401,9 +401,9 @@ def test_node_velocity_closed_form_against_a_contour_integral():
     pair at |E| ~ 2e3 only swaps the two sheets), integrated on |E| = 3 max|core|.  The FFT expansions
     at the node's branches lost 5e-12 of it."""
     import sympy as sp
-    from thetasol.equations import inertia_from_moments
-    from thetasol.spectral import spectral_curve
-    from thetasol.theta_rotation import _infinity_data, _velocity_at_infinity
+    from thetasol.mechanics.equations import inertia_from_moments
+    from thetasol.curves.spectral import spectral_curve
+    from thetasol.solutions.theta_rotation import _infinity_data, _velocity_at_infinity
 
     J, a, Q0, w0 = _small_spin_body(1e-3)
     C = spectral_curve(J, hat(inertia_from_moments(J) @ w0), -(Q0.T @ a @ Q0), tol=1e-12)
@@ -431,7 +431,7 @@ def test_random_symmetric_bodies_against_dop853(seed):
     """Random symmetric bodies (either axis, random a, attitude, spin).  Measured on these four at
     t <= 40: 7.5e-14..1.2e-12 from DOP853 at rtol 1e-13, 1.5e-14..1.7e-13 from heyoka 80-bit (and
     worst 3.7e-11 from DOP853 on 16 other random cases)."""
-    from thetasol._so3 import rodrigues
+    from thetasol.core.so3 import rodrigues
 
     rng = np.random.default_rng([2026, seed])
     j = rng.uniform(0.3, 1.5, 2)
@@ -453,7 +453,7 @@ def test_principal_axes_along_eigenvectors_of_a(turn):
     v_k sit at places over E = 0 with no w of their own.  From 666a0f1 to 6ef5add these data (the
     README's example) raised ClosedFormUnavailable.  Measured against heyoka 80-bit at t <= 4002:
     1.6e-12, 1.4e-12, 9.3e-12."""
-    from thetasol._so3 import rotation_about
+    from thetasol.core.so3 import rotation_about
 
     J, a, w0 = [0.6, 1.0, 1.7], np.diag([-1.0, 0.4, 1.5]), np.array([0.5, -0.8, 0.6])
     Q0 = np.eye(3) if turn is None else rotation_about(*turn)
@@ -488,8 +488,8 @@ def test_node_branch_eigenvectors_against_mpmath():
     the foil."""
     import mpmath
 
-    from thetasol._lax import lax_matrix, right_eigenvector
-    from thetasol.theta_rotation import _node_branch, _node_slopes
+    from thetasol.mechanics.lax import lax_matrix, right_eigenvector
+    from thetasol.solutions.theta_rotation import _node_branch, _node_slopes
 
     curve = solve_rotation(*_NODE_NEAR_BRANCH).curve
     lb = curve.node[1]

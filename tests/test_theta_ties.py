@@ -1,4 +1,4 @@
-"""thetasol.theta on Riemann matrices with rounding ties in every Siegel-reduction step.
+"""thetasol.theta.riemann on Riemann matrices with rounding ties in every Siegel-reduction step.
 
 Real-structure homology bases give ``Re tau`` with exact half-integer patterns, so the
 reduction meets ties all the time: ``|Re tau_ij| = 1/2`` in the integer shift ``tau + B``
@@ -22,7 +22,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from thetasol import RiemannTheta, riemann_theta, siegel_reduce
-from thetasol._theta_lattice import siegel_reduction
+from thetasol.theta._lattice import siegel_reduction
 
 DATA = Path(__file__).parent / "data" / "theta"
 FAMILIES = ("B", "LLL", "S=", "S<", "sp")

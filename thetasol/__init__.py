@@ -1,34 +1,75 @@
 """thetasol: exact solutions of integrable rigid-body mechanics (Bogoyavlenskij, CMP 1992).
 
-The pipeline, one module per concept:
-
-mechanics (:mod:`thetasol.bodies`, :mod:`thetasol.configuration`)
-  -> equations and invariants (:mod:`thetasol.equations`)
-  -> numerical reference (:mod:`thetasol.integrate`)
-  -> curves, theta and elliptic functions
-  -> closed-form solutions, one per physical model.
-
-Conventions are fixed once, in docs/conventions.md.
+The public API, grouped by concept.  Names load on first use, so ``import thetasol`` is cheap;
+the layers behind them are drawn in docs/architecture.md.  Conventions are fixed once, in
+docs/conventions.md.
 """
-from .equations import invariants, spectral_coefficients, torque
-from .integrate import integrate_rotation
-from .theta import RiemannTheta, riemann_theta, riemann_theta_separated, siegel_reduce
-from .rotation import ClosedFormUnavailable, RotationSolution, solve_rotation
-from .gyrostat import solve_gyrostat
+from __future__ import annotations
 
-__all__ = ["integrate_rotation", "invariants", "spectral_coefficients", "torque",
-           "RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce",
-           "RotationSolution", "solve_rotation", "solve_gyrostat", "ClosedFormUnavailable"]
-# mechanics of C^k-central configurations (issue 2)
-from .bodies import Body  # noqa: E402
-from .configuration import Configuration, Joint, Trajectories  # noqa: E402
-from .masscenter import MassCenterMotion, mass_center  # noqa: E402
-from .multibody import integrate_multibody  # noqa: E402
-from .scene import Scene, load_scene, run, solve_configuration  # noqa: E402
-__all__ += ["Body", "Configuration", "Joint", "Trajectories", "MassCenterMotion", "mass_center",
-            "integrate_multibody", "Scene", "load_scene", "run", "solve_configuration"]
-# algebraic curves: periods, Abel map, Riemann constant, spectral curve (4.12) (issue 4)
-from .curves import Place, PlaneCurve  # noqa: E402
-from .spectral import SpectralCurve, spectral_curve  # noqa: E402
-__all__ += ["PlaneCurve", "Place", "SpectralCurve", "spectral_curve"]
-__version__ = "0.1.0"
+import importlib
+from typing import TYPE_CHECKING
+
+from thetasol._version import __version__
+
+#: public name -> module that defines it, grouped by concept
+_API: dict[str, str] = {}
+
+
+def _group(module: str, *names: str) -> None:
+    for n in names:
+        _API[n] = module
+
+
+# the solution protocol and its exceptions
+_group("thetasol.solutions.base", "Solution", "RotationSolution", "ClosedFormUnavailable")
+# closed forms, one per physical model
+_group("thetasol.solutions.rotation", "solve_rotation")
+_group("thetasol.solutions.gyrostat", "solve_gyrostat")
+_group("thetasol.solutions.mass_center", "MassCenterMotion", "mass_center")
+# mechanics: bodies, configurations, equations and first integrals
+_group("thetasol.mechanics.bodies", "Body")
+_group("thetasol.mechanics.configuration", "Configuration", "Joint")
+_group("thetasol.mechanics.trajectories", "Trajectories")
+_group("thetasol.mechanics.equations", "invariants", "spectral_coefficients", "torque")
+# numerical references
+_group("thetasol.integrators.rotation", "integrate_rotation")
+_group("thetasol.integrators.multibody", "integrate_multibody")
+# scenes: the split pipeline of a whole configuration
+_group("thetasol.scenes.scene", "Scene", "load_scene", "run", "solve_configuration")
+# the machinery: theta functions and curves
+_group("thetasol.theta.riemann", "RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce")
+_group("thetasol.curves.plane_curve", "PlaneCurve", "Place")
+_group("thetasol.curves.spectral", "SpectralCurve", "spectral_curve")
+
+__all__ = sorted(_API) + ["__version__"]
+
+
+def __getattr__(name: str):
+    try:
+        module = _API[name]
+    except KeyError:
+        raise AttributeError(f"module 'thetasol' has no attribute {name!r}") from None
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_API))
+
+
+if TYPE_CHECKING:
+    from thetasol.curves.plane_curve import Place, PlaneCurve
+    from thetasol.curves.spectral import SpectralCurve, spectral_curve
+    from thetasol.integrators.multibody import integrate_multibody
+    from thetasol.integrators.rotation import integrate_rotation
+    from thetasol.mechanics.bodies import Body
+    from thetasol.mechanics.configuration import Configuration, Joint
+    from thetasol.mechanics.equations import invariants, spectral_coefficients, torque
+    from thetasol.mechanics.trajectories import Trajectories
+    from thetasol.scenes.scene import Scene, load_scene, run, solve_configuration
+    from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution, Solution
+    from thetasol.solutions.gyrostat import solve_gyrostat
+    from thetasol.solutions.mass_center import MassCenterMotion, mass_center
+    from thetasol.solutions.rotation import solve_rotation
+    from thetasol.theta.riemann import RiemannTheta, riemann_theta, riemann_theta_separated, siegel_reduce

@@ -15,7 +15,7 @@ import pathlib
 import numpy as np
 
 from thetasol import integrate_rotation
-from thetasol._so3 import rodrigues
+from thetasol.core.so3 import rodrigues
 
 TIMES = [0.7, 3.1, 17.3, 102.0, 997.0, 4002.0]
 

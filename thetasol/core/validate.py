@@ -1,0 +1,104 @@
+"""Input checks shared by every public entry point.
+
+Every check raises ``ValueError`` with a message that names the argument and
+says what is wrong; none of them silently repairs data beyond round-off.
+"""
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from thetasol.core.so3 import polar_orthonormalize
+
+#: Relative tolerance on symmetry of a potential matrix or tensor.
+SYM_RTOL = 1e-12
+#: Absolute tolerance on ``Q^T Q - 1`` for an attitude matrix (issue 2).
+ORTHO_TOL = 1e-10
+
+
+def finite_array(x, name: str, shape: Sequence[int] | None = None, dtype=float) -> np.ndarray:
+    """Convert to an array, checking dtype, shape and finiteness."""
+    try:
+        arr = np.asarray(x, dtype=dtype)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be numeric, got {x!r}") from exc
+    if shape is not None and arr.shape != tuple(shape):
+        raise ValueError(f"{name} must have shape {tuple(shape)}, got {arr.shape}")
+    if not np.all(np.isfinite(arr)):
+        raise ValueError(f"{name} contains NaN or inf")
+    return arr
+
+
+def symmetric_matrix(a, name: str = "a", rtol: float = SYM_RTOL) -> np.ndarray:
+    """A real symmetric 3x3 matrix; rejects asymmetry beyond ``rtol`` (relative to max |a_ij|)."""
+    a = finite_array(a, name, (3, 3))
+    scale = max(np.max(np.abs(a)), np.finfo(float).tiny)
+    asym = np.max(np.abs(a - a.T)) / scale
+    if asym > rtol:
+        raise ValueError(f"{name} must be symmetric: max |{name} - {name}^T| / max|{name}| = {asym:.3g}")
+    return 0.5 * (a + a.T)
+
+
+def second_moments(J, name: str = "J") -> np.ndarray:
+    """Second-moment tensor ``J = sum m r r^T`` as a 3x3 array, checked to be physical.
+
+    Accepts the three principal values or a symmetric 3x3 tensor.  A physical body has
+    ``J`` positive semi-definite and inertia ``I = tr(J) 1 - J`` positive definite (the
+    triangle inequalities ``I_i <= I_j + I_k``, a rod excluded); a flat plate (one
+    ``J_i = 0``) is allowed.
+    """
+    arr = finite_array(J, name)
+    if arr.shape == (3,):
+        arr = np.diag(arr)
+    elif arr.shape != (3, 3):
+        raise ValueError(f"{name} must be 3 principal values or a 3x3 tensor, got shape {arr.shape}")
+    arr = symmetric_matrix(arr, name)
+    ev = np.linalg.eigvalsh(arr)
+    scale = max(ev[-1], np.finfo(float).tiny)
+    if ev[-1] <= 0:
+        raise ValueError(f"{name} must be positive semi-definite with a positive trace, eigenvalues {ev}")
+    if ev[0] < -1e-12 * scale:
+        raise ValueError(
+            f"{name} is not physical: second moments must be >= 0 (eigenvalues {ev}); "
+            "equivalently the inertia violates a triangle inequality I_i <= I_j + I_k"
+        )
+    if ev[1] <= 1e-12 * scale:
+        raise ValueError(f"{name} describes a rod or a point (two zero second moments {ev}): the inertia is singular")
+    return arr
+
+
+def inertia_to_moments(I, name: str = "I") -> np.ndarray:
+    """Second moments ``J = tr(I)/2 1 - I`` from an inertia tensor (principal values or 3x3)."""
+    arr = finite_array(I, name)
+    if arr.shape == (3,):
+        arr = np.diag(arr)
+    elif arr.shape != (3, 3):
+        raise ValueError(f"{name} must be 3 principal values or a 3x3 tensor, got shape {arr.shape}")
+    arr = symmetric_matrix(arr, name)
+    ev = np.linalg.eigvalsh(arr)
+    if ev[0] <= 0:
+        raise ValueError(f"inertia {name} must be positive definite, eigenvalues {ev}")
+    J = 0.5 * np.trace(arr) * np.eye(3) - arr
+    return second_moments(J, f"second moments from {name}")
+
+
+def rotation_matrix(Q, name: str = "Q0", tol: float = ORTHO_TOL) -> np.ndarray:
+    """A proper rotation; rejects ``|Q^T Q - 1| > tol`` or ``det Q < 0``, snaps round-off to SO(3)."""
+    Q = finite_array(Q, name, (3, 3))
+    err = np.max(np.abs(Q.T @ Q - np.eye(3)))
+    if err > tol:
+        raise ValueError(f"{name} is not orthogonal: max |{name}^T {name} - 1| = {err:.3g} > {tol:g}")
+    if np.linalg.det(Q) < 0:
+        raise ValueError(f"{name} is a reflection (det = -1), not a rotation")
+    return polar_orthonormalize(Q)
+
+
+def vector3(v, name: str) -> np.ndarray:
+    """A finite 3-vector."""
+    return finite_array(v, name, (3,))
+
+
+def times(t, name: str = "t") -> np.ndarray:
+    """Finite real times of any shape."""
+    return finite_array(t, name)

@@ -1,0 +1,236 @@
+"""Double-double quadrature of the critical intervals of the curve engine.
+
+Where the float64 Gauss-Legendre sum of an interval is not accurate enough (node positions next to
+close critical values, roots that float64 cannot separate well, see
+:meth:`thetasol.curves._quad.Tracked.critical_intervals`), the interval is re-summed in double-double
+arithmetic (~32 digits): the exact rational coefficients of the curve and of the numerators rounded
+to double-double pairs, Gauss-Legendre nodes and weights (from mpmath once per order, cached), the
+piece's parametrization x(tau), dx/dtau, Newton polishing of all roots from the float seeds, and the
+integrand p(x, y) / f_y dx/dtau, all in double-double and vectorized over every node of every
+critical interval and every track at once.  Only the sum of each interval is rounded to complex128.
+
+Why by hand: the same computation in mpmath (:func:`thetasol.curves._mp.interval_mp`, kept for the
+``dps=`` path and as the reference of the tests) runs a scalar Python Newton loop per node and per
+track and dominated the set-up time of the theta solutions; no allowed dependency offers vectorized
+double-double arithmetic.  The primitives are those of :mod:`thetasol.core.dd`.
+"""
+from __future__ import annotations
+
+from functools import lru_cache
+
+import mpmath
+import numpy as np
+
+from thetasol.curves._mp import gauss_legendre_mp
+from thetasol.curves._poly import split_exact
+from thetasol.core.dd import cdd, cdd_add, cdd_div, cdd_mul, cdd_scale, cdd_sub, cdd_value, dd_add, dd_div, \
+    dd_mul, dd_split_mp, dd_sum, DD
+
+_NEWTON_MAX = 12
+_REL_DONE = 2.0 ** -104   # a Newton step this small (relative) changes nothing in double-double
+_REL_STALL = 1e-26        # steps stagnating below this are rounding noise of an ill-conditioned root
+
+
+def exact_to_cdd(exact: dict, shape: tuple[int, int]):
+    """{(i, j): (Fraction re, Fraction im)} -> complex double-double arrays of ``shape`` indexed [j, i]."""
+    hi, lo = np.zeros(shape, complex), np.zeros(shape, complex)
+    for (i, j), (re, im) in exact.items():
+        hi[j, i], lo[j, i] = split_exact(re, im)
+    return hi.real, lo.real, hi.imag, lo.imag
+
+
+def curve_to_cdd(poly):
+    """The curve's coefficients (:class:`CurvePoly` C + Clo) as complex double-double arrays indexed [j, i]."""
+    return poly.C.T.real, poly.Clo.T.real, poly.C.T.imag, poly.Clo.T.imag
+
+
+def numerators_to_cdd(numer_exact):
+    """List of exact numerators -> complex double-double arrays (ndiff, J, I) (coefficient of x^i y^j)."""
+    I = 1 + max((i for P in numer_exact for i, _ in P), default=0)
+    J = 1 + max((j for P in numer_exact for _, j in P), default=0)
+    parts = [exact_to_cdd(P, (J, I)) for P in numer_exact]
+    return tuple(np.stack([p[c] for p in parts]) for c in range(4))
+
+
+@lru_cache(maxsize=None)
+def gauss_legendre_dd(N: int):
+    """Gauss-Legendre nodes and weights on [-1, 1] as double-double pairs (t_hi, t_lo, w_hi, w_lo)."""
+    ts, ws = gauss_legendre_mp(N, 24)
+    with mpmath.workdps(40):
+        return (*dd_split_mp(ts), *dd_split_mp(ws))
+
+
+def _horner(C, z, deriv=False):
+    """sum_k C[..., k] z^k in complex double-double (coefficients along the last axis), and its z-derivative."""
+    n = C[0].shape[-1] - 1
+    p = tuple(c[..., n] for c in C)
+    dp = None
+    for k in range(n - 1, -1, -1):
+        if deriv:
+            dp = p if dp is None else cdd_add(cdd_mul(dp, z), p)
+        p = cdd_add(cdd_mul(p, z), tuple(c[..., k] for c in C))
+    shape = np.broadcast_shapes(C[0].shape[:-1], z[0].shape)
+    p = tuple(np.broadcast_to(v, shape) for v in p)
+    if deriv:
+        dp = tuple(np.zeros(shape) for _ in p) if dp is None else tuple(np.broadcast_to(v, shape) for v in dp)
+        return p, dp
+    return p
+
+
+def _pow_dd(uh, ul, e):
+    """(uh + ul)^e for an integer e >= 0 (double-double)."""
+    ph, pl = np.ones_like(uh), np.zeros_like(uh)
+    for _ in range(e):
+        ph, pl = dd_mul(ph, pl, uh, ul)
+    return ph, pl
+
+
+def piece_x_dd(kind, a, b, e, tau):
+    """x(tau) and dx/dtau of a path piece in complex double-double (see :class:`_curve_quad.Piece`).
+
+    a, b: complex arrays (per node), e: int, tau: real double-double (hi, lo) per node.
+    """
+    th, tl = tau
+    if kind == "line":
+        d = cdd_sub(cdd(b), cdd(a))
+        return cdd_add(cdd(a), cdd_scale(d, th, tl)), d
+    if kind not in ("point", "inf"):
+        raise ValueError(f"no double-double parametrization for a {kind!r} piece")
+    d = cdd_sub(cdd(a), cdd(b))
+    uh, ul = dd_add(np.ones_like(th), 0.0 * th, -th, -tl)
+    if kind == "point":
+        xh = cdd_add(cdd(b), cdd_scale(d, *_pow_dd(uh, ul, e)))
+        return xh, cdd_scale(d, *dd_mul(*_pow_dd(uh, ul, e - 1), np.full_like(th, -float(e)), 0.0))
+    ph, pl = _pow_dd(uh, ul, e)
+    inv_h, inv_l = dd_div(np.ones_like(th), 0.0 * th, ph, pl)
+    x = cdd_add(cdd(b), cdd_scale(d, inv_h, inv_l))
+    inv2_h, inv2_l = dd_div(inv_h, inv_l, uh, ul)
+    return x, cdd_scale(d, *dd_mul(inv2_h, inv2_l, np.full_like(th, float(e)), 0.0))
+
+
+def intervals_dd(pieces, crit, seeds, curve_cdd, numer_cdd, rounded=True):
+    """Double-double Gauss-Legendre sums over critical intervals, for every track.
+
+    Parameters
+    ----------
+    pieces : list of :class:`thetasol.curves._quad.Piece`
+    crit : list of (piece index, first node, (lo, hi, N)) as from ``Tracked.critical_intervals``.
+    seeds : list (per interval) of complex arrays (m, N): float roots at the float nodes, one row per track.
+    curve_cdd : complex double-double coefficients of f, arrays (n + 1, dx + 1) indexed [j, i].
+    numer_cdd : complex double-double numerator coefficients, arrays (ndiff, J, I).
+    rounded : if False, return the unrounded sums as complex double-double 4-tuples (for tests).
+
+    Returns
+    -------
+    list (per interval) of complex arrays (m, ndiff), each the interval's sum rounded to complex128.
+    """
+    if not crit:
+        return []
+    # ---- nodes (per interval, shared by its tracks), grouped by parametrization
+    node_tau_h, node_tau_l, node_w_h, node_w_l = [], [], [], []
+    node_int, node_q = [], []
+    for c, (p, k, (lo, hi, N)) in enumerate(crit):
+        th_, tl_, wh_, wl_ = gauss_legendre_dd(N)
+        mh, ml = dd_add(lo, 0.0, hi, 0.0)
+        hh, hl = dd_add(hi, 0.0, -lo, 0.0)
+        mh, ml, hh, hl = 0.5 * mh, 0.5 * ml, 0.5 * hh, 0.5 * hl   # exact halvings
+        th, tl = dd_add(mh, ml, *dd_mul(th_, tl_, hh, hl))
+        wh, wl = dd_mul(wh_, wl_, hh, hl)
+        node_tau_h.append(th)
+        node_tau_l.append(tl)
+        node_w_h.append(wh)
+        node_w_l.append(wl)
+        node_int.append(np.full(N, c))
+        node_q.append(np.arange(N))
+    tau_h, tau_l = np.concatenate(node_tau_h), np.concatenate(node_tau_l)
+    w_h, w_l = np.concatenate(node_w_h), np.concatenate(node_w_l)
+    nint = np.concatenate(node_int)
+    K = len(tau_h)
+    X = [np.zeros(K) for _ in range(4)]
+    DX = [np.zeros(K) for _ in range(4)]
+    pidx = np.array([crit[c][0] for c in range(len(crit))])[nint]
+    groups = {}
+    for node, p in enumerate(pidx.tolist()):
+        pc = pieces[p]
+        groups.setdefault((pc.kind, pc.e), []).append(node)
+    for (kind, e), sel in groups.items():
+        sel = np.asarray(sel)
+        a = np.array([pieces[p].a for p in pidx[sel]])
+        b = np.array([pieces[p].b for p in pidx[sel]])
+        x, dx = piece_x_dd(kind, a, b, e, (tau_h[sel], tau_l[sel]))
+        for c in range(4):
+            X[c][sel] = x[c]
+            DX[c][sel] = dx[c]
+    X, DX = tuple(X), tuple(DX)
+    wdx = cdd_scale(DX, w_h, w_l)                                     # weight * dx/dtau per node
+    # coefficients a_j(x) of f and b_dj(x) of the numerators at every node
+    A = _horner(curve_cdd, tuple(v[:, None] for v in X))              # (K, n + 1)
+    B = _horner(numer_cdd, tuple(v[:, None, None] for v in X))        # (K, ndiff, J)
+    # ---- (node, track) pairs
+    pair_node, pair_seed, pair_group, pair_q = [], [], [], []
+    base = np.cumsum([0] + [N for _, _, (_, _, N) in crit])
+    gstart = np.cumsum([0] + [s.shape[0] for s in seeds])
+    for c, (p, k, (lo, hi, N)) in enumerate(crit):
+        m = seeds[c].shape[0]
+        pair_node.append(np.tile(base[c] + np.arange(N), m))
+        pair_q.append(np.tile(np.arange(N), m))
+        pair_group.append(np.repeat(gstart[c] + np.arange(m), N))
+        pair_seed.append(np.asarray(seeds[c], dtype=complex).ravel())
+    pn = np.concatenate(pair_node)
+    y0 = np.concatenate(pair_seed)
+    Ap = tuple(v[pn] for v in A)
+    y = cdd(y0)
+    # ---- Newton's method on all roots at once; steps in float (they are small corrections).  A root
+    # is done when its step is below the rounding bound of the double-double residual,
+    # 2^-104 (n + 1) sum |a_j| |y|^j / |f_y| (ill-conditioned roots near colliding sheets), or when
+    # its steps stop decreasing below 1e-26 relative.
+    prev = np.full(len(y0), np.inf)
+    absA = np.abs(Ap[0] + 1j * Ap[2])
+    done = np.zeros(len(y0), bool)
+    for _ in range(_NEWTON_MAX):
+        f, fy = _horner(Ap, y, deriv=True)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = cdd_value(f) / cdd_value(fy)
+            rel = np.abs(step) / np.abs(cdd_value(y))
+        if not np.all(np.isfinite(step)):
+            raise ValueError("double-double quadrature: f_y vanishes at a node (numerically singular curve)")
+        ay = np.abs(cdd_value(y))
+        S = absA[:, -1]
+        for j in range(absA.shape[1] - 2, -1, -1):
+            S = S * ay + absA[:, j]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            noise = _REL_DONE * absA.shape[1] * S / np.abs(cdd_value(fy)) / ay
+        done |= (rel <= np.maximum(_REL_DONE, noise)) | ((rel >= prev) & (rel <= _REL_STALL)) | (step == 0)
+        prev = rel
+        if np.all(done):
+            break
+        y = cdd_sub(y, cdd(step))
+    else:
+        raise ValueError("Newton's method did not converge in the double-double quadrature")
+    yz = cdd_value(y)
+    moved = np.abs(yz - y0)
+    if np.any((moved > 1e-4 * (np.abs(y0) + 1e-300) + 1e-300) & (moved > 1e-6)):
+        raise ValueError("multiprecision quadrature: a root moved away from its sheet "
+                         "(numerically singular curve)")
+    fac = cdd_div(tuple(v[pn] for v in wdx), fy)                      # w dx/dtau / f_y per pair
+    Bp = tuple(v[pn] for v in B)                                       # (P, ndiff, J)
+    g = _horner(Bp, tuple(v[:, None] for v in y))                      # (P, ndiff)
+    term = cdd_mul(g, tuple(v[:, None] for v in fac))
+    # ---- sums per (interval, track) in double-double: padded (node, group, ndiff) layout
+    G = int(gstart[-1])
+    Nmax = int(max(N for _, _, (_, _, N) in crit))
+    nd = term[0].shape[1]
+    q = np.concatenate(pair_q)
+    grp = np.concatenate(pair_group)
+    sums = []
+    for c in range(4):
+        buf = np.zeros((Nmax, G, nd))
+        buf[q, grp] = term[c]
+        sums.append(buf)
+    re = dd_sum(DD(sums[0], sums[1]))
+    im = dd_sum(DD(sums[2], sums[3]))
+    if not rounded:
+        return [(re.hi[gstart[c]:gstart[c + 1]], re.lo[gstart[c]:gstart[c + 1]],
+                 im.hi[gstart[c]:gstart[c + 1]], im.lo[gstart[c]:gstart[c + 1]]) for c in range(len(crit))]
+    tot = (re.hi + re.lo) + 1j * (im.hi + im.lo)                       # (G, ndiff)
+    return [tot[gstart[c]:gstart[c + 1]] for c in range(len(crit))]

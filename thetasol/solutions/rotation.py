@@ -1,0 +1,147 @@
+"""Closed-form rotation of one effective rigid body: the entry point and the result protocol.
+
+:func:`solve_rotation` takes the data of :func:`thetasol.integrate_rotation` (second
+moments ``J``, potential matrix ``a``, initial attitude ``Q0``, initial body angular
+velocity ``omega0``) and returns a :class:`RotationSolution`, an immutable object that
+evaluates the motion at any times, in any order, at the cost of a few elementary and
+elliptic function evaluations per time (no time stepping).
+
+Dispatch (one small function per branch, tried in order, see ``_BRANCHES``):
+
+* ``a = c 1`` (zero or isotropic) or a spherical body (no torque, Section 4 I): the Euler top of
+  :mod:`thetasol.solutions.euler_top` in Jacobi elliptic functions;
+* angular velocity along a principal axis that is also an eigenvector of ``Q0^T a Q0``: the
+  body keeps turning about that axis, a planar pendulum in elliptic functions
+  (:mod:`thetasol.solutions.pendulum`; the spectral curve is reducible), uniform rotation or rest included;
+* a symmetric body with no spin about its symmetry axis: the axis moves as in C. Neumann's problem
+  and the body is parallel-transported along it (:mod:`thetasol.solutions.neumann_rotation`);
+* any other ``a`` (Section 4 II): the Baker-Akhiezer theta-function solution of
+  :mod:`thetasol.solutions.theta_rotation` (genus 4; genus 3 for a potential with a repeated eigenvalue
+  or for a symmetric body, genus 2 for both).
+
+The free gyrostat (8.39)-(8.40) has its own entry point, :func:`thetasol.solve_gyrostat`,
+and returns an object with the same protocol.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from thetasol.core import validate as V
+from thetasol.core.so3 import hat
+from thetasol.mechanics.equations import inertia_from_moments
+
+from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
+
+__all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]
+
+
+# -- dispatcher --------------------------------------------------------------------------------
+
+def _isotropic(a: np.ndarray) -> bool:
+    """``a = c 1`` up to a few ulps of ``c`` (no torque on any body)."""
+    c = np.trace(a) / 3.0
+    dev = np.max(np.abs(a - c * np.eye(3)))
+    return bool(dev <= 8 * np.finfo(float).eps * abs(c))
+
+
+def _free_branch(J, a, Q0, omega0, dps):
+    # a spherical body feels no torque either ([u, J] = 0)
+    if not (_isotropic(a) or _isotropic(J)):
+        return None
+    from thetasol.solutions.euler_top import _solve_euler_top
+
+    return _solve_euler_top(J, a, Q0, omega0, dps=dps)
+
+
+def _pendulum_branch(J, a, Q0, omega0, dps):
+    from thetasol.solutions.pendulum import _solve_pendulum
+
+    return _solve_pendulum(J, a, Q0, omega0, dps)
+
+
+def _neumann_branch(J, a, Q0, omega0, dps):
+    # symmetric body without axial spin: the axis moves as in Neumann's problem (tacnode of (4.12))
+    from thetasol.solutions.neumann_rotation import _solve_neumann_rotation
+
+    return _solve_neumann_rotation(J, a, Q0, omega0, dps)
+
+
+def _potential_branch(J, a, Q0, omega0, dps):
+    from thetasol.solutions.theta_rotation import _solve_theta_rotation
+
+    return _solve_theta_rotation(J, a, Q0, omega0, dps=dps)
+
+
+#: Tried in order; each returns a RotationSolution or None (not its case).
+_BRANCHES: list[Callable] = [_free_branch, _pendulum_branch, _neumann_branch, _potential_branch]
+
+
+def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolution:
+    """Exact rotation of a rigid body in the potential ``phi = 1/2 x^T a x`` (closed form).
+
+    Parameters
+    ----------
+    J : array_like, shape (3,) or (3, 3)
+        Second moments ``sum m r r^T`` in the body frame: principal values or a symmetric
+        tensor (then a right-handed principal frame is used internally and results are
+        mapped back).  Inertia ``I = tr(J) 1 - J``.
+    a : array_like, shape (3, 3)
+        Symmetric potential matrix.  ``a = 0`` or ``a = c 1`` (no torque) gives the Euler
+        top; any other ``a`` the theta-function solution (4.8)-(4.12).
+    Q0 : array_like, shape (3, 3)
+        Initial attitude, body to space (``x = Q r``).
+    omega0 : array_like, shape (3,)
+        Initial body-frame angular velocity (``Qdot = Q hat(omega)``).
+    dps : int, optional
+        Compute with mpmath at ``dps`` decimal digits (the float data taken as exact);
+        ``omega``/``Q`` then return object arrays of ``mpmath.mpf``.
+
+    Returns
+    -------
+    RotationSolution
+        ``sol(t) -> (omega, Q)``, ``sol.omega(t)``, ``sol.Q(t)``, ``sol.M(t)``, ``sol.u(t)``,
+        ``sol.method``, ``sol.invariants``.
+
+    Raises
+    ------
+    ValueError
+        Non-finite, wrongly shaped or unphysical data.
+    ClosedFormUnavailable
+        (a ``NotImplementedError``) A symmetric body (two equal principal moments) with little
+        (but not zero) spin about its symmetry axis in a potential with torque, a Neumann torus
+        too close to a separatrix or too thin, ``dps`` with a potential,
+        or nearly degenerate data for which the curve computations cannot reach the solution's
+        accuracy; the message says which.
+
+    Warns
+    -----
+    RuntimeWarning
+        The theta-function set-up lost accuracy (``|Im Phi(0, t)|`` above 1e-8 at ``t = 1000``,
+        the size is stated): errors of that size are to be expected.  The check cannot see an
+        error of the torus position along the real torus (near an unstable relative equilibrium
+        1.5e-8 went unseen before the curve engine's fix for clustered branch points; the reference
+        case is at 6.7e-12 at ``t = 4002`` since: docs/theta_rotation.md).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> sol = solve_rotation([1.0, 2.0, 3.5], np.zeros((3, 3)), np.eye(3), [0.1, 1.0, 0.2])
+    >>> sol.method
+    'euler-top/elliptic'
+    >>> sol.omega(np.array([0.0, 1e6])).shape
+    (2, 3)
+    """
+    Jm = V.second_moments(J, "J")
+    am = V.symmetric_matrix(a, "a")
+    Q0m = V.rotation_matrix(Q0, "Q0")
+    w0 = V.vector3(omega0, "omega0")
+    if dps is not None and (not isinstance(dps, (int, np.integer)) or dps < 15):
+        raise ValueError(f"dps must be an integer >= 15, got {dps!r}")
+    for branch in _BRANCHES:
+        sol = branch(Jm, am, Q0m, w0, dps)
+        if sol is not None:
+            return sol
+    raise AssertionError("unreachable: the last branch always answers")  # pragma: no cover

@@ -1,0 +1,337 @@
+"""Lattice machinery behind :mod:`thetasol.theta.riemann`: LLL, Siegel reduction, error bounds, point sets.
+
+Everything here works on the quadratic form ``Y = Im tau = T^T T`` (``T`` upper triangular, so
+``(T n)_g = T_gg n_g`` and lattice points are enumerated from the last coordinate to the first,
+the first being innermost).  Hand-written because it is small, because no allowed dependency
+has an LLL for a real Gram matrix, and because the evaluator needs the exact composition of the
+elementary symplectic steps (not only the reduced ``tau``) to map points and characteristics.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import mpmath
+import numpy as np
+from scipy.integrate import quad
+
+__all__: list[str] = []
+
+#: Largest genus accepted (the union sets grow like R^g; 6 is slow but works).
+MAX_GENUS = 8
+
+
+# ----------------------------------------------------------------------------------------
+# LLL reduction of a positive definite Gram matrix
+# ----------------------------------------------------------------------------------------
+def _ldl(H: np.ndarray):
+    """``H = L diag(d) L^T`` with ``L`` unit lower triangular (small dense H)."""
+    g = H.shape[0]
+    C = np.linalg.cholesky(H)
+    d = np.diag(C) ** 2
+    L = C / np.diag(C)[None, :]
+    return L, d
+
+
+def lll_gram(G: np.ndarray, delta: float = 0.99) -> np.ndarray:
+    """Unimodular integer ``U`` such that ``U G U^T`` is LLL-reduced (rows of ``U`` = new basis).
+
+    Float arithmetic on the Gram matrix; ``U G U^T`` is recomputed from the integer ``U`` at
+    every step, so round-off does not accumulate.
+    """
+    g = G.shape[0]
+    U = np.eye(g, dtype=np.int64)
+    k = 1
+    it = 0
+    while k < g:
+        it += 1
+        if it > 10000:  # pragma: no cover - LLL terminates; this guards against NaN input
+            raise ValueError("LLL reduction of Im(tau) did not terminate")
+        for j in range(k - 1, -1, -1):
+            H = U @ G @ U.T
+            L, _ = _ldl(H)
+            q = round(L[k, j])
+            if q:
+                U[k] -= q * U[j]
+        H = U @ G @ U.T
+        L, d = _ldl(H)
+        if d[k] >= (delta - L[k, k - 1] ** 2) * d[k - 1]:
+            k += 1
+        else:
+            U[[k - 1, k]] = U[[k, k - 1]]
+            k = max(k - 1, 1)
+    return U
+
+
+# ----------------------------------------------------------------------------------------
+# Siegel reduction as a composition of elementary symplectic steps
+# ----------------------------------------------------------------------------------------
+@dataclass
+class Reduction:
+    """Result of :func:`siegel_reduction` for ``tau0`` (a g x g complex symmetric matrix).
+
+    With ``tau = tau_red`` and the zero characteristic it holds, for every ``w`` in C^g,
+
+        theta(w | tau0) = exp(c0 + 2 pi i l.w + pi i w.Q w) theta(M w + tau a_s + b_s | tau)
+
+    where ``a_s, b_s`` are half-integer vectors.  ``gamma = [[A, B], [C, D]]`` in Sp(2g, Z)
+    satisfies ``tau = (A tau0 + B)(C tau0 + D)^{-1}`` and ``M = (C tau0 + D)^{-T}``; the
+    lattice map ``(a, b) -> gamma^{-T} (a, b)`` sends ``tau0 a + b`` to ``tau a' + b'`` under ``M``.
+    """
+
+    tau0: np.ndarray
+    tau: np.ndarray
+    gamma: np.ndarray
+    M: np.ndarray
+    Q: np.ndarray
+    l: np.ndarray
+    c0: complex
+    a_s: np.ndarray
+    b_s: np.ndarray
+    steps: list = field(default_factory=list)
+    mp: dict = field(default_factory=dict)
+
+    @property
+    def lattice_map(self) -> np.ndarray:
+        """``gamma^{-T} = [[D, -C], [-B, A]]`` as an integer matrix."""
+        g = self.tau.shape[0]
+        A, B = self.gamma[:g, :g], self.gamma[:g, g:]
+        C, D = self.gamma[g:, :g], self.gamma[g:, g:]
+        return np.block([[D, -C], [-B, A]])
+
+
+def siegel_reduction(tau0: np.ndarray, max_iter: int = 500, dps: int = 40) -> Reduction:
+    """Frauendiener-Jaber-Klein (2019) reduction: LLL on Im tau, |Re tau| <= 1/2, then invert
+    ``tau_11`` while ``|tau_11| < 1``.
+
+    The integer steps are chosen in float64, then replayed with mpmath at ``dps`` digits: the
+    transformation constants (``c0``, ``Q``, ``l``) carry phases of size ~100 that would otherwise
+    cost ~1e-13 of accuracy.  The float fields are the correctly rounded mp results; the mp
+    values are kept in ``mp`` for the characteristic tables.
+
+    Ties (``Re tau_ij = +-1/2``, LLL coefficients ``+-1/2``, ``|tau_11| = 1``) are common for
+    bases adapted to a real structure; either choice is valid provided every step is exactly
+    symplectic: the float ``tau`` is kept exactly symmetric and ``B`` is symmetric by
+    construction, and ``gamma`` is checked (``gamma^T J gamma = J``) after the replay.
+    """
+    g = tau0.shape[0]
+    tau0 = 0.5 * (tau0 + tau0.T)  # exact no-op for symmetric input
+    tau = tau0.copy()
+    I = np.eye(g, dtype=np.int64)
+    steps: list = []
+    for _ in range(max_iter):
+        U = lll_gram(tau.imag)
+        if not np.array_equal(U, I):
+            # U tau U^T is symmetric only up to rounding: keep tau exactly symmetric, or the
+            # rounding of Re tau_ij = +-1/2 (a tie, common for real-structure bases) differs
+            # between (i, j) and (j, i) and B below is not symmetric (gamma not symplectic)
+            tau = U @ tau @ U.T
+            tau = 0.5 * (tau + tau.T)
+            steps.append(("U", U))
+        B = _symmetric_shift(tau.real)
+        if np.any(B):
+            tau = tau + B
+            steps.append(("B", B))
+        t11 = tau[0, 0]
+        if abs(t11) >= 1.0 - 1e-12:
+            break
+        tnew = tau.copy()
+        tnew[0, 0] = -1.0 / t11
+        tnew[0, 1:] = tau[0, 1:] / t11
+        tnew[1:, 0] = tau[1:, 0] / t11
+        tnew[1:, 1:] = tau[1:, 1:] - np.outer(tau[1:, 0], tau[0, 1:]) / t11
+        tau = 0.5 * (tnew + tnew.T)
+        steps.append(("S", None))
+    else:  # pragma: no cover - det Im tau grows at every inversion, so this needs absurd input
+        raise ValueError(f"Siegel reduction of tau did not converge in {max_iter} steps")
+    return _replay(tau0, steps, dps)
+
+
+def _symmetric_shift(X: np.ndarray) -> np.ndarray:
+    """Symmetric integer ``B`` with ``|X + B|_ij <= 1/2``, rounded from the upper triangle only.
+
+    ``tau -> tau + B`` is symplectic only for symmetric ``B``; rounding both triangles of a
+    matrix that is symmetric up to an ulp breaks that at the ties ``X_ij = +-1/2``.
+    """
+    R = np.triu(-np.rint(X)).astype(np.int64)
+    return R + np.triu(R, 1).T
+
+
+def _check_steps(steps: list, gamma: np.ndarray) -> None:
+    """Every elementary step and their composition must be exactly symplectic (integer check)."""
+    g = gamma.shape[0] // 2
+    for kind, data in steps:
+        if kind == "B" and not np.array_equal(data, data.T):  # pragma: no cover - guarded above
+            raise RuntimeError(f"internal error: Siegel reduction shift B is not symmetric:\n{data}")
+        if kind == "U" and abs(round(np.linalg.det(data))) != 1:  # pragma: no cover
+            raise RuntimeError(f"internal error: Siegel reduction step U is not unimodular:\n{data}")
+    J = np.block([[np.zeros((g, g), np.int64), np.eye(g, dtype=np.int64)],
+                  [-np.eye(g, dtype=np.int64), np.zeros((g, g), np.int64)]])
+    if not np.array_equal(gamma.T @ J @ gamma, J):  # pragma: no cover - would be a broken step
+        raise RuntimeError(f"internal error: Siegel reduction gamma is not symplectic:\n{gamma}")
+
+
+def _replay(tau0: np.ndarray, steps: list, dps: int) -> Reduction:
+    """Apply the elementary steps to tau and to the transformation data, in mpmath."""
+    g = tau0.shape[0]
+    ctx = mpmath.mp.clone()
+    ctx.dps = dps
+    mpc, pi = ctx.mpc, ctx.pi
+    tau = [[mpc(complex(tau0[i, j])) for j in range(g)] for i in range(g)]
+    M = [[mpc(1 if i == j else 0) for j in range(g)] for i in range(g)]
+    Q = [[mpc(0)] * g for _ in range(g)]
+    l = [mpc(0)] * g
+    c0 = mpc(0)
+    a_s = np.zeros(g)
+    b_s = np.zeros(g)
+    gamma = np.eye(2 * g, dtype=np.int64)
+    I = np.eye(g, dtype=np.int64)
+    Z = np.zeros((g, g), np.int64)
+
+    def matmul(A, Bm):  # A integer ndarray or nested list, Bm nested list
+        return [[ctx.fsum(A[i][k] * Bm[k][j] for k in range(g)) for j in range(g)] for i in range(g)]
+
+    for kind, data in steps:
+        if kind == "U":
+            U = data
+            Uinv_T = np.rint(np.linalg.inv(U)).astype(np.int64).T
+            if not np.array_equal(U @ Uinv_T.T, I):  # pragma: no cover - huge U entries only
+                raise RuntimeError(f"internal error: inverse of the LLL step is not exact:\n{U}")
+            Ul = U.tolist()
+            tau = matmul(Ul, [list(r) for r in zip(*matmul(Ul, [list(r) for r in zip(*tau)]))])
+            tau = [[(tau[i][j] + tau[j][i]) / 2 for j in range(g)] for i in range(g)]
+            M = matmul(Ul, M)
+            a_s, b_s = Uinv_T @ a_s, U @ b_s
+            gamma = np.block([[U, Z], [Z, Uinv_T]]) @ gamma
+        elif kind == "B":
+            B = data
+            tau = [[tau[i][j] + int(B[i, j]) for j in range(g)] for i in range(g)]
+            b_s = b_s - B @ a_s - np.diag(B) / 2.0
+            gamma = np.block([[I, B], [Z, I]]) @ gamma
+        else:
+            t11 = tau[0][0]
+            # u_1 = M_1 w + s_1 with s = tau a_s + b_s (exact halves times tau)
+            s1 = ctx.fsum(tau[0][j] * ctx.mpf(a_s[j]) for j in range(g)) + ctx.mpf(b_s[0])
+            M1 = list(M[0])
+            Q = [[Q[i][j] - M1[i] * M1[j] / t11 for j in range(g)] for i in range(g)]
+            l = [l[i] - s1 * M1[i] / t11 for i in range(g)]
+            c0 = c0 - 1j * pi * s1 * s1 / t11 - ctx.log(-1j * t11) / 2
+            newM = [[M[0][j] / t11 for j in range(g)]]
+            for i in range(1, g):
+                newM.append([M[i][j] - tau[i][0] * M[0][j] / t11 for j in range(g)])
+            M = newM
+            tn = [[None] * g for _ in range(g)]
+            tn[0][0] = -1 / t11
+            for j in range(1, g):
+                tn[0][j] = tn[j][0] = tau[0][j] / t11
+            for i in range(1, g):
+                for j in range(1, g):
+                    tn[i][j] = tau[i][j] - tau[i][0] * tau[0][j] / t11
+            tau = tn
+            E = np.zeros((g, g), np.int64)
+            E[0, 0] = 1
+            Id = I - E
+            a_s, b_s = Id @ a_s - E @ b_s, E @ a_s + Id @ b_s
+            gamma = np.block([[Id, -E], [E, Id]]) @ gamma
+    _check_steps(steps, gamma)
+    tofl = lambda A: np.array([[complex(x) for x in row] for row in A])
+    taur = tofl(tau)
+    red = Reduction(tau0=tau0, tau=0.5 * (taur + taur.T), gamma=gamma, M=tofl(M), Q=tofl(Q),
+                    l=np.array([complex(x) for x in l]), c0=complex(c0), a_s=a_s, b_s=b_s, steps=steps)
+    red.mp = {"ctx": ctx, "tau0": [[mpc(complex(tau0[i, j])) for j in range(g)] for i in range(g)],
+              "tau": tau, "M": M, "Q": Q, "l": l, "c0": c0}
+    return red
+
+
+# ----------------------------------------------------------------------------------------
+# Error bounds (Deconinck et al. 2004, Thm 2, generalized to polynomial weights)
+# ----------------------------------------------------------------------------------------
+def shortest_vector(T: np.ndarray) -> float:
+    """Length of the shortest nonzero vector ``min ||T n||`` (Fincke-Pohst on the union-free set)."""
+    g = T.shape[0]
+    best = float(min(np.linalg.norm(T[:, j]) for j in range(g)))
+    pts = _enumerate(T, best * (1 + 1e-12), box=False)
+    norms = np.linalg.norm(pts @ T.T, axis=1)
+    norms = norms[norms > 0]
+    return float(min(best, norms.min())) if norms.size else best
+
+
+def tail_bound(R: float, rho: float, g: int, order: int = 0, a: float = 1.0) -> float:
+    """Upper bound of ``sum_{||T(m+f)|| >= R} (1 + a t)^order exp(-pi t^2)``, t = ||T(m+f)||.
+
+    Disjoint balls of radius rho/2 around the points give ``#{t_m <= t} <= (2 t/rho + 1)^g``;
+    a Stieltjes integration by parts then bounds the tail by
+    ``int_R^inf (2t/rho + 1)^g (-h'(t)) dt`` for the decreasing weight h (Deconinck et al.).
+    """
+    def h_prime_neg(t):
+        w = (1.0 + a * t)
+        return (2 * math.pi * t * w - order * a) * w ** (order - 1) * math.exp(-math.pi * t * t) if order else \
+            2 * math.pi * t * math.exp(-math.pi * t * t)
+
+    f = lambda t: (2.0 * t / rho + 1.0) ** g * max(h_prime_neg(t), 0.0)
+    val, _ = quad(f, R, R + 12.0, limit=200, epsabs=0, epsrel=1e-6)
+    return val
+
+
+def radius_for(tol: float, rho: float, g: int, order: int = 0, a: float = 1.0) -> float:
+    """Smallest R (to 1e-3) with ``tail_bound(R) <= tol``."""
+    lo, hi = 0.5, 2.0
+    while tail_bound(hi, rho, g, order, a) > tol:
+        lo, hi = hi, hi * 1.5
+    while hi - lo > 1e-3:
+        mid = 0.5 * (lo + hi)
+        if tail_bound(mid, rho, g, order, a) > tol:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+# ----------------------------------------------------------------------------------------
+# Lattice point sets and Babai rounding
+# ----------------------------------------------------------------------------------------
+def _enumerate(T: np.ndarray, R: float, box: bool = True) -> np.ndarray:
+    """Integer points ``m`` with ``sum_i dist((T m)_i, [-T_ii/2, T_ii/2])^2 < R^2`` (box=True):
+    the union over the Babai cell of the ellipsoids ``||T(m + f)|| < R``; box=False gives the
+    plain ellipsoid ``||T m|| < R``.  Level-wise (vectorized) enumeration from the last coordinate.
+    """
+    g = T.shape[0]
+    half = 0.5 * np.diag(T) if box else np.zeros(g)
+    pts = np.zeros((1, 0), dtype=np.int64)
+    rem = np.array([R * R])
+    for i in range(g - 1, -1, -1):
+        tii = T[i, i]
+        s = pts @ T[i, i + 1:] if pts.shape[1] else np.zeros(len(pts))
+        r = np.sqrt(np.maximum(rem, 0.0)) + half[i]
+        lo = np.ceil((-s - r) / tii - 1e-12).astype(np.int64)
+        hi = np.floor((-s + r) / tii + 1e-12).astype(np.int64)
+        cnt = np.maximum(hi - lo + 1, 0)
+        rep = np.repeat(np.arange(len(pts)), cnt)
+        offs = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        mi = lo[rep] + offs
+        d = np.maximum(np.abs(tii * mi + s[rep]) - half[i], 0.0)
+        newrem = rem[rep] - d * d
+        keep = newrem > 0
+        pts = np.concatenate([mi[keep, None], pts[rep][keep]], axis=1)
+        rem = newrem[keep]
+    return pts
+
+
+def union_set(T: np.ndarray, R: float) -> np.ndarray:
+    """Lattice points needed by every point whose Babai remainder lies in the cell (int64, (N, g))."""
+    return _enumerate(T, R, box=True)
+
+
+def babai(c: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """Nearest-plane rounding: integer ``k`` with ``(T(c - k))_i`` in ``[-T_ii/2, T_ii/2]``.
+
+    ``c`` has shape (..., g); returns float array of integers (same shape).
+    """
+    g = T.shape[0]
+    k = np.empty_like(c)
+    f = np.empty_like(c)
+    for i in range(g - 1, -1, -1):
+        acc = c[..., i] + (f[..., i + 1:] @ T[i, i + 1:]) / T[i, i] if i < g - 1 else c[..., i].copy()
+        k[..., i] = np.rint(acc)
+        f[..., i] = c[..., i] - k[..., i]
+    return k

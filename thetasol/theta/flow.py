@@ -1,0 +1,81 @@
+"""Riemann theta along a real linear flow: theta(s_j + t u | tau) for fixed shifts s_j.
+
+In a homology basis adapted to the real Liouville torus (:mod:`thetasol.curves.adapted_basis`) the
+velocity ``u`` is real and vanishes outside the first r coordinates, so ``Im`` of the argument is
+constant and, as a function of t, theta is the Fourier series in r phases::
+
+    theta(s + t u) = exp(e_s) sum_{m' in Z^r} D_s(m') exp(2 pi i m'.phi(t)),  phi(t) = t u mod 1,
+    D_s(m') = sum_{m''} exp(pi i m.tau.m + 2 pi i m.s - e_s),   m = (m', m''),
+
+with ``e_s = pi y.(Im tau)^-1.y``, ``y = Im s``.  The coefficients D_s are summed once (all m in
+the ellipsoid pi (m + c).Y.(m + c) <= R^2, c = Y^-1 y, outside which the terms are below ``tol``);
+per time only the phases ``exp(2 pi i m'.phi)`` (products of one-dimensional power tables) and one
+complex matrix product remain.  Integer shifts of ``phi`` leave theta unchanged, so far times cost
+what t = 1 costs and need no quasi-periodicity factors.
+"""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = []
+
+
+class FlowTheta:
+    """Values and u-derivatives of theta(s_j + t u) for shifts s_j (S, g) and real u (r,)."""
+
+    def __init__(self, tau: np.ndarray, u: np.ndarray, shifts: np.ndarray, tol: float = 1e-16):
+        tau = 0.5 * (tau + tau.T)
+        g = tau.shape[0]
+        u = np.asarray(u, float)
+        r = u.size
+        Y = tau.imag
+        Yinv = np.linalg.inv(Y)
+        S = shifts.shape[0]
+        R2 = math.log(1.0 / tol) + 2.0 * math.log(10.0)
+        self.e = np.empty(S)
+        half = np.sqrt(R2 / math.pi * np.diag(Yinv))
+        keys, terms, rows = [], [], []
+        for j, s in enumerate(shifts):
+            y = s.imag
+            c = Yinv @ y
+            self.e[j] = math.pi * y @ Yinv @ y
+            ranges = [np.arange(math.floor(-c[i] - half[i]), math.ceil(-c[i] + half[i]) + 1) for i in range(g)]
+            m = np.stack(np.meshgrid(*ranges, indexing="ij"), axis=-1).reshape(-1, g).astype(float)
+            d = m + c
+            keep = math.pi * ((d @ Y) * d).sum(axis=1) <= R2  # einsum over 3 operands: 1.1-4.4x slower (13 refs)
+            m = m[keep]
+            expo = 1j * math.pi * ((m @ tau) * m).sum(axis=1) + 2j * math.pi * m @ s - self.e[j]
+            keys.append(m[:, :r].astype(np.int64))
+            terms.append(np.exp(expo))
+            rows.append(np.full(len(m), j))
+        # group the terms by their first r indices (the Fourier mode), in one pass for all shifts
+        # (np.unique over rows sorts structured records, ~0.1 s here: rows coded as C-order flat indices
+        # in the box lo .. lo + span - 1 keep the same lexicographic order)
+        K = np.concatenate(keys)
+        self.lo = K.min(axis=0)
+        self.span = K.max(axis=0) - self.lo + 1
+        codes, inv = np.unique(np.ravel_multi_index(tuple((K - self.lo).T), self.span), return_inverse=True)
+        self.modes = self.lo + np.stack(np.unravel_index(codes, self.span), axis=-1)
+        D = np.zeros((S, len(self.modes)), complex)
+        np.add.at(D, (np.concatenate(rows), inv), np.concatenate(terms))
+        self.D = D
+        self.Dd = D * (2j * math.pi * (self.modes @ u))[None, :]
+        self.u = u
+        self.r = r
+
+    def __call__(self, t: np.ndarray, derivative: bool = True):
+        """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv."""
+        t = np.asarray(t, float)
+        phi = np.multiply.outer(t, self.u)
+        phi -= np.round(phi)
+        X = None
+        for i in range(self.r):
+            k = np.arange(self.span[i]) + self.lo[i]
+            tab = np.exp(2j * math.pi * np.multiply.outer(phi[:, i], k))     # (n, span_i)
+            col = tab[:, self.modes[:, i] - self.lo[i]]
+            X = col if X is None else X * col
+        v = X @ self.D.T
+        dv = X @ self.Dd.T if derivative else None
+        return self.e, v, dv

@@ -1,0 +1,452 @@
+"""Riemann theta functions with characteristics, derivatives and error control.
+
+Definition (DLMF 21.2.5), for ``tau`` symmetric with ``Im tau`` positive definite::
+
+    theta[alpha; beta](z | tau) = sum_{n in Z^g} exp(2 pi i (1/2 (n+alpha).tau.(n+alpha)
+                                                     + (n+alpha).(z+beta)))
+
+Method
+------
+* **Siegel reduction** (Frauendiener, Jaber, Klein 2019): LLL reduction of ``Im tau``,
+  ``|Re tau_ij| <= 1/2`` and the quasi-inversion of ``tau_11`` while ``|tau_11| < 1``.  The
+  composition of these elementary symplectic steps is kept exactly, so points map linearly,
+  characteristics map through ``gamma^{-T}`` and the prefactor is an explicit
+  ``exp(quadratic)`` without any eighth-root-of-unity ambiguity.  Ill-conditioned ``tau``
+  (pinched cycles, ``Im tau`` eigenvalues from 0.05 to 50) thus cost no more than reduced ones.
+* **Exponent separation**: ``theta = exp(e) v`` with ``e = pi y.(Im tau)^{-1}.y``, ``y = Im z``,
+  and ``|v|`` bounded; ``v`` is what is summed, so nothing overflows (Deconinck, Heil, Bobenko,
+  van Hoeij, Schmies, Math. Comp. 73 (2004), eqs. (4)-(6)).  ``z`` is first reduced modulo the
+  period lattice of the *original* ``tau`` (exact quasi-periodicity), then mapped to the reduced
+  frame, where each point is shifted again by Babai nearest-plane rounding of ``(Im tau)^{-1} Im z``.
+* **Ellipsoid summation** over the union of the ellipsoids ``||T(m + f)|| < R`` for all Babai
+  remainders ``f``, with ``R`` from the bound of Deconinck et al. (Thm 2), extended to the
+  polynomial weights of derivatives.  One lattice set serves a whole batch of points, so the hot
+  loop is a complex matrix product (see :mod:`thetasol.theta._core`).
+* **All 2^(2g) half-integer characteristics** at once: the sums are grouped by ``alpha`` and the
+  ``beta`` signs ``(-1)^{n.b}`` are columns of the same matrix product.
+* **Precision where float64 fails**: the reduction steps are replayed in mpmath (the constants
+  carry phases ~1e3), and the O(g^2)-per-point maps whose inputs are large but whose results
+  are O(1) (``z - tau k``, ``pi k.X.k mod 2 pi``, ``e``, ``M z``, the Babai shift in the reduced
+  frame) run in double-double (:mod:`thetasol.core.dd`).  Measured errors against FLINT are
+  1e-15 .. 5e-15 (values) and <= 1e-13 (gradients) on all test families (docs/theta.md).
+
+Written by hand because no allowed dependency evaluates Riemann theta functions in float64
+(python-flint's certified ``acb_theta`` is an optional test oracle, 25x-10000x slower per point,
+docs/bench_theta.md).
+An mpmath path (``dps=``) sums the defining series directly in the original frame.
+
+Conventions
+-----------
+* ``z`` has shape ``(..., g)``; results have shape ``z.shape[:-1]`` (plus ``(2^(2g),)`` for
+  ``char="all"``, plus ``(g,)``/``(g, g)`` for gradients/Hessians).
+* ``char="all"`` orders characteristics as python-flint: index ``a * 2^g + b`` where
+  ``a, b`` in ``{0,1}^g`` are read as binary numbers with the first coordinate most significant,
+  ``alpha = a/2, beta = b/2``.
+* ``tol`` bounds the truncation error of ``v`` (absolute, i.e. relative to ``exp(e)``); the
+  k-th derivative's bound is ``tol * prod_i (1 + |v_i.(c - alpha)|)`` with ``c = (Im tau)^{-1} y``
+  (the natural size of the derivative).  Float64 round-off adds ~1e-15 .. 1e-14.
+"""
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+
+from thetasol.core.dd import DD, dd_matvec, dd_prod, dd_split_mp, dd_sum
+from thetasol.theta._core import TWO_PI_I, ReducedLattice, group_jets, jet_layout
+from thetasol.theta._lattice import MAX_GENUS, babai, siegel_reduction
+from thetasol.core.validate import finite_array
+from thetasol.theta._checks import (MAX_ORDER, TAU_SYM_RTOL, check_char as _check_char, check_dirs as _check_dirs,
+                                    check_tau as _check_tau, check_tol as _check_tol, check_z as _check_z)
+
+__all__ = ["RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce"]
+
+#: pi - float(pi)
+_PI_LO = 1.2246467991473532e-16
+
+
+# ----------------------------------------------------------------------------------------
+# Public API
+# ----------------------------------------------------------------------------------------
+def siegel_reduce(tau) -> tuple[np.ndarray, np.ndarray]:
+    """Siegel reduction of a Riemann matrix (Frauendiener, Jaber, Klein 2019).
+
+    Parameters
+    ----------
+    tau : array_like, shape (g, g)
+        Complex symmetric matrix with positive definite imaginary part.
+
+    Returns
+    -------
+    tau_red : ndarray, shape (g, g)
+        ``(A tau + B)(C tau + D)^{-1}`` with ``Im tau_red`` LLL-reduced, ``|Re tau_red| <= 1/2``
+        entrywise and ``|tau_red[0, 0]| >= 1``.
+    gamma : ndarray of int64, shape (2g, 2g)
+        ``[[A, B], [C, D]]`` in ``Sp(2g, Z)`` (``gamma^T J gamma = J``, ``J = [[0, 1], [-1, 0]]``,
+        checked exactly; rounding ties such as ``Re tau_ij = +-1/2`` are resolved by exactly
+        symplectic steps, see docs/theta.md).
+
+    Notes
+    -----
+    Callers map points and characteristics with the theta transformation formula
+    (Igusa; Mumford, Tata Lectures I, II.5): with ``z' = (C tau + D)^{-T} z`` and
+
+        alpha' = D alpha - C beta + 1/2 diag(C D^T),
+        beta'  = -B alpha + A beta + 1/2 diag(A B^T),
+
+    one has ``theta[alpha'; beta'](z' | tau_red) = kappa * sqrt(det(C tau + D))
+    * exp(pi i z.(C tau + D)^{-1} C z) * theta[alpha; beta](z | tau)`` with ``|kappa| = 1`` a
+    constant depending on gamma and the characteristic (an eighth root of unity times
+    ``exp(2 pi i phi(alpha, beta))``).  :class:`RiemannTheta` does not need kappa: it keeps the
+    elementary steps and so knows every factor exactly.
+    """
+    t = _check_tau(tau)
+    red = siegel_reduction(t)
+    return red.tau.copy(), red.gamma.copy()
+
+
+class RiemannTheta:
+    """Reusable evaluator of ``theta[alpha; beta](z | tau)`` for one ``tau``.
+
+    Validates and Siegel-reduces ``tau`` once, caches the Cholesky factor, the lattice point
+    sets and the characteristic tables, and evaluates batches of points with matrix products.
+
+    Parameters
+    ----------
+    tau : array_like, shape (g, g)
+        Riemann matrix (symmetric to 1e-12 relative, ``Im tau`` positive definite).
+    tol : float
+        Absolute truncation error of the exponent-separated value ``v`` (see module notes).
+
+    Examples
+    --------
+    >>> th = RiemannTheta([[1j, 0.5], [0.5, 2j]])
+    >>> z0, V, c = np.zeros(2), np.array([0.3, 0.1]), np.array([[0.1, 0.2j], [0.5, -0.3j]])
+    >>> t = np.linspace(0, 10, 1000)
+    >>> z = (z0 + t[:, None] * V)[:, None, :] + c[None, :, :]   # (T, S, g)
+    >>> th(z).shape, th.gradient(z).shape
+    ((1000, 2), (1000, 2, 2))
+    """
+
+    def __init__(self, tau, tol: float = 1e-14):
+        self.tau = _check_tau(tau)
+        self.tol = _check_tol(tol)
+        self.g = g = self.tau.shape[0]
+        self._X0 = self.tau.real
+        self._Y0 = self.tau.imag
+        self._T0 = np.linalg.cholesky(self._Y0).T
+        self._Y0inv = np.linalg.inv(self._Y0)
+        self.reduction = siegel_reduction(self.tau)
+        Mmp = self.reduction.mp["M"]
+        self._M_dd = (*dd_split_mp([[x.real for x in row] for row in Mmp]),
+                      *dd_split_mp([[x.imag for x in row] for row in Mmp]))
+        ctx = self.reduction.mp["ctx"]
+        Yinv_mp = ctx.matrix([[ctx.mpf(float(self._Y0[i, j])) for j in range(g)] for i in range(g)]) ** -1
+        self._Y0inv_dd = dd_split_mp([[Yinv_mp[i, j] for j in range(g)] for i in range(g)])
+        Qmp = self.reduction.mp["Q"]
+        self._Q_dd = (*dd_split_mp([[x.real for x in row] for row in Qmp]),
+                      *dd_split_mp([[x.imag for x in row] for row in Qmp]))
+        taur_mp = self.reduction.mp["tau"]
+        self.lattice = ReducedLattice(self.reduction.tau, np.array(
+            [[complex(taur_mp[i][j] - complex(self.reduction.tau[i, j])) for j in range(g)] for i in range(g)]))
+        self._tables: dict = {}
+
+    # -- characteristic tables ---------------------------------------------------------
+    def _char_table(self, alpha: np.ndarray, beta: np.ndarray) -> dict:
+        """Per characteristic: reduced characteristic and the constant K of the prefactor
+        exp(K + pi i z.Q.z) (the transformation law has no linear term; checked on the first one)."""
+        red, g = self.reduction, self.g
+        mp = red.mp
+        ctx = mp["ctx"]
+        # (alpha', beta') = gamma^{-T} (alpha, beta) + (a_s, b_s): exact in mpmath (integer map;
+        # general characteristics are not multiples of 1/2), then split into [0, 1) + integers
+        Lam = red.lattice_map
+        shift = np.concatenate([red.a_s, red.b_s])
+        a1 = np.empty_like(alpha, dtype=object)
+        b1 = np.empty_like(beta, dtype=object)
+        for ci in range(alpha.shape[0]):
+            ab = [ctx.mpf(float(x)) for x in np.concatenate([alpha[ci], beta[ci]])]
+            img = [ctx.fsum(int(Lam[i, j]) * ab[j] for j in range(2 * g)) + ctx.mpf(shift[i]) for i in range(2 * g)]
+            a1[ci], b1[ci] = img[:g], img[g:]
+        # exact floor, no snapping: a characteristic 1e-13 off an integer is a different
+        # characteristic (theta changes by ~2 pi |z| 1e-13), and the constant K below uses
+        # the exact a1 - p; half-integer images are exact, so ar, br in {0, 1/2} for "all"
+        p = np.vectorize(ctx.floor)(a1)
+        q = np.vectorize(ctx.floor)(b1)
+        ar = np.vectorize(float)(a1 - p).astype(float)
+        br = np.vectorize(float)(b1 - q).astype(float)
+        # K carries phases of size ~1e3 (large Q, c0 after inversions): sum it in mpmath
+        tau0, taur, Qm, lm, Mm = mp["tau0"], mp["tau"], mp["Q"], mp["l"], mp["M"]
+        n = alpha.shape[0]
+        K = np.empty(n, dtype=complex)
+        two_pi_i = 2j * ctx.pi
+        rg = range(g)
+        for ci in range(n):
+            al, be = [ctx.mpf(x) for x in alpha[ci]], [ctx.mpf(x) for x in beta[ci]]
+            a1c, b1c = list(a1[ci]), list(b1[ci])
+            d0 = [ctx.fdot(tau0[i], al) + be[i] for i in rg]
+            Qd0 = [ctx.fdot(Qm[i], d0) for i in rg]
+            Ta1 = [ctx.fdot(taur[i], a1c) for i in rg]
+            Kc = (ctx.pi * 1j * ctx.fdot(al, [ctx.fdot(tau0[i], al) for i in rg])
+                  + two_pi_i * ctx.fdot(al, be) + mp["c0"] + two_pi_i * ctx.fdot(lm, d0)
+                  + ctx.pi * 1j * ctx.fdot(d0, Qd0) - ctx.pi * 1j * ctx.fdot(a1c, Ta1)
+                  - two_pi_i * ctx.fdot(a1c, b1c) + two_pi_i * ctx.fdot(list(a1[ci] - p[ci]), list(q[ci])))
+            # Im K is a phase of size up to ~1e3: reduce it mod 2 pi before rounding to float64
+            K[ci] = complex(float(Kc.real), float(ctx.fmod(Kc.imag, 2 * ctx.pi)))
+            if ci == 0:  # linear coefficient of log(prefactor) in z: zero by the modular law
+                L = [abs(al[j] + lm[j] + Qd0[j] - ctx.fdot(a1c, [Mm[i][j] for i in rg])) for j in rg]
+                if max(L) > 1e-20:  # pragma: no cover - would mean a broken reduction
+                    raise RuntimeError(f"internal error: theta transformation has a linear term {L}")
+        return {"alpha": alpha, "beta": beta, "ar": ar, "br": br, "K": K}
+
+    def _table_all(self) -> dict:
+        if "all" not in self._tables:
+            alpha, beta, _ = _check_char("all", self.g)
+            tab = self._char_table(alpha, beta)
+            ia = np.rint(2 * tab["ar"]).astype(np.int64)
+            ib = np.rint(2 * tab["br"]).astype(np.int64)
+            w = 1 << np.arange(self.g - 1, -1, -1)
+            tab["red_index"] = (ia @ w) * (1 << self.g) + ib @ w
+            self._tables["all"] = tab
+        return self._tables["all"]
+
+    # -- the evaluation pass -----------------------------------------------------------
+    def _quad_phase(self, zr_re: DD, zr_im: DD) -> np.ndarray:
+        """``Re(zr.Q.zr) / 2`` modulo 1, in double-double (Q from the mp replay); zr as (g, P)."""
+        Qr_hi, Qr_lo, Qi_hi, Qi_lo = self._Q_dd
+        g, P = zr_re.hi.shape
+        xi = lambda d: DD(d.hi[:, None, :], d.lo[:, None, :])  # noqa: E731
+        xj = lambda d: DD(d.hi[None, :, :], d.lo[None, :, :])  # noqa: E731
+        rr = xi(zr_re).mul_dd(xj(zr_re)) - xi(zr_im).mul_dd(xj(zr_im))  # Re(z_i z_j)
+        ii = xi(zr_re).mul_dd(xj(zr_im)) + xi(zr_im).mul_dd(xj(zr_re))  # Im(z_i z_j)
+        h = lambda A: 0.5 * A[:, :, None]  # noqa: E731
+        acc = rr.mul(h(Qr_hi)) + DD(rr.hi * h(Qr_lo)) - ii.mul(h(Qi_hi)) - DD(ii.hi * h(Qi_lo))
+        return dd_sum(DD(acc.hi.reshape(g * g, P), acc.lo.reshape(g * g, P))).frac()
+
+    def _reduce_points(self, z: np.ndarray):
+        """``z = zr + tau k + j`` (k by Babai on (Im tau)^{-1} Im z); zr as DD (g, P), k, j as (P, g)."""
+        k0 = babai(z.imag @ self._Y0inv, self._T0)
+        kT = k0.T
+        re = DD(z.real.T) - dd_sum(dd_prod(self._X0.T[:, :, None], kT[:, None, :]))  # [j, i, p]
+        im = DD(z.imag.T) - dd_sum(dd_prod(self._Y0.T[:, :, None], kT[:, None, :]))
+        j0 = np.rint(re.hi)
+        return re - j0, im, k0, j0.T
+
+    def _evaluate(self, z: np.ndarray, char, V: np.ndarray, order: int):
+        """Exponent ``e`` (P,) and subset jets (P, nchar, jet.size) of ``exp(-e) D_S theta``."""
+        g = self.g
+        alpha, beta, is_all = _check_char(char, g)
+        if is_all:
+            tab = self._table_all()
+        else:
+            key = (alpha.tobytes(), beta.tobytes())
+            tab = self._tables.get(key)
+            if tab is None:
+                if len(self._tables) > 256:  # bounded cache of general characteristics
+                    self._tables = {k: v for k, v in self._tables.items() if k == "all"}
+                tab = self._tables[key] = self._char_table(alpha, beta)
+        jet = jet_layout(len(V), order)
+        P = z.shape[0]
+        # 1. reduce z modulo the period lattice of the original tau (double-double: k ~ |Im z|)
+        red = self.reduction
+        zr_re, zr_im, k0, j0 = self._reduce_points(z)
+        zr = (zr_re.value() + 1j * zr_im.value()).T
+        # e = pi y.Y^{-1}.y in double-double with Y^{-1} from mpmath: Y may have condition ~1e3
+        # and y ~ 50, and e's error is a relative error of theta
+        Yi_hi, Yi_lo = self._Y0inv_dd
+        yT = z.imag.T
+        yy = dd_prod(yT[:, None, :], yT[None, :, :]).mul_dd(DD(Yi_hi[:, :, None], Yi_lo[:, :, None]))
+        acc = dd_sum(DD(yy.hi.reshape(g * g, P), yy.lo.reshape(g * g, P)))
+        # pi * acc in dd; e is returned rounded and its rounding residual goes into v
+        e_dd = acc.mul(math.pi) + DD(acc.hi * _PI_LO)
+        e, e_res = e_dd.hi, e_dd.lo
+        # quasi-periodicity phase / 2 pi = alpha.j - beta.k - k.X.k/2 - k.Re(zr)   (mod 1)
+        aT, bT = tab["alpha"].T[:, :, None], tab["beta"].T[:, :, None]  # [i, c, 1]
+        ph = dd_sum(dd_prod(aT, j0.T[:, None, :])) - dd_sum(dd_prod(bT, k0.T[:, None, :]))  # (nchar, P)
+        kk = (k0.T[:, None, :] * k0.T[None, :, :]).reshape(g * g, P)
+        own = dd_sum(zr_re.mul(k0.T)) + dd_sum(dd_prod(kk, 0.5 * self._X0.reshape(-1, 1)))
+        ph = ph - DD(own.hi[None, :], own.lo[None, :])
+        phi0 = 2 * math.pi * ph.frac().T  # (P, nchar)
+        # 2. map into the reduced frame, u = M zr (double-double)
+        Mr_hi, Mr_lo, Mi_hi, Mi_lo = self._M_dd
+        ur = dd_matvec(Mr_hi, Mr_lo, zr_re) - dd_matvec(Mi_hi, Mi_lo, zr_im)
+        ui = dd_matvec(Mr_hi, Mr_lo, zr_im) + dd_matvec(Mi_hi, Mi_lo, zr_re)
+        u = (ur.hi + 1j * ui.hi).T
+        u_lo = (ur.lo + 1j * ui.lo).T
+        # prefactor exp(K + pi i zr.Q.zr) (L = 0: the transformation law has no linear term);
+        # |Q| reaches ~100 for pinched tau, so its phase pi Re(zr.Q.zr) is taken mod 2 pi in dd
+        Qz = zr @ red.Q.T  # Q symmetric
+        quad = self._quad_phase(zr_re, zr_im)  # Re(zr.Q.zr) / 2 mod 1
+        K = tab["K"]
+        logmag = K.real  # |prefactor| exp(e'(u) - e(zr)) is constant (modular invariance)
+        phase = K.imag[None, :] + 2 * math.pi * quad[:, None] + phi0
+        pref = np.exp(logmag[None, :] + e_res[:, None] + 1j * phase)
+        # 3. reduced-frame jets
+        Vr = V @ red.M.T
+        tol_in = self.tol * math.exp(-max(float(np.max(logmag)), 0.0)) * 0.5
+        a = 1.0
+        if len(V):
+            nv = np.linalg.norm(V, axis=1)
+            nz = nv > 0  # a zero direction gives a zero derivative, whatever R
+            a = float(np.max(np.linalg.norm(Vr[nz] @ self.lattice.Tinv, axis=1) / nv[nz], initial=1.0))
+        R = self.lattice.radius(tol_in, order, a)
+        lset = self.lattice.points(R)
+        if is_all:
+            bits = (np.arange(1 << g)[:, None] >> np.arange(g - 1, -1, -1)[None, :]) & 1
+            Jr = np.concatenate([group_jets(self.lattice, lset, u, ab / 2.0, np.zeros(g), bits, jet, Vr,
+                                            u_lo=u_lo) for ab in bits], axis=1)
+            Jr = Jr[:, tab["red_index"], :]
+        else:
+            Jr = group_jets(self.lattice, lset, u, tab["ar"][0], tab["br"][0], np.zeros((1, g), np.int64),
+                            jet, Vr, u_lo=u_lo)
+        # 4. Leibniz with the prefactor exp(K + pi i z.Q.z - 2 pi i k0.z)
+        if jet.size > 1:
+            ell = (TWO_PI_I * (Qz - k0) @ V.T)[:, None, :]
+            qd = TWO_PI_I * (V @ red.Q @ V.T)
+            Jr = jet.leibniz(jet.factor(ell, qd), Jr)
+        return e, Jr * pref[:, :, None], jet
+
+    # -- public methods ----------------------------------------------------------------
+    def _run(self, z, char, V, order):
+        zz = _check_z(z, self.g)
+        shape = zz.shape[:-1]
+        flat = zz.reshape(-1, self.g)
+        nchar = 4 ** self.g if isinstance(char, str) else 1
+        # chunks of points keep the work arrays (~8 x P x nchar x jet size) near 100 MB
+        step = max(64, (1 << 21) // (nchar * jet_layout(len(V), order).size))
+        if len(flat) <= step:
+            e, J, jet = self._evaluate(flat, char, V, order)
+        else:
+            parts = [self._evaluate(flat[s:s + step], char, V, order) for s in range(0, len(flat), step)]
+            e = np.concatenate([p[0] for p in parts])
+            J = np.concatenate([p[1] for p in parts])
+            jet = parts[0][2]
+        return shape, e, J, jet, isinstance(char, str)
+
+    @staticmethod
+    def _finish(shape, e, val, is_all, extra, separated):
+        """Reshape (P, nchar, *extra) to shape (+ (nchar,)) + extra and apply exp(e) unless separated."""
+        out = val if is_all else val[:, 0]
+        out = out.reshape(shape + out.shape[1:])
+        ee = e.reshape(shape)
+        if separated:
+            return (ee[()] if ee.ndim == 0 else ee), (out[()] if out.ndim == 0 else out)
+        with np.errstate(over="ignore", invalid="ignore"):
+            scale = np.exp(ee).reshape(shape + (1,) * (out.ndim - len(shape)))
+            res = out * scale
+        if not np.all(np.isfinite(res)):
+            raise OverflowError(
+                f"theta overflows float64 (exponent e up to {float(np.max(ee)):.4g}); "
+                "use separated=True to get theta = exp(e) * v")
+        return res[()] if res.ndim == 0 else res
+
+    def __call__(self, z, char=None, derivs: Sequence = (), separated: bool = False):
+        """``theta[alpha; beta](z | tau)`` or its directional derivative ``D_{v_1} .. D_{v_k} theta``.
+
+        Parameters
+        ----------
+        z : array_like, shape (..., g)
+        char : None, "all" or (alpha, beta)
+        derivs : sequence of k direction vectors (length g, complex allowed)
+        separated : bool
+            Return ``(e, v)`` with ``result = exp(e) * v`` (never overflows).
+
+        Returns
+        -------
+        complex ndarray of shape ``z.shape[:-1]`` (``+ (2^(2g),)`` for char="all"); a scalar
+        for a single point.  With ``separated=True`` a pair ``(e, v)``.
+        """
+        V = _check_dirs(derivs, self.g)
+        shape, e, J, jet, is_all = self._run(z, char, V, len(V))
+        return self._finish(shape, e, J[:, :, -1] if len(V) else J[:, :, 0], is_all, (), separated)
+
+    def separated(self, z, char=None, derivs: Sequence = ()):
+        """Exponent-separated evaluation ``(e, v)``: ``theta = exp(e) v``, ``e = pi y.(Im tau)^{-1}.y``."""
+        return self(z, char, derivs, separated=True)
+
+    def jet(self, z, char=None, order: int = 1, separated: bool = False):
+        """Value, gradient (order >= 1) and Hessian (order 2) in one pass over the lattice.
+
+        Returns a tuple ``(value, gradient[, hessian])`` with shapes ``s``, ``s + (g,)``,
+        ``s + (g, g)`` where ``s = z.shape[:-1]`` (``+ (2^(2g),)`` for char="all"); with
+        ``separated=True`` the tuple is ``(e, value, gradient[, hessian])`` in units of ``exp(e)``.
+        """
+        if order not in (0, 1, 2):
+            raise ValueError(f"order must be 0, 1 or 2, got {order!r}")
+        g = self.g
+        # order 2 uses every unit direction twice, so that D_{e_i} D_{e_i} is a subset too
+        V = np.eye(g, dtype=complex) if order < 2 else np.concatenate([np.eye(g), np.eye(g)]).astype(complex)
+        shape, e, J, jet, is_all = self._run(z, char, V, order)
+        parts = [J[..., 0]]
+        if order >= 1:
+            parts.append(J[..., [jet.index[1 << i] for i in range(g)]])
+        if order >= 2:
+            idx = [[jet.index[(1 << i) | (1 << (g + j))] for j in range(g)] for i in range(g)]
+            parts.append(J[..., np.array(idx)])
+        outs = [self._finish(shape, e, p, is_all, (), True)[1] for p in parts]
+        if separated:
+            ee = e.reshape(shape)
+            return (ee[()] if ee.ndim == 0 else ee, *outs)
+        return tuple(self._finish(shape, e, p, is_all, (), False) for p in parts)
+
+    def gradient(self, z, char=None, separated: bool = False):
+        """Gradient ``d theta / d z_j``, shape ``z.shape[:-1] + (g,)`` (one pass over the lattice)."""
+        res = self.jet(z, char, 1, separated)
+        return (res[0], res[2]) if separated else res[1]
+
+    def hessian(self, z, char=None, separated: bool = False):
+        """Hessian ``d^2 theta / d z_i d z_j``, shape ``z.shape[:-1] + (g, g)``."""
+        res = self.jet(z, char, 2, separated)
+        return (res[0], res[3]) if separated else res[2]
+
+
+def riemann_theta(z, tau, char=None, derivs: Sequence = (), tol: float = 1e-14, dps: int | None = None):
+    """Riemann theta function ``theta[alpha; beta](z | tau)`` (DLMF 21.2.5) or a derivative.
+
+    Parameters
+    ----------
+    z : array_like, shape (..., g)
+        Complex points.
+    tau : array_like, shape (g, g)
+        Riemann matrix: symmetric (to 1e-12 relative; symmetrized), ``Im tau`` positive definite.
+    char : None, "all" or (alpha, beta)
+        Characteristic (real vectors of length g); "all" gives the 2^(2g) half-integer ones
+        (flint order, see module notes) along a new last axis.
+    derivs : sequence of direction vectors
+        ``(v_1, ..., v_k)``: returns ``D_{v_1} ... D_{v_k} theta`` (any order up to 8).
+    tol : float
+        Absolute error of ``theta * exp(-e)``, ``e = pi y.(Im tau)^{-1}.y`` (default 1e-14).
+    dps : int, optional
+        If given, evaluate with mpmath at ``dps`` decimal digits (object array of ``mpc``;
+        tol is then ``10**-dps``).
+
+    Returns
+    -------
+    ndarray of complex, shape ``z.shape[:-1]`` (a scalar for one point).
+
+    Raises
+    ------
+    ValueError
+        Bad input (non-symmetric tau, Im tau not positive definite, wrong shapes, NaN).
+    OverflowError
+        If ``|theta|`` overflows float64; use :func:`riemann_theta_separated`.
+    """
+    if dps is not None:
+        from thetasol.theta._mp import theta_mp
+        return theta_mp(z, tau, char, derivs, dps, separated=False)
+    return RiemannTheta(tau, tol)(z, char, derivs)
+
+
+def riemann_theta_separated(z, tau, char=None, derivs: Sequence = (), tol: float = 1e-14,
+                            dps: int | None = None):
+    """Exponent-separated theta: ``(e, v)`` with ``theta = exp(e) * v``.
+
+    ``e = pi y.(Im tau)^{-1}.y`` (real, ``y = Im z``) and ``|v|`` is bounded by a constant
+    depending on tau only (for derivatives, by that constant times the natural derivative
+    size).  Same parameters as :func:`riemann_theta`; never overflows.
+    """
+    if dps is not None:
+        from thetasol.theta._mp import theta_mp
+        return theta_mp(z, tau, char, derivs, dps, separated=True)
+    return RiemannTheta(tau, tol).separated(z, char, derivs)
