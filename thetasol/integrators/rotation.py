@@ -24,6 +24,7 @@ import sys
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
@@ -43,7 +44,7 @@ def _prepare(J, a, Q0, omega0, t) -> tuple[np.ndarray, ...]:
     return Jm, am, Q0, w0, tt
 
 
-def integrate_rotation(J, a, Q0, omega0, t, rtol: float = 1e-12, atol: float | None = None,
+def integrate_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, rtol: float = 1e-12, atol: float | None = None,
                        method: str = "DOP853", step: float | None = None,
                        dtype: str = "dbl") -> tuple[np.ndarray, np.ndarray]:
     """Integrate the rotation of a rigid body in the potential ``1/2 x^T a x`` numerically.
@@ -143,7 +144,8 @@ class NumericalRotation(RotationSolution):
         return integrate_rotation(self.J, self.a, self.Q0, self.omega0, t, rtol=self.rtol, method=self.integrator)
 
 
-def numerical_rotation(J, a, Q0, omega0, rtol: float = 1e-12, method: str = "DOP853") -> NumericalRotation:
+def numerical_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, rtol: float = 1e-12,
+                       method: str = "DOP853") -> NumericalRotation:
     """The rotation of one body in ``1/2 x^T a x`` as a solution evaluated by :func:`integrate_rotation`.
 
     Parameters

@@ -73,7 +73,7 @@ class Trajectories:
             "mass_center": float(np.max(np.abs(self.mass_center - other.mass_center), initial=0.0)),
         }
 
-    def save(self, path) -> None:
+    def save(self, path: str | Path) -> None:
         """Write to ``.npz`` or ``.csv`` atomically (see :func:`write_trajectories`)."""
         write_trajectories(self, path)
 
@@ -111,7 +111,7 @@ def _csv_columns(traj: Trajectories):
     return cols, np.hstack(data)
 
 
-def write_trajectories(traj: Trajectories, path, report: str | None = None) -> list[Path]:
+def write_trajectories(traj: Trajectories, path: str | Path, report: str | None = None) -> list[Path]:
     """Write trajectories to ``.npz`` or ``.csv``, atomically; optionally the report beside them.
 
     ``.npz`` arrays: ``t`` (T,), ``names`` (N,), ``mass_center``/``mass_center_velocity`` (T, 3),

@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.integrators.rotation import numerical_rotation
@@ -34,7 +35,7 @@ from thetasol.solutions.mass_center import MassCenterMotion
 __all__ = ["ConfigurationSolution", "solve_configuration", "rotation_kind", "closed_form_rotation"]
 
 
-def rotation_kind(a) -> str:
+def rotation_kind(a: ArrayLike) -> str:
     """Which closed form the rotation of a body in ``1/2 x^T a x`` needs (Sections 4 I and II).
 
     ``"elliptic"`` when ``a`` is isotropic (``a = c 1`` exerts no torque: the Euler top),
@@ -51,7 +52,7 @@ def rotation_kind(a) -> str:
     return "theta"
 
 
-def closed_form_rotation(J, a, Q0, omega0) -> tuple[Any, str]:
+def closed_form_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike) -> tuple[Any, str]:
     """``solve_rotation(J, a, Q0, omega0)`` and ``""``, or ``None`` and the reason it refused the data."""
     # imported here: scenes without a closed-form rotation never load the theta machinery
     from thetasol.solutions.rotation import solve_rotation
@@ -132,7 +133,7 @@ class ConfigurationSolution(Solution):
                 np.stack([placed[n]["velocity"] for n in names], axis=1),
                 np.stack([Qs[n] for n in names], axis=1), np.stack([Ws[n] for n in names], axis=1))
 
-    def state(self, t) -> tuple[np.ndarray, ...]:
+    def state(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
         """The state at times ``t`` of any shape, ``t.shape`` leading and the body axis next.
 
         Returns
@@ -147,7 +148,7 @@ class ConfigurationSolution(Solution):
         """
         return super().__call__(t)
 
-    def __call__(self, t) -> Trajectories:
+    def __call__(self, t: ArrayLike) -> Trajectories:
         """:class:`Trajectories` of every body at the 1-d times ``t``.
 
         ``info`` holds ``models``, ``rotation_kind``, ``method`` and the seconds per part
@@ -174,7 +175,7 @@ class ConfigurationSolution(Solution):
             omega=np.array([Ws[n] for n in names]),
             mass_center=q, mass_center_velocity=qd, info=info)
 
-    def evaluate(self, t) -> Trajectories:
+    def evaluate(self, t: ArrayLike) -> Trajectories:
         """Alias of ``sol(t)``."""
         return self(t)
 
@@ -219,7 +220,8 @@ def _first_integrals(config: Configuration, a: np.ndarray, mc: MassCenterMotion,
     return {"energy": float(energy), "mass_center": mc.invariants, "rotations": rot}
 
 
-def solve_configuration(config: Configuration, a, b, q0, v0, Q0: Mapping, omega0: Mapping, *,
+def solve_configuration(config: Configuration, a: ArrayLike, b: ArrayLike, q0: ArrayLike, v0: ArrayLike,
+                        Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike], *,
                         rotation: str = "auto", rtol: float = 1e-12, method: str = "DOP853",
                         check_central: bool = True) -> ConfigurationSolution:
     """Every body of a C^k-central configuration by the split (3.1), as a solution to evaluate.

@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 
 import mpmath
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.solutions.base import Solution
@@ -45,7 +46,7 @@ __all__ = ["MassCenterMotion", "mass_center", "stumpff"]
 _KIND_ORDER = ("trigonometric", "hyperbolic", "polynomial")
 
 
-def stumpff(lam, t) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def stumpff(lam: ArrayLike, t: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The functions ``C, S, P`` of ``z = lam t^2`` (module docstring), broadcasting ``lam`` and ``t``.
 
     Parameters
@@ -187,7 +188,7 @@ class MassCenterMotion(Solution):
         inv = self.first_integrals(self.q0, self.v0)
         object.__setattr__(self, "invariants", {**inv, "energy": float(inv["energy"])})
 
-    def __call__(self, t, dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def __call__(self, t: ArrayLike, dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Position and velocity at times ``t``.
 
         Parameters
@@ -206,7 +207,7 @@ class MassCenterMotion(Solution):
             return self._mp(V.times(t, "t"), int(dps))
         return super().__call__(t)
 
-    def evaluate(self, t, dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def evaluate(self, t: ArrayLike, dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Alias of ``mc(t, dps=dps)``."""
         return self(t, dps=dps)
 
@@ -259,17 +260,17 @@ class MassCenterMotion(Solution):
                     vo[idx + (i,)] = mp.fsum(Vec[i][k] * yd[k] for k in range(3))
         return qo, vo
 
-    def potential(self, q) -> np.ndarray:
+    def potential(self, q: ArrayLike) -> np.ndarray:
         """``phi(q) = 1/2 q^T a q + 1/2 b^T q`` (2.4), shape ``q.shape[:-1]``."""
         q = np.asarray(q, dtype=float)
         return 0.5 * np.einsum("...i,ij,...j->...", q, self.a, q) + 0.5 * q @ self.b
 
-    def energy(self, q, v) -> np.ndarray:
+    def energy(self, q: ArrayLike, v: ArrayLike) -> np.ndarray:
         """Energy per unit mass ``1/2 |v|^2 + phi(q)`` (constant along the motion)."""
         v = np.asarray(v, dtype=float)
         return 0.5 * np.sum(v * v, axis=-1) + self.potential(q)
 
-    def first_integrals(self, q, v) -> dict[str, np.ndarray]:
+    def first_integrals(self, q: ArrayLike, v: ArrayLike) -> dict[str, np.ndarray]:
         """The first integrals per unit mass at states ``(q, v)``, shapes ``q.shape[:-1]`` leading.
 
         ``energy`` ``1/2 |v|^2 + phi(q)``; ``mode_energies`` (..., 3) ``1/2 ydot_k^2 +
@@ -301,7 +302,8 @@ class MassCenterMotion(Solution):
         return out
 
 
-def mass_center(a, b, q0, v0, t, dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+def mass_center(a: ArrayLike, b: ArrayLike, q0: ArrayLike, v0: ArrayLike, t: ArrayLike,
+                dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Closed-form mass centre ``q(t)`` and velocity in ``phi(x) = 1/2 x^T a x + 1/2 b^T x`` (3.2).
 
     Parameters
