@@ -1,4 +1,4 @@
-"""Speed against error for the mechanics of issue 2 (results in docs/bench_mechanics.md).
+"""Speed against error for the mechanics: mass centre, split and unsplit (results in docs/bench_mechanics.md).
 
 1. The mass centre (3.2) on 1000 times in [0, 100]: closed form (thetasol.solutions.mass_center) against
    scipy DOP853 at several tolerances and scipy.linalg.expm per time; errors against mpmath's

@@ -220,8 +220,8 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     Notes
     -----
     Equations derived independently of the split (module docstring).  Cost is dominated
-    by Python overhead per right-hand side (dense ``(6N, 6N)`` algebra): about 0.1 ms for
-    N = 5 (0.11 ms measured, 0.14 ms per evaluation inside solve_ivp).
+    by Python overhead per right-hand side (dense ``(6N, 6N)`` algebra): 0.14-0.21 ms per
+    evaluation inside solve_ivp for N = 5 (docs/bench_mechanics.md, section 2).
     """
     if not isinstance(config, Configuration):
         raise ValueError(f"config must be a Configuration, got {type(config).__name__}")

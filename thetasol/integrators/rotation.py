@@ -72,8 +72,9 @@ def integrate_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayL
     dtype : {"dbl", "ldbl", "f128"}
         Floating type for ``"heyoka"``.  With ``"ldbl"`` and ``"f128"`` the inverse inertia and
         ``m0 = I omega0`` are those of the float64 ``J`` and ``omega0`` rounded once to that type
-        (not the float64 inverse: near an unstable relative equilibrium its one-ulp change of the
-        body moved the trajectory by 5e-9 at t = 4000).
+        (not the float64 inverse, another body one ulp away: near an unstable relative equilibrium
+        it moves the 80-bit trajectory by 5.8e-9 at t = 3727 against 5.1e-10 with the rounded-once
+        inverse, test_extended_precision_reference_next_to_an_unstable_equilibrium_matches_the_closed_form).
 
     Returns
     -------
@@ -288,8 +289,8 @@ def _working_precision_inertia(Jm, w0, fp):
     Formed in mpmath at 60 digits and rounded to ``fp`` (np.longdouble, heyoka.real128) as the sum
     of the float64 triple-word split, added in ``fp`` (within one ulp of ``fp``).  The float64 inverse
     of the float64 inertia is another body, about one ulp away: next to an unstable relative
-    equilibrium that moved the trajectory by 5e-9 at t = 4000 (the data's own conditioning there is
-    ~1e-10), so an extended-precision reference must not round I^-1 to float64.
+    equilibrium it moves the trajectory by 5.8e-9 at t = 3727 (the data's own conditioning there is
+    ~1e-10; tests/test_equations.py), so an extended-precision reference must not round I^-1 to float64.
     """
     import mpmath
 
