@@ -129,7 +129,7 @@ def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
 
     def solve_rotation(J, a, Q0, w0):
         if not np.allclose(a, a[0, 0] * np.eye(3)):
-            raise NotImplementedError("theta functions: issue 6")
+            raise NotImplementedError("theta functions: not in this stand-in")
         return Fake(J, a, Q0, w0)
 
     monkeypatch.setitem(sys.modules, "thetasol.solutions.rotation", types.SimpleNamespace(solve_rotation=solve_rotation))
@@ -144,7 +144,7 @@ def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
     # a generic a falls back to numerics and says why
     sc2 = load_scene(write(tmp_path, SMALL, "generic.toml"))
     traj2, report2, _ = run(sc2, check=False)
-    assert "issue 6" in report2
+    assert "not in this stand-in" in report2
     assert all("numerical fallback" in m for m in traj2.info["models"]["rotations"].values())
 
 

@@ -21,7 +21,7 @@ __all__ = ["Trajectories", "write_trajectories"]
 class Trajectories:
     """Trajectories of every body of a configuration on a time grid.
 
-    Produced by the split solution (:func:`thetasol.scenes.scene.solve_configuration`) and by the
+    Produced by the split solution (:class:`thetasol.scenes.pipeline.ConfigurationSolution`) and by the
     unsplit reference (:func:`thetasol.integrators.multibody.integrate_multibody`) in the same layout,
     so that they compare directly.
 
