@@ -1,4 +1,4 @@
-"""Speed against error for the mechanics of issue 2 (results in docs/bench_mechanics.md).
+"""Speed against error for the mechanics: mass centre, split and unsplit (results in docs/bench_mechanics.md).
 
 1. The mass centre (3.2) on 1000 times in [0, 100]: closed form (thetasol.solutions.mass_center) against
    scipy DOP853 at several tolerances and scipy.linalg.expm per time; errors against mpmath's
@@ -25,7 +25,7 @@ from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.solutions.mass_center import mass_center
 from thetasol.integrators.multibody import integrate_multibody
-from thetasol.scenes.scene import solve_configuration
+from thetasol.scenes.pipeline import solve_configuration
 
 from _common import best_of, machine_info
 
@@ -90,16 +90,16 @@ def split_table():
     t = np.linspace(0, 60, 241)
     try:
         import heyoka  # noqa: F401
-        ref = solve_configuration(cfg, a, b, t=t, rotation="numerical", method="heyoka", rtol=1e-16, **s)
+        ref = solve_configuration(cfg, a, b, rotation="numerical", method="heyoka", rtol=1e-16, **s)(t)
         ref_name = "split with heyoka rotations (tol 1e-16)"
     except ImportError:
-        ref = solve_configuration(cfg, a, b, t=t, rotation="numerical", rtol=1e-14, **s)
+        ref = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-14, **s)(t)
         ref_name = "split with DOP853 rotations (rtol 1e-14)"
     print(f"reference: {ref_name}\n")
     print("| solution | time (s) | RHS evals | max position / attitude deviation from the reference |")
     print("|---|---|---|---|")
     for rtol in (1e-10, 1e-12, 1e-13):
-        sec, sp = best_of(lambda rtol=rtol: solve_configuration(cfg, a, b, t=t, rotation="numerical", rtol=rtol, **s), 1)
+        sec, sp = best_of(lambda rtol=rtol: solve_configuration(cfg, a, b, rotation="numerical", rtol=rtol, **s)(t), 1)
         d = sp.deviation(ref)
         print(f"| split, DOP853 rotations rtol={rtol:g} | {sec:.2f} | - | {d['position']:.1e} / {d['attitude']:.1e} |")
     for rtol in (1e-10, 1e-11, 1e-12, 1e-13):

@@ -77,16 +77,16 @@ def test_usage_errors(tmp_path, capsys):
 
 def test_failed_check_exits_1(tmp_path, capsys, monkeypatch):
     """A check beyond its tolerance makes the verdict FAILED and the exit status 1."""
-    import thetasol.scenes.scene as scene_mod
+    import thetasol.scenes.pipeline as pipeline_mod
 
-    real = scene_mod.MassCenterMotion
+    real = pipeline_mod.MassCenterMotion
 
     class Off(real):
         def __call__(self, t, dps=None):
             q, v = real.__call__(self, t, dps)
             return q + 1e-6, v
 
-    monkeypatch.setattr(scene_mod, "MassCenterMotion", Off)
+    monkeypatch.setattr(pipeline_mod, "MassCenterMotion", Off)
     assert main(["solve", str(EXAMPLE), "--no-check"]) == 1
     assert "verdict: FAILED" in capsys.readouterr().out
 

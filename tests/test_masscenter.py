@@ -3,6 +3,8 @@
 Reference: d/dt (q, v, 1) = [[0, 1, 0], [-a, 0, -b/2], [0, 0, 0]] (q, v, 1), exponentiated by
 mpmath.expm at 40 digits: no eigen-decomposition, no case split by eigenvalue sign.
 """
+import dataclasses
+
 import mpmath
 import numpy as np
 import pytest
@@ -10,6 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from thetasol.core.so3 import rodrigues
+from thetasol.solutions.base import CHUNK, Solution
 from thetasol.solutions.mass_center import MassCenterMotion, mass_center, stumpff
 
 
@@ -148,3 +151,71 @@ def test_bad_input_and_overflow():
         mc(1000.0)
     q, _ = mc(1000.0, dps=20)  # the mpmath path has no overflow
     assert q[0] > mpmath.mpf(10) ** 400
+
+
+def test_solution_protocol():
+    rng = np.random.default_rng(7)
+    a = matrix_with_eigenvalues([1.3, -0.7, 0.0], [0.2, 0.5, -0.9])
+    mc = MassCenterMotion(a, rng.normal(size=3), rng.normal(size=3), rng.normal(size=3))
+    assert isinstance(mc, Solution)
+    assert mc.method == "mass-center/trigonometric+hyperbolic+polynomial"
+    assert MassCenterMotion(np.eye(3), np.zeros(3), np.ones(3), np.zeros(3)).method == "mass-center/trigonometric"
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        mc.a = np.eye(3)
+    d = mc.diagnostics
+    assert d["kinds"] == mc.kinds and np.array_equal(d["eigenvalues"], mc.eigenvalues)
+    assert np.allclose(d["axes"] @ np.diag(d["eigenvalues"]) @ d["axes"].T, a, rtol=0, atol=1e-15)
+    t = np.linspace(0, 4, 9).reshape(3, 3)
+    q, v = mc.evaluate(t)
+    assert q.shape == (3, 3, 3)
+    qm, _ = mc.evaluate(t[0], dps=20)
+    assert isinstance(qm[0, 0], mpmath.mpf)
+    # long arrays are evaluated in chunks with the same values
+    tl = np.linspace(-3, 3, 2 * CHUNK + 5)
+    ql, _ = mc(tl)
+    assert np.array_equal(ql[-5:], mc(tl[-5:])[0])
+
+
+@pytest.mark.parametrize("lam, n_axes", [
+    ([0.7, 0.7, -0.3], 1),    # axially symmetric: the component along the odd eigenvector
+    ([0.5, 0.5, 0.5], 3),     # isotropic: all three components
+    ([0.9, 0.4, -0.2], 0),    # distinct eigenvalues: none
+])
+def test_first_integrals_of_the_reference_motion(lam, n_axes):
+    """The invariants are conserved along mpmath's matrix-exponential motion (40 digits)."""
+    rng = np.random.default_rng(11)
+    a = matrix_with_eigenvalues(lam, [0.4, -1.1, 0.7])
+    b, q0, v0 = rng.normal(size=3), rng.normal(size=3), rng.normal(size=3)
+    mc = MassCenterMotion(a, b, q0, v0)
+    t = [0.0, 0.37, 1.0, -2.2, 5.0]
+    ref = to_float(expm_reference(a, b, q0, v0, t))
+    fi = mc.first_integrals(ref[:, :3], ref[:, 3:])
+    assert fi["angular_momentum"].shape == (5, n_axes) and fi["mode_energies"].shape == (5, 3)
+    scale = 1 + np.max(np.abs(ref)) ** 2
+    for k in ("energy", "mode_energies", "angular_momentum"):
+        # measured <= 1.1e-16 (relative to 1 + max |state|^2)
+        assert np.max(np.abs(fi[k] - mc.invariants[k]), initial=0.0) < 1e-15 * scale
+    assert abs(np.sum(mc.invariants["mode_energies"]) - mc.invariants["energy"]) < 1e-15 * scale  # 7.6e-18
+    if n_axes == 1:
+        odd = matrix_with_eigenvalues([0, 0, 1], [0.4, -1.1, 0.7])  # projector on the odd eigenvector
+        n = mc.diagnostics["angular_momentum_axes"][0]
+        assert abs(n @ odd @ n - 1) < 1e-14
+    # a component that is NOT conserved is not listed: along a distinct eigenvector L drifts
+    if n_axes == 0:
+        L = np.cross(ref[:, :3], ref[:, 3:]) @ mc.axes
+        assert np.all(np.max(np.abs(L - L[0]), axis=0) > 1e-2)
+
+
+def test_constant_force_in_a_zero_plane_breaks_the_symmetry():
+    """a = diag(0, 0, 1) with b in the zero plane: uniform acceleration there, L_z not conserved."""
+    a = np.diag([0.0, 0.0, 1.0])
+    free = MassCenterMotion(a, [0, 0, 0.3], [1, 0, 0], [0, 1, 0])
+    pushed = MassCenterMotion(a, [0.3, 0, 0], [1, 0, 0], [0, 1, 0])
+    assert free.invariants["angular_momentum"].shape == (1,)
+    assert pushed.invariants["angular_momentum"].shape == (0,)
+    q, v = pushed(np.array([0.0, 2.0]))
+    Lz = np.cross(q, v)[:, 2]
+    assert abs(Lz[1] - Lz[0]) > 0.1
+    q, v = free(np.linspace(0, 5, 11))
+    assert np.allclose(free.first_integrals(q, v)["angular_momentum"], free.invariants["angular_momentum"],
+                       rtol=0, atol=1e-14)

@@ -1,4 +1,4 @@
-"""Scene files, the split pipeline and its report (thetasol.scenes.scene)."""
+"""Scene files, the split pipeline and its report (thetasol.scenes.format, .pipeline, .report)."""
 import sys
 import textwrap
 import types
@@ -10,7 +10,9 @@ import pytest
 from thetasol import integrate_rotation
 from thetasol.mechanics.trajectories import Trajectories, write_trajectories
 from thetasol.integrators.multibody import initial_state
-from thetasol.scenes.scene import Scene, demo_scene_path, load_scene, rotation_kind, run
+from thetasol.scenes.format import Scene, demo_scene_path, load_scene
+from thetasol.scenes.pipeline import rotation_kind
+from thetasol.scenes.report import run
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "satellite_boom.toml"
 
@@ -92,7 +94,7 @@ def test_load_solve_and_initial_state(tmp_path):
     assert [k for _, k in models["mass_center"]] == ["hyperbolic", "trigonometric", "trigonometric"]
     assert all("closed form" in m for m in models["rotations"].values())
     # the arm (a symmetric box at rest) turns as a pendulum; the tip is generic: genus 4, and so is the root,
-    # whose principal axis z is an eigenvector of a (it fell back to numerics from 666a0f1 to 6ef5add)
+    # whose principal axis z is an eigenvector of a
     assert models["rotations"]["root"].endswith("closed form theta/genus-4")
     assert models["rotations"]["arm"].endswith("closed form pendulum/libration")
     assert models["rotations"]["tip"].endswith("closed form theta/genus-4")
@@ -127,7 +129,7 @@ def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
 
     def solve_rotation(J, a, Q0, w0):
         if not np.allclose(a, a[0, 0] * np.eye(3)):
-            raise NotImplementedError("theta functions: issue 6")
+            raise NotImplementedError("theta functions: not in this stand-in")
         return Fake(J, a, Q0, w0)
 
     monkeypatch.setitem(sys.modules, "thetasol.solutions.rotation", types.SimpleNamespace(solve_rotation=solve_rotation))
@@ -142,7 +144,7 @@ def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
     # a generic a falls back to numerics and says why
     sc2 = load_scene(write(tmp_path, SMALL, "generic.toml"))
     traj2, report2, _ = run(sc2, check=False)
-    assert "issue 6" in report2
+    assert "not in this stand-in" in report2
     assert all("numerical fallback" in m for m in traj2.info["models"]["rotations"].values())
 
 

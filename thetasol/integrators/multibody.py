@@ -28,8 +28,10 @@ departs from the split.
 from __future__ import annotations
 
 import time
+from typing import Mapping
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
@@ -40,7 +42,8 @@ from thetasol.mechanics.trajectories import Trajectories
 __all__ = ["initial_state", "integrate_multibody"]
 
 
-def initial_state(config: Configuration, q0, v0, Q0: dict, omega0: dict):
+def initial_state(config: Configuration, q0: ArrayLike, v0: ArrayLike, Q0: Mapping[str, ArrayLike],
+                  omega0: Mapping[str, ArrayLike]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Maximal coordinates (mass centres and their velocities) of every body, joints satisfied.
 
     Parameters
@@ -176,7 +179,8 @@ class _System:
         return self.pack(v, acc[:, :3], Qdot, acc[:, 3:])
 
 
-def integrate_multibody(config: Configuration, a, b, q0, v0, Q0: dict, omega0: dict, t,
+def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: ArrayLike, v0: ArrayLike,
+                        Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike], t: ArrayLike,
                         rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
                         alpha: float | None = None, kappa: float | None = None) -> Trajectories:
     """Integrate a tree of rigid bodies on spherical joints in ``phi(x) = 1/2 x^T a x + 1/2 b^T x``.
@@ -216,8 +220,8 @@ def integrate_multibody(config: Configuration, a, b, q0, v0, Q0: dict, omega0: d
     Notes
     -----
     Equations derived independently of the split (module docstring).  Cost is dominated
-    by Python overhead per right-hand side (dense ``(6N, 6N)`` algebra): about 0.1 ms for
-    N = 5 (0.11 ms measured, 0.14 ms per evaluation inside solve_ivp).
+    by Python overhead per right-hand side (dense ``(6N, 6N)`` algebra): 0.14-0.21 ms per
+    evaluation inside solve_ivp for N = 5 (docs/bench_mechanics.md, section 2).
     """
     if not isinstance(config, Configuration):
         raise ValueError(f"config must be a Configuration, got {type(config).__name__}")

@@ -13,22 +13,29 @@ equation ``Qdot = Q hat(omega)``.  Three methods:
 ``"heyoka"``
     heyoka's Taylor integrator (optional extra ``thetasol[bench]``); ``dtype="f128"`` or
     ``"ldbl"`` gives a quadruple/extended-precision reference.
+
+:class:`NumericalRotation` wraps it in the :class:`~thetasol.solutions.base.RotationSolution`
+protocol, for bodies whose rotation has no closed form.
 """
 from __future__ import annotations
 
 import math
+import sys
+from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
-from thetasol.mechanics.equations import inertia_from_moments, rotation_rhs
+from thetasol.mechanics.equations import inertia_from_moments, invariants, rotation_rhs
+from thetasol.solutions.base import RotationSolution
 
-__all__ = ["integrate_rotation"]
+__all__ = ["integrate_rotation", "NumericalRotation", "numerical_rotation"]
 
 
-def _prepare(J, a, Q0, omega0, t):
+def _prepare(J, a, Q0, omega0, t) -> tuple[np.ndarray, ...]:
     Jm = V.second_moments(J, "J")
     am = V.symmetric_matrix(a, "a")
     Q0 = V.rotation_matrix(Q0, "Q0")
@@ -37,8 +44,9 @@ def _prepare(J, a, Q0, omega0, t):
     return Jm, am, Q0, w0, tt
 
 
-def integrate_rotation(J, a, Q0, omega0, t, rtol: float = 1e-12, atol: float | None = None,
-                       method: str = "DOP853", step: float | None = None, dtype: str = "dbl"):
+def integrate_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, rtol: float = 1e-12, atol: float | None = None,
+                       method: str = "DOP853", step: float | None = None,
+                       dtype: str = "dbl") -> tuple[np.ndarray, np.ndarray]:
     """Integrate the rotation of a rigid body in the potential ``1/2 x^T a x`` numerically.
 
     Parameters
@@ -64,8 +72,9 @@ def integrate_rotation(J, a, Q0, omega0, t, rtol: float = 1e-12, atol: float | N
     dtype : {"dbl", "ldbl", "f128"}
         Floating type for ``"heyoka"``.  With ``"ldbl"`` and ``"f128"`` the inverse inertia and
         ``m0 = I omega0`` are those of the float64 ``J`` and ``omega0`` rounded once to that type
-        (not the float64 inverse: near an unstable relative equilibrium its one-ulp change of the
-        body moved the trajectory by 5e-9 at t = 4000).
+        (not the float64 inverse, another body one ulp away: near an unstable relative equilibrium
+        it moves the 80-bit trajectory by 5.8e-9 at t = 3727 against 5.1e-10 with the rounded-once
+        inverse, test_extended_precision_reference_next_to_an_unstable_equilibrium_matches_the_closed_form).
 
     Returns
     -------
@@ -107,6 +116,69 @@ def integrate_rotation(J, a, Q0, omega0, t, rtol: float = 1e-12, atol: float | N
     Q_out = polar_orthonormalize(Q_out)
     omega = np.linalg.solve(Im, m_out[..., None])[..., 0]
     return omega[inv].reshape(tt.shape + (3,)), Q_out[inv].reshape(tt.shape + (3, 3))
+
+
+@dataclass(frozen=True, eq=False)
+class NumericalRotation(RotationSolution):
+    """:func:`integrate_rotation` behind the :class:`~thetasol.solutions.base.RotationSolution` protocol.
+
+    ``sol(t)`` integrates on demand, once per call, from ``t = 0`` to every requested time (any
+    shape, any order, negative allowed): no chunking, so a call costs one integration over
+    ``[min(t, 0), max(t, 0)]`` and nothing is cached between calls.  Build it with
+    :func:`numerical_rotation`.
+
+    Attributes
+    ----------
+    rtol : float
+        Relative tolerance passed to :func:`integrate_rotation`.
+    integrator : str
+        Its ``method`` (``"DOP853"``, ``"splitting"``, ``"heyoka"``, ...).
+    """
+
+    rtol: float = 1e-12
+    integrator: str = "DOP853"
+
+    def _chunk_size(self) -> int:
+        return sys.maxsize  # one integration over all requested times
+
+    def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return integrate_rotation(self.J, self.a, self.Q0, self.omega0, t, rtol=self.rtol, method=self.integrator)
+
+
+def numerical_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, rtol: float = 1e-12,
+                       method: str = "DOP853") -> NumericalRotation:
+    """The rotation of one body in ``1/2 x^T a x`` as a solution evaluated by :func:`integrate_rotation`.
+
+    Parameters
+    ----------
+    J, a, Q0, omega0
+        As for :func:`integrate_rotation` (validated here).
+    rtol : float
+        Relative tolerance of the integration.
+    method : str
+        Integration method of :func:`integrate_rotation`.
+
+    Returns
+    -------
+    NumericalRotation
+        ``method`` is ``"numerical/<method>"``; ``invariants`` the first integrals at ``t = 0``
+        (``energy``, ``I2``, ``I3`` (4.13) and the spectral-curve coefficients ``curve`` (4.12));
+        ``diagnostics`` the integrator and its tolerance.
+    """
+    Jm = V.second_moments(J, "J")
+    am = V.symmetric_matrix(a, "a")
+    Qm = V.rotation_matrix(Q0, "Q0")
+    wm = V.vector3(omega0, "omega0")
+    if not (0 < rtol < 1):
+        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
+    inv = invariants(Jm, am, Qm, wm)
+    first = {"energy": float(inv["energy"]), "I2": float(inv["I2"]), "I3": float(inv["I3"]), "curve": inv["curve"]}
+    # Q0 is kept as given (checked above): integrate_rotation projects it onto SO(3) itself, and a
+    # second projection could move its last bits.
+    Qg = np.array(Q0, dtype=float)
+    return NumericalRotation(J=Jm, a=am, Q0=Qg, omega0=wm, method=f"numerical/{method}", invariants=first,
+                             diagnostics={"integrator": "integrate_rotation", "method": method, "rtol": rtol},
+                             rtol=float(rtol), integrator=method)
 
 
 def _solve_ivp(Jm, I_inv, am, Q0, m0, tgrid, rtol, atol, method):
@@ -217,8 +289,8 @@ def _working_precision_inertia(Jm, w0, fp):
     Formed in mpmath at 60 digits and rounded to ``fp`` (np.longdouble, heyoka.real128) as the sum
     of the float64 triple-word split, added in ``fp`` (within one ulp of ``fp``).  The float64 inverse
     of the float64 inertia is another body, about one ulp away: next to an unstable relative
-    equilibrium that moved the trajectory by 5e-9 at t = 4000 (the data's own conditioning there is
-    ~1e-10), so an extended-precision reference must not round I^-1 to float64.
+    equilibrium it moves the trajectory by 5.8e-9 at t = 3727 (the data's own conditioning there is
+    ~1e-10; tests/test_equations.py), so an extended-precision reference must not round I^-1 to float64.
     """
     import mpmath
 
@@ -264,12 +336,12 @@ def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0):
             m[0] * w[1] - m[1] * w[0] + tau[2]]
     W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
     Qdot = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
-    sys = list(zip(xs, mdot + Qdot))
+    odes = list(zip(xs, mdot + Qdot, strict=True))
     # Q0 and the times are the float64 values themselves (real128(str(x)) would be another number)
     y0 = np.array(m0w + [ft(float(v)) for v in Q0.ravel()])
     grid = np.array([ft(float(v)) for v in np.concatenate([[0.0], tgrid])])
     tol = hy.real128(str(rtol)) if dtype == "f128" else ft(rtol)
-    ta = hy.taylor_adaptive(sys, y0, tol=tol, fp_type=ft)
+    ta = hy.taylor_adaptive(odes, y0, tol=tol, fp_type=ft)
     res = ta.propagate_grid(grid)
     states = np.asarray(res[-1], dtype=float)[1:]
     return states[:, :3], states[:, 3:].reshape(-1, 3, 3)

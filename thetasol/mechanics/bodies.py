@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.mechanics.equations import inertia_from_moments
@@ -113,7 +114,7 @@ class Body:
         object.__setattr__(self, "name", str(self.name))
 
     @classmethod
-    def from_point_masses(cls, masses, points, name: str = "") -> "Body":
+    def from_point_masses(cls, masses: ArrayLike, points: ArrayLike, name: str = "") -> "Body":
         """A body made of point masses ``masses[k]`` at body-frame points ``points[k]``.
 
         Parameters
@@ -142,7 +143,7 @@ class Body:
         return cls(mass=m, J=J, center=c, name=name)
 
     @classmethod
-    def box(cls, mass: float, size, center=(0.0, 0.0, 0.0), name: str = "") -> "Body":
+    def box(cls, mass: float, size: ArrayLike, center: ArrayLike = (0.0, 0.0, 0.0), name: str = "") -> "Body":
         """A homogeneous box with edge lengths ``size`` along the body axes, centred at ``center``.
 
         Its second moments are ``J_i = m size_i^2 / 12``.
@@ -156,7 +157,7 @@ class Body:
         """Principal second moments (ascending) and right-handed principal axes (columns)."""
         return principal_axes(self.J)
 
-    def second_moments_about(self, point) -> np.ndarray:
+    def second_moments_about(self, point: ArrayLike) -> np.ndarray:
         """Second moments ``int rho (r - p)(r - p)^T`` about a body-frame point ``p`` (parallel axes)."""
         d = V.vector3(point, "point") - self.center
         return self.J + self.mass * np.outer(d, d)

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import hat
@@ -280,7 +281,7 @@ class Configuration:
 
     # -- kinematics of the split -----------------------------------------------------------------
 
-    def place(self, q, qdot, Q: Mapping[str, np.ndarray], omega: Mapping[str, np.ndarray] | None = None,
+    def place(self, q: ArrayLike, qdot: ArrayLike, Q: Mapping[str, np.ndarray], omega: Mapping[str, np.ndarray] | None = None,
               check_central: bool = True) -> dict[str, dict[str, np.ndarray]]:
         """Positions and velocities of every body from the split variables (Theorem 2, (3.1)).
 
@@ -341,7 +342,8 @@ def _find_cycle(parent_of: Mapping[str, Joint]) -> str:
     return ""
 
 
-def initial_attitudes(config, Q0, omega0):
+def initial_attitudes(config: Configuration, Q0: Mapping[str, ArrayLike],
+                      omega0: Mapping[str, ArrayLike]) -> tuple[np.ndarray, np.ndarray]:
     """Per-body initial attitudes and angular velocities in ``config.order`` (identity and zero
     where a body is missing), validated: arrays of shapes ``(N, 3, 3)`` and ``(N, 3)``."""
     names = config.order

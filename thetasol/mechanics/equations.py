@@ -49,7 +49,8 @@ def torque(J: np.ndarray, a: np.ndarray, Q: np.ndarray) -> np.ndarray:
     return vee(J @ ap - ap @ J)
 
 
-def rotation_rhs(J: np.ndarray, I_inv: np.ndarray, a: np.ndarray, m: np.ndarray, Q: np.ndarray):
+def rotation_rhs(J: np.ndarray, I_inv: np.ndarray, a: np.ndarray, m: np.ndarray,
+                 Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Right-hand side of the Euler equations (4.8) in vector form and of ``Qdot = Q hat(omega)``.
 
     Returns ``(mdot, Qdot)`` where ``mdot = m x omega + tau`` and ``omega = I^{-1} m``.
@@ -59,7 +60,8 @@ def rotation_rhs(J: np.ndarray, I_inv: np.ndarray, a: np.ndarray, m: np.ndarray,
     return mdot, Q @ hat(omega)
 
 
-def paper_variables(J: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray):
+def paper_variables(J: np.ndarray, a: np.ndarray, Q: np.ndarray,
+                    omega: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The paper's matrices ``(M, u, omega_hat)`` of (4.5), (4.8) in the library convention.
 
     ``M = J hat(omega) + hat(omega) J`` and ``u = -Q^T a Q``.

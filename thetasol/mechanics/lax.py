@@ -16,17 +16,18 @@ degree-24 system and gives each point once.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = []
 
 
-def lax_matrix(J: np.ndarray, M: np.ndarray, u: np.ndarray, E) -> np.ndarray:
+def lax_matrix(J: np.ndarray, M: np.ndarray, u: np.ndarray, E: ArrayLike) -> np.ndarray:
     """L(E) = J^2 E^2 + M E + u (4.11) for J the principal values; shape ``E.shape + (3, 3)``."""
     E = np.asarray(E)[..., None, None]
     return np.diag(J * J) * E**2 + M * E + u
 
 
-def right_eigenvector(L: np.ndarray, w) -> np.ndarray:
+def right_eigenvector(L: np.ndarray, w: ArrayLike) -> np.ndarray:
     """Unit null vector of ``L - w`` (batched): the right eigenvector at a smooth point.
 
     Taken from a row pair's cross product (the largest one), exact where ``w`` is a simple
@@ -49,7 +50,8 @@ def _polymatmul(A: list, B: list) -> list:
     return out
 
 
-def eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.ndarray, left: bool = False):
+def eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.ndarray,
+                      left: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Points (E, w) where alpha^T v = 0, v the right (``left=True``: left) eigenvector.
 
     Returns ``(E, w)`` arrays of the finite points (6 for generic alpha, with multiplicity; fewer
@@ -94,11 +96,11 @@ def eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.nda
 
 
 def polish_eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.ndarray,
-                             E: np.ndarray, w: np.ndarray, dps: int = 40):
+                             E: np.ndarray, w: np.ndarray, dps: int = 40) -> tuple[np.ndarray, np.ndarray]:
     """The points of :func:`eigenvector_poles` polished by Newton's method in mpmath.
 
     ``np.roots`` leaves E a few ulps off; next to a tight pair of branch points (motion near a
-    relative equilibrium) that moved the Abel image of the divisor by up to 6e-11.  Here
+    relative equilibrium) those ulps move the Abel image of the divisor by up to 6e-11.  Here
     ``(L(E) - w) v = 0`` with ``v = b1 + s b2`` (or ``s b1 + b2``) in the plane ``alpha^T v = 0``
     (bilinear; ``b1, b2`` two of ``alpha x e_i``, exactly in mpmath) is solved for
     ``(E, w, s)`` from the float values, with ``J^2`` taken exactly as the spectral curve takes it

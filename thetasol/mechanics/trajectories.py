@@ -21,7 +21,7 @@ __all__ = ["Trajectories", "write_trajectories"]
 class Trajectories:
     """Trajectories of every body of a configuration on a time grid.
 
-    Produced by the split solution (:func:`thetasol.scenes.scene.solve_configuration`) and by the
+    Produced by the split solution (:class:`thetasol.scenes.pipeline.ConfigurationSolution`) and by the
     unsplit reference (:func:`thetasol.integrators.multibody.integrate_multibody`) in the same layout,
     so that they compare directly.
 
@@ -73,7 +73,7 @@ class Trajectories:
             "mass_center": float(np.max(np.abs(self.mass_center - other.mass_center), initial=0.0)),
         }
 
-    def save(self, path) -> None:
+    def save(self, path: str | Path) -> None:
         """Write to ``.npz`` or ``.csv`` atomically (see :func:`write_trajectories`)."""
         write_trajectories(self, path)
 
@@ -111,7 +111,7 @@ def _csv_columns(traj: Trajectories):
     return cols, np.hstack(data)
 
 
-def write_trajectories(traj: Trajectories, path, report: str | None = None) -> list[Path]:
+def write_trajectories(traj: Trajectories, path: str | Path, report: str | None = None) -> list[Path]:
     """Write trajectories to ``.npz`` or ``.csv``, atomically; optionally the report beside them.
 
     ``.npz`` arrays: ``t`` (T,), ``names`` (N,), ``mass_center``/``mass_center_velocity`` (T, 3),

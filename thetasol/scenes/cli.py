@@ -1,6 +1,6 @@
 """Command line: ``python -m thetasol demo`` and ``python -m thetasol solve SCENE.toml``.
 
-Both print the report of :func:`thetasol.scenes.scene.run` (effective bodies, the model of each
+Both print the report of :func:`thetasol.scenes.report.run` (effective bodies, the model of each
 part, the exact parts against the numerical references with deviations and timings).
 ``solve`` (and ``demo`` with ``-o``) also writes the trajectories (``.npz`` or ``.csv``)
 and the report (``<stem>.report.txt``), atomically.
@@ -38,7 +38,8 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit status."""
     args = _parser().parse_args(argv)
     from thetasol.mechanics.trajectories import write_trajectories
-    from thetasol.scenes.scene import demo_scene_path, load_scene, run
+    from thetasol.scenes.format import demo_scene_path, load_scene
+    from thetasol.scenes.report import run
 
     try:
         if args.output is not None and not args.output.lower().endswith((".npz", ".csv")):

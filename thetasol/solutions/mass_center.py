@@ -31,17 +31,22 @@ result keeps that (unavoidable) absolute error.  Overflow raises ``OverflowError
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import mpmath
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.solutions.base import Solution
 
 __all__ = ["MassCenterMotion", "mass_center", "stumpff"]
 
 
-def stumpff(lam, t):
+_KIND_ORDER = ("trigonometric", "hyperbolic", "polynomial")
+
+
+def stumpff(lam: ArrayLike, t: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The functions ``C, S, P`` of ``z = lam t^2`` (module docstring), broadcasting ``lam`` and ``t``.
 
     Parameters
@@ -68,7 +73,7 @@ def stumpff(lam, t):
     return C, S, P
 
 
-def _sinc(x, pos):
+def _sinc(x: np.ndarray, pos: np.ndarray) -> np.ndarray:
     """``sin x / x`` where ``pos`` else ``sinh x / x``, with the value 1 at x = 0."""
     xs = np.where(x == 0, 1.0, x)
     with np.errstate(over="ignore", invalid="ignore"):
@@ -78,9 +83,40 @@ def _sinc(x, pos):
     return np.where(small, 1.0 - np.where(pos, 1.0, -1.0) * x * x / 6.0, r)
 
 
+def _symmetry_axes(lam: np.ndarray, Vec: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Axes ``n`` about which ``phi`` is rotationally symmetric, and a centre ``c`` on each.
+
+    ``phi`` is symmetric about the axis ``n = Vec[:, k]`` through ``c`` when the other two
+    eigenvalues are equal (to the rounding of ``eigh``) and, for a zero pair, ``b`` has no
+    component in their plane; then ``n . ((q - c) x v)`` is a first integral.  ``c`` is the
+    equilibrium in that plane, ``-(beta_i e_i + beta_j e_j) / lam``.
+    """
+    scale = max(float(np.max(np.abs(lam))), np.finfo(float).tiny)
+    tol = 32 * np.finfo(float).eps * scale
+    btol = 16 * np.finfo(float).eps * float(np.linalg.norm(beta))
+    axes, centers = [], []
+    for k in range(3):
+        i, j = (m for m in range(3) if m != k)
+        if abs(lam[i] - lam[j]) > tol:
+            continue
+        mean = 0.5 * (lam[i] + lam[j])
+        if abs(mean) > tol:
+            c = -(beta[i] * Vec[:, i] + beta[j] * Vec[:, j]) / mean
+        elif abs(beta[i]) <= btol and abs(beta[j]) <= btol:
+            c = np.zeros(3)
+        else:
+            continue  # a constant force in the plane: no rotational symmetry
+        axes.append(Vec[:, k])
+        centers.append(c)
+    return np.reshape(axes, (-1, 3)), np.reshape(centers, (-1, 3))
+
+
 @dataclass(frozen=True, eq=False)
-class MassCenterMotion:
+class MassCenterMotion(Solution):
     """Closed-form motion of the mass centre in ``phi(x) = 1/2 x^T a x + 1/2 b^T x`` (3.2).
+
+    A :class:`~thetasol.solutions.base.Solution`: ``mc(t)`` returns ``(q, v)`` with shapes
+    ``t.shape + (3,)``; ``mc(t, dps=n)`` evaluates the same formulas in mpmath at ``n`` digits.
 
     Parameters
     ----------
@@ -98,6 +134,17 @@ class MassCenterMotion:
     kinds : tuple of str
         ``"trigonometric"``, ``"hyperbolic"`` or ``"polynomial"`` per mode (``|lam|`` at the
         round-off level of ``eigh`` counts as zero; the formula is the same for all three).
+    method : str
+        ``"mass-center/"`` and the kinds present, e.g. ``"mass-center/trigonometric+hyperbolic"``.
+    invariants : dict
+        First integrals per unit mass, at ``t = 0`` (:meth:`first_integrals`): ``energy``,
+        ``mode_energies`` (3,) and ``angular_momentum`` (k,), the components of ``(q - c) x v``
+        along the ``k`` axes about which ``phi`` is rotationally symmetric (``k = 0`` for
+        distinct eigenvalues, 1 for a double one, 3 for ``a = c 1``).
+    diagnostics : dict
+        ``eigenvalues``, ``axes``, ``kinds``, and the symmetry axes and centres of the
+        conserved angular momentum components (``angular_momentum_axes`` (k, 3),
+        ``angular_momentum_centers`` (k, 3)).
 
     Examples
     --------
@@ -106,14 +153,22 @@ class MassCenterMotion:
     >>> q, v = mc(np.pi)
     >>> np.round(q, 6).tolist()
     [-1.0, 1.0, 11.591953]
+    >>> mc.method
+    'mass-center/trigonometric+hyperbolic+polynomial'
     """
 
     a: np.ndarray
     b: np.ndarray
     q0: np.ndarray
     v0: np.ndarray
+    eigenvalues: np.ndarray = field(init=False, repr=False)
+    axes: np.ndarray = field(init=False, repr=False)
+    kinds: tuple = field(init=False)
+    method: str = field(init=False)
+    invariants: dict = field(init=False, repr=False)
+    diagnostics: dict = field(init=False, repr=False)
 
-    def __post_init__(self):
+    def __post_init__(self) -> None:
         a = V.symmetric_matrix(self.a, "a")
         object.__setattr__(self, "a", a)
         object.__setattr__(self, "b", V.vector3(self.b, "b"))
@@ -125,8 +180,15 @@ class MassCenterMotion:
         tiny = 16 * np.finfo(float).eps * max(np.max(np.abs(lam)), np.finfo(float).tiny)
         kinds = tuple("polynomial" if abs(x) <= tiny else "trigonometric" if x > 0 else "hyperbolic" for x in lam)
         object.__setattr__(self, "kinds", kinds)
+        object.__setattr__(self, "method", "mass-center/" + "+".join(k for k in _KIND_ORDER if k in kinds))
+        L_axes, L_centers = _symmetry_axes(lam, Vec, 0.5 * (Vec.T @ self.b))
+        object.__setattr__(self, "diagnostics", {
+            "eigenvalues": lam, "axes": Vec, "kinds": kinds,
+            "angular_momentum_axes": L_axes, "angular_momentum_centers": L_centers})
+        inv = self.first_integrals(self.q0, self.v0)
+        object.__setattr__(self, "invariants", {**inv, "energy": float(inv["energy"])})
 
-    def __call__(self, t, dps: int | None = None):
+    def __call__(self, t: ArrayLike, dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Position and velocity at times ``t``.
 
         Parameters
@@ -141,9 +203,15 @@ class MassCenterMotion:
         -------
         q, v : ndarray, shape ``t.shape + (3,)``
         """
-        tt = V.times(t, "t")
         if dps is not None:
-            return self._mp(tt, int(dps))
+            return self._mp(V.times(t, "t"), int(dps))
+        return super().__call__(t)
+
+    def evaluate(self, t: ArrayLike, dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """Alias of ``mc(t, dps=dps)``."""
+        return self(t, dps=dps)
+
+    def _evaluate(self, tt: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         lam, Vec = self.eigenvalues, self.axes
         y0, w0, beta = Vec.T @ self.q0, Vec.T @ self.v0, 0.5 * (Vec.T @ self.b)
         tc = tt[..., None]
@@ -159,7 +227,7 @@ class MassCenterMotion:
                                 "use dps= for an mpmath evaluation")
         return q, v
 
-    def _mp(self, tt, dps):
+    def _mp(self, tt: np.ndarray, dps: int) -> tuple[np.ndarray, np.ndarray]:
         with mpmath.workdps(dps + 5):
             mp = mpmath.mp
             a = mp.matrix([[mp.mpf(float(x)) for x in row] for row in self.a])
@@ -192,20 +260,38 @@ class MassCenterMotion:
                     vo[idx + (i,)] = mp.fsum(Vec[i][k] * yd[k] for k in range(3))
         return qo, vo
 
-    def potential(self, q) -> np.ndarray:
+    def potential(self, q: ArrayLike) -> np.ndarray:
         """``phi(q) = 1/2 q^T a q + 1/2 b^T q`` (2.4), shape ``q.shape[:-1]``."""
         q = np.asarray(q, dtype=float)
         return 0.5 * np.einsum("...i,ij,...j->...", q, self.a, q) + 0.5 * q @ self.b
 
-    def energy(self, q, v) -> np.ndarray:
+    def energy(self, q: ArrayLike, v: ArrayLike) -> np.ndarray:
         """Energy per unit mass ``1/2 |v|^2 + phi(q)`` (constant along the motion)."""
         v = np.asarray(v, dtype=float)
         return 0.5 * np.sum(v * v, axis=-1) + self.potential(q)
 
+    def first_integrals(self, q: ArrayLike, v: ArrayLike) -> dict[str, np.ndarray]:
+        """The first integrals per unit mass at states ``(q, v)``, shapes ``q.shape[:-1]`` leading.
+
+        ``energy`` ``1/2 |v|^2 + phi(q)``; ``mode_energies`` (..., 3) ``1/2 ydot_k^2 +
+        1/2 lam_k y_k^2 + beta_k y_k`` with ``y = axes^T q`` (their sum is ``energy``);
+        ``angular_momentum`` (..., k) ``n . ((q - c) x v)`` for each symmetry axis ``n`` and
+        centre ``c`` of ``diagnostics``.
+        """
+        q = np.asarray(q, dtype=float)
+        v = np.asarray(v, dtype=float)
+        y, yd = q @ self.axes, v @ self.axes
+        beta = 0.5 * (self.axes.T @ self.b)
+        modes = 0.5 * yd * yd + 0.5 * self.eigenvalues * y * y + beta * y
+        d = self.diagnostics
+        r = q[..., None, :] - d["angular_momentum_centers"]
+        L = np.einsum("kj,...kj->...k", d["angular_momentum_axes"], np.cross(r, v[..., None, :]))
+        return {"energy": self.energy(q, v), "mode_energies": modes, "angular_momentum": L}
+
     def describe(self) -> list[str]:
         """One line per mode: eigenvalue, kind, frequency or rate, axis."""
         out = []
-        for lam, kind, ax in zip(self.eigenvalues, self.kinds, self.axes.T):
+        for lam, kind, ax in zip(self.eigenvalues, self.kinds, self.axes.T, strict=True):
             if kind == "trigonometric":
                 extra = f"frequency {np.sqrt(lam):.6g}"
             elif kind == "hyperbolic":
@@ -216,7 +302,8 @@ class MassCenterMotion:
         return out
 
 
-def mass_center(a, b, q0, v0, t, dps: int | None = None):
+def mass_center(a: ArrayLike, b: ArrayLike, q0: ArrayLike, v0: ArrayLike, t: ArrayLike,
+                dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Closed-form mass centre ``q(t)`` and velocity in ``phi(x) = 1/2 x^T a x + 1/2 b^T x`` (3.2).
 
     Parameters

@@ -1,0 +1,354 @@
+"""Scene files: a configuration in a quadratic potential with its initial state and output times.
+
+A scene (TOML, read with the standard library's :mod:`tomllib`; format in
+docs/scene_format.md) gives bodies, joints, the potential (2.4), the initial state and the
+output times.  :func:`load_scene` reads and validates one; every error is a ``ValueError``
+naming the file and the entry.  Unknown keys are errors: a typo must not change the physics.
+"""
+from __future__ import annotations
+
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Mapping
+
+import numpy as np
+
+from thetasol.core import validate as V
+from thetasol.core.so3 import rodrigues
+from thetasol.mechanics.bodies import Body
+from thetasol.mechanics.configuration import Configuration, Joint
+from thetasol.mechanics.trajectories import Trajectories
+from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
+
+__all__ = ["Scene", "load_scene", "demo_scene_path"]
+
+_TOP_KEYS = {"name", "description", "bodies", "joints", "potential", "initial", "output", "solver"}
+_BODY_KEYS = {"name", "mass", "J", "I", "center", "box", "masses", "points"}
+_JOINT_KEYS = {"parent", "child", "parent_point", "child_point"}
+_SOLVER_KEYS = {"rtol", "method", "rotation", "make_central", "check_multibody", "check_t_end", "check_rtol"}
+_METHODS = ("DOP853", "RK45", "RK23", "splitting", "heyoka")
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A configuration in a quadratic potential with its initial state and output times.
+
+    Attributes
+    ----------
+    config : Configuration
+    a, b : ndarray
+        Potential (2.4).
+    q0, v0 : ndarray (3,)
+        System mass centre and velocity at ``t = 0``.
+    Q0, omega0 : dict name -> ndarray
+        Attitudes and body angular velocities at ``t = 0`` (every body present).
+    t : ndarray (T,)
+        Output times, increasing, ``>= 0``.
+    name, description : str
+    solver : dict
+        ``rtol``, ``method``, ``rotation``, ``check_multibody``, ``check_t_end``, ``check_rtol``,
+        ``make_central``.
+    """
+
+    config: Configuration
+    a: np.ndarray
+    b: np.ndarray
+    q0: np.ndarray
+    v0: np.ndarray
+    Q0: dict
+    omega0: dict
+    t: np.ndarray
+    name: str = ""
+    description: str = ""
+    solver: dict = field(default_factory=dict)
+
+    def solution(self, rotation: str | None = None) -> ConfigurationSolution:
+        """The split solution (:func:`~thetasol.scenes.pipeline.solve_configuration`) with the scene's options."""
+        s = self.solver
+        return solve_configuration(self.config, self.a, self.b, self.q0, self.v0, self.Q0, self.omega0,
+                                   rotation=rotation or s.get("rotation", "auto"), rtol=s.get("rtol", 1e-12),
+                                   method=s.get("method", "DOP853"))
+
+    def solve(self, rotation: str | None = None) -> Trajectories:
+        """The split solution on the output times: ``self.solution(rotation)(self.t)``."""
+        return self.solution(rotation)(self.t)
+
+    @classmethod
+    def from_dict(cls, d: Mapping[str, Any], source: str = "scene") -> "Scene":
+        """Build and validate a scene from the parsed TOML table (docs/scene_format.md)."""
+        return _scene_from_dict(d, source)
+
+
+def load_scene(path: str | Path) -> Scene:
+    """Read and validate a scene file (TOML).
+
+    Raises
+    ------
+    ValueError
+        Unreadable or malformed TOML, unknown keys, missing or non-physical data; the
+        message names the file and the entry.
+    """
+    path = Path(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise ValueError(f"cannot read scene file {str(path)!r}: {exc.strerror or exc}") from exc
+    try:
+        d = tomllib.loads(data.decode("utf-8"))
+    except UnicodeDecodeError as exc:
+        raise ValueError(f"{path}: not UTF-8 text ({exc})") from exc
+    except tomllib.TOMLDecodeError as exc:
+        raise ValueError(f"{path}: malformed TOML: {exc}") from exc
+    return _scene_from_dict(d, str(path))
+
+
+def demo_scene_path() -> Path:
+    """Path of the bundled demo scene (a C^2-central space-station-like configuration)."""
+    return Path(__file__).with_name("data") / "station.toml"
+
+
+# -- values ----------------------------------------------------------------------------------------
+
+def _table(d: Mapping, key: str, required: bool = True) -> dict:
+    if key not in d:
+        if required:
+            raise ValueError(f"missing [{key}]")
+        return {}
+    v = d[key]
+    if not isinstance(v, dict):
+        raise ValueError(f"[{key}] must be a table, got {type(v).__name__}")
+    return v
+
+
+def _unknown(d: Mapping, allowed: set, where: str) -> None:
+    extra = set(d) - allowed
+    if extra:
+        raise ValueError(f"{where}: unknown key(s) {sorted(extra)}; allowed: {sorted(allowed)}")
+
+
+def _number(x: Any, where: str, positive: bool = False) -> float:
+    if isinstance(x, bool) or not isinstance(x, (int, float)):
+        raise ValueError(f"{where} must be a number, got {x!r}")
+    x = float(x)
+    if not np.isfinite(x):
+        raise ValueError(f"{where} must be finite, got {x!r}")
+    if positive and x <= 0:
+        raise ValueError(f"{where} must be positive, got {x!r}")
+    return x
+
+
+def _array(x: Any, where: str, shape: tuple | None = None) -> np.ndarray:
+    if isinstance(x, (str, bool, dict)):
+        raise ValueError(f"{where} must be numeric, got {x!r}")
+    try:
+        arr = np.array(x, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where} must be a (nested) list of numbers, got {x!r}") from exc
+    return V.finite_array(arr, where, shape)
+
+
+def _attitude(x: Any, where: str) -> np.ndarray:
+    arr = _array(x, where)
+    if arr.shape == (3,):
+        return rodrigues(arr)
+    if arr.shape == (3, 3):
+        return V.rotation_matrix(arr, where)
+    raise ValueError(f"{where} must be a rotation vector (3 numbers) or a 3x3 matrix, got shape {arr.shape}")
+
+
+# -- the stages of a scene -------------------------------------------------------------------------
+
+def _body(d: Any, i: int) -> Body:
+    where = f"bodies[{i}]"
+    if not isinstance(d, dict):
+        raise ValueError(f"{where} must be a table")
+    _unknown(d, _BODY_KEYS, where)
+    name = d.get("name")
+    if not isinstance(name, str) or not name:
+        raise ValueError(f"{where}: 'name' must be a non-empty string")
+    where = f"body {name!r}"
+    if "masses" in d or "points" in d:
+        if not ({"masses", "points"} <= set(d)) or set(d) & {"mass", "J", "I", "box", "center"}:
+            raise ValueError(f"{where}: a point-mass body gives exactly 'masses' and 'points'")
+        return Body.from_point_masses(_array(d["masses"], f"{where}: masses"), _array(d["points"], f"{where}: points"),
+                                      name=name)
+    if "mass" not in d:
+        raise ValueError(f"{where}: missing 'mass'")
+    mass = _number(d["mass"], f"{where}: mass", positive=True)
+    center = _array(d.get("center", [0.0, 0.0, 0.0]), f"{where}: center", (3,))
+    given = [k for k in ("J", "I", "box") if k in d]
+    if len(given) != 1:
+        raise ValueError(f"{where}: give exactly one of 'J' (second moments), 'I' (inertia) or 'box' (edge lengths)")
+    k = given[0]
+    if k == "box":
+        return Body.box(mass, _array(d["box"], f"{where}: box", (3,)), center=center, name=name)
+    val = _array(d[k], f"{where}: {k}")
+    return Body(mass=mass, center=center, name=name, **{k: val})
+
+
+def _bodies(d: Mapping) -> dict[str, Body]:
+    """The ``[[bodies]]``, by name, in file order."""
+    bl = d.get("bodies")
+    if not isinstance(bl, list) or not bl:
+        raise ValueError("needs at least one [[bodies]] entry")
+    bodies = [_body(b, i) for i, b in enumerate(bl)]
+    byname = {}
+    for b in bodies:
+        if b.name in byname:
+            raise ValueError(f"duplicate body name {b.name!r}")
+        byname[b.name] = b
+    return byname
+
+
+def _joint(j: Any, i: int, byname: Mapping[str, Body]) -> tuple:
+    """``(parent, child, parent_point, child_point)``; ``child_point`` may be the string "central"."""
+    where = f"joints[{i}]"
+    if not isinstance(j, dict):
+        raise ValueError(f"{where} must be a table")
+    _unknown(j, _JOINT_KEYS, where)
+    for k in _JOINT_KEYS:
+        if k not in j:
+            raise ValueError(f"{where}: missing '{k}'")
+    for k in ("parent", "child"):
+        if not isinstance(j[k], str):
+            raise ValueError(f"{where}: '{k}' must be a body name (string)")
+        if j[k] not in byname:
+            raise ValueError(f"{where}: unknown {k} {j[k]!r}; bodies are {list(byname)}")
+    pp = _array(j["parent_point"], f"{where}: parent_point", (3,))
+    cp = j["child_point"]
+    if isinstance(cp, str):
+        if cp != "central":
+            raise ValueError(f"{where}: child_point must be 3 numbers or \"central\", got {cp!r}")
+    else:
+        cp = _array(cp, f"{where}: child_point", (3,))
+    return j["parent"], j["child"], pp, cp
+
+
+def _configuration(bodies: list[Body], raw_joints: list[tuple], make_central: Any) -> Configuration:
+    """The tree, "central" child points filled in, shifted to central if asked, checked central."""
+    # "central" child points need the effective bodies: build once with zeros, then fill in.
+    joints = [Joint(p, c, pp, np.zeros(3) if isinstance(cp, str) else cp) for p, c, pp, cp in raw_joints]
+    config = Configuration(bodies, joints)
+    if any(isinstance(cp, str) for *_, cp in raw_joints):
+        joints = [Joint(p, c, pp, config.effective_body(c).center if isinstance(cp, str) else cp)
+                  for p, c, pp, cp in raw_joints]
+        config = Configuration(bodies, joints)
+    if not isinstance(make_central, bool):
+        raise ValueError("[solver] make_central must be true or false")
+    if make_central:
+        config = config.make_central()
+    config.check_central()
+    return config
+
+
+def _potential(d: Mapping) -> tuple[np.ndarray, np.ndarray]:
+    pot = _table(d, "potential")
+    _unknown(pot, {"a", "b"}, "[potential]")
+    if "a" not in pot:
+        raise ValueError("[potential] needs 'a' (3x3 symmetric)")
+    a = V.symmetric_matrix(_array(pot["a"], "potential.a", (3, 3)), "potential.a")
+    b = _array(pot.get("b", [0.0, 0.0, 0.0]), "potential.b", (3,))
+    return a, b
+
+
+def _initial(d: Mapping, order: list[str]) -> tuple[np.ndarray, np.ndarray, dict, dict]:
+    """``q0, v0`` and per-body attitudes and angular velocities (identity and zero where not given)."""
+    ini = _table(d, "initial", required=False)
+    _unknown(ini, {"q", "v", "attitude", "omega"}, "[initial]")
+    q0 = _array(ini.get("q", [0.0, 0.0, 0.0]), "initial.q", (3,))
+    v0 = _array(ini.get("v", [0.0, 0.0, 0.0]), "initial.v", (3,))
+    Q0, w0 = {}, {}
+    for key, dest in (("attitude", Q0), ("omega", w0)):
+        tab = ini.get(key, {})
+        if not isinstance(tab, dict):
+            raise ValueError(f"[initial.{key}] must be a table of body names")
+        for n, val in tab.items():
+            if n not in order:
+                raise ValueError(f"initial.{key} names unknown body {n!r}")
+            w = f"initial.{key}.{n}"
+            dest[n] = _attitude(val, w) if key == "attitude" else _array(val, w, (3,))
+    Q0 = {n: Q0.get(n, np.eye(3)) for n in order}
+    w0 = {n: w0.get(n, np.zeros(3)) for n in order}
+    return q0, v0, Q0, w0
+
+
+def _output(d: Mapping) -> np.ndarray:
+    """The output times: ``times``, or ``samples`` points on ``[0, t_end]``."""
+    out = _table(d, "output")
+    _unknown(out, {"t_end", "samples", "times"}, "[output]")
+    if "times" in out:
+        if set(out) & {"t_end", "samples"}:
+            raise ValueError("[output] gives either 'times' or 't_end' and 'samples'")
+        t = _array(out["times"], "output.times")
+        if t.ndim != 1 or t.size == 0:
+            raise ValueError("output.times must be a non-empty list of numbers")
+    else:
+        if "t_end" not in out:
+            raise ValueError("[output] needs 't_end' (and optionally 'samples') or 'times'")
+        t_end = _number(out["t_end"], "output.t_end", positive=True)
+        n = out.get("samples", 201)
+        if isinstance(n, bool) or not isinstance(n, int) or not 2 <= n <= 10**7:
+            raise ValueError(f"output.samples must be an integer in [2, 1e7], got {n!r}")
+        t = np.linspace(0.0, t_end, n)
+    if t[0] < 0 or np.any(np.diff(t) <= 0):
+        raise ValueError("output times must be >= 0 and strictly increasing")
+    return t
+
+
+def _solver_options(solver: Mapping, t: np.ndarray, make_central: bool) -> dict:
+    """The ``[solver]`` options with their defaults."""
+    s = {"rtol": 1e-12, "method": "DOP853", "rotation": "auto", "check_multibody": True,
+         "check_t_end": float(t[-1]), "check_rtol": 1e-12}
+    for k in ("rtol", "check_rtol"):
+        if k in solver:
+            s[k] = _number(solver[k], f"solver.{k}", positive=True)
+            if s[k] >= 1:
+                raise ValueError(f"solver.{k} must be below 1")
+    if "check_t_end" in solver:
+        s["check_t_end"] = _number(solver["check_t_end"], "solver.check_t_end", positive=True)
+    if "method" in solver:
+        if solver["method"] not in _METHODS:
+            raise ValueError("solver.method must be DOP853, RK45, RK23, splitting or heyoka")
+        s["method"] = solver["method"]
+    if "rotation" in solver:
+        if solver["rotation"] not in ("auto", "numerical"):
+            raise ValueError("solver.rotation must be 'auto' or 'numerical'")
+        s["rotation"] = solver["rotation"]
+    if "check_multibody" in solver:
+        if not isinstance(solver["check_multibody"], bool):
+            raise ValueError("solver.check_multibody must be true or false")
+        s["check_multibody"] = solver["check_multibody"]
+    s["make_central"] = make_central
+    return s
+
+
+def _scene_from_dict(d: Any, source: str) -> Scene:
+    try:
+        return _build_scene(d)
+    except ValueError as exc:
+        raise ValueError(f"{source}: {exc}") from exc
+
+
+def _build_scene(d: Any) -> Scene:
+    if not isinstance(d, Mapping):
+        raise ValueError("a scene must be a table")
+    _unknown(d, _TOP_KEYS, "top level")
+    name = d.get("name", "")
+    desc = d.get("description", "")
+    if not isinstance(name, str) or not isinstance(desc, str):
+        raise ValueError("'name' and 'description' must be strings")
+    byname = _bodies(d)
+    jl = d.get("joints", [])
+    if not isinstance(jl, list):
+        raise ValueError("'joints' must be an array of tables [[joints]]")
+    raw_joints = [_joint(j, i, byname) for i, j in enumerate(jl)]
+    solver = dict(_table(d, "solver", required=False))
+    _unknown(solver, _SOLVER_KEYS, "[solver]")
+    make_central = solver.get("make_central", False)
+    config = _configuration(list(byname.values()), raw_joints, make_central)
+    a, b = _potential(d)
+    q0, v0, Q0, w0 = _initial(d, config.order)
+    t = _output(d)
+    return Scene(config=config, a=a, b=b, q0=q0, v0=v0, Q0=Q0, omega0=w0, t=t, name=name, description=desc,
+                 solver=_solver_options(solver, t, make_central))

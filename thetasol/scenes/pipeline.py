@@ -1,0 +1,281 @@
+"""The split of Theorem 2 (3.1): a whole C^k-central configuration as one Solution.
+
+:func:`solve_configuration` builds, once, every part of the split:
+
+* the system mass centre ``q(t)`` in closed form (:class:`~thetasol.solutions.mass_center.MassCenterMotion`);
+* one rotation per effective body (2.15), (3.7) in ``1/2 x^T a x`` (3.3), independent of ``q``
+  and of each other: ``thetasol.solutions.rotation.solve_rotation`` where a closed form exists
+  (elliptic functions for ``a = c 1`` and pendulum motions, Neumann's separation for a
+  symmetric body without axial spin, theta functions otherwise), else (data it refuses, e.g. a
+  symmetric body with little but non-zero axial spin) a
+  :class:`~thetasol.integrators.rotation.NumericalRotation`, which runs
+  :func:`thetasol.integrate_rotation` on demand at the requested times.  Which one, and why, is
+  recorded per body.
+
+The result, a :class:`ConfigurationSolution`, places every physical body down the tree
+(:meth:`Configuration.place`) at any times it is asked for.
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from thetasol.core import validate as V
+from thetasol.integrators.rotation import numerical_rotation
+from thetasol.mechanics.configuration import Configuration, initial_attitudes
+from thetasol.mechanics.equations import invariants as rotation_invariants
+from thetasol.mechanics.trajectories import Trajectories
+from thetasol.solutions.base import Solution
+from thetasol.solutions.mass_center import MassCenterMotion
+
+__all__ = ["ConfigurationSolution", "solve_configuration", "rotation_kind", "closed_form_rotation"]
+
+
+def rotation_kind(a: ArrayLike) -> str:
+    """Which closed form the rotation of a body in ``1/2 x^T a x`` needs (Sections 4 I and II).
+
+    ``"elliptic"`` when ``a`` is isotropic (``a = c 1`` exerts no torque: the Euler top),
+    ``"theta (rank-one a, genus-3 nodal curve)"`` for ``a`` of rank one, else ``"theta"``
+    (the generic genus-4 spectral curve (4.12), Prym variety of dimension 3).
+    """
+    a = V.symmetric_matrix(a, "a")
+    ev = np.linalg.eigvalsh(a)
+    scale = max(np.max(np.abs(ev)), np.finfo(float).tiny)
+    if ev[-1] - ev[0] <= 1e-14 * scale:
+        return "elliptic"
+    if np.sum(np.abs(ev) > 1e-14 * scale) == 1:
+        return "theta (rank-one a, genus-3 nodal curve)"
+    return "theta"
+
+
+def closed_form_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike) -> tuple[Any, str]:
+    """``solve_rotation(J, a, Q0, omega0)`` and ``""``, or ``None`` and the reason it refused the data."""
+    # imported here: scenes without a closed-form rotation never load the theta machinery
+    from thetasol.solutions.rotation import solve_rotation
+
+    try:
+        return solve_rotation(J, a, Q0, omega0), ""
+    except NotImplementedError as exc:
+        return None, str(exc) or "not implemented"
+
+
+@dataclass(frozen=True, eq=False)
+class ConfigurationSolution(Solution):
+    """Every body of a C^k-central configuration, by the split (3.1), at any times.
+
+    ``sol(t)`` takes 1-d times (any order, negative allowed) and returns a
+    :class:`~thetasol.mechanics.trajectories.Trajectories` (its layout has one time axis);
+    other shapes of ``t`` are refused with a ``ValueError`` that points to :meth:`state`, which
+    takes any shape.  Each part is evaluated once per call (the closed forms in their own
+    chunks; a numerical rotation integrates from 0 to the requested times).
+
+    Attributes
+    ----------
+    config : Configuration
+    a, b : ndarray
+        Potential (2.4).
+    mass_center : MassCenterMotion
+        The system mass centre (3.2).
+    rotations : dict name -> Solution
+        The rotation of every effective body (3.3), root first: a closed form of
+        ``solve_rotation`` or a :class:`~thetasol.integrators.rotation.NumericalRotation`.
+    method : str
+        ``"split: "``, the mass centre's method, then ``name=method`` per rotation.
+    invariants : dict
+        First integrals: ``energy`` (the whole system's, ``M E_q + sum_B E_B``),
+        ``mass_center`` (per unit mass, :attr:`MassCenterMotion.invariants`) and ``rotations``
+        (name -> ``energy``, ``I2``, ``I3`` (4.13), ``curve`` (4.12) of each effective body).
+    diagnostics : dict
+        ``models`` (the mass-centre modes and a line per rotation), ``rotation_kind``,
+        ``rotations`` (name -> ``model``, ``closed_form``, ``reason``, ``setup_seconds``),
+        ``mass_center_setup_seconds``, ``setup_seconds`` (all set-up).
+    """
+
+    config: Configuration
+    a: np.ndarray
+    b: np.ndarray
+    mass_center: MassCenterMotion
+    rotations: dict
+    method: str
+    invariants: dict = field(repr=False)
+    diagnostics: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Body names, root first (the body axis of the outputs)."""
+        return tuple(self.config.order)
+
+    def _chunk_size(self) -> int:
+        return 1 << 62  # the parts chunk themselves; a numerical rotation integrates once
+
+    def _parts(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict, dict, dict, dict]:
+        """Mass centre, attitudes, angular velocities, placed bodies and seconds per part at 1-d ``t``."""
+        seconds = {}
+        start = time.perf_counter()
+        q, qd = self.mass_center(t)
+        seconds["mass_center"] = time.perf_counter() - start
+        Qs, Ws = {}, {}
+        for n, rot in self.rotations.items():
+            start = time.perf_counter()
+            Ws[n], Qs[n] = rot(t)
+            seconds[n] = time.perf_counter() - start
+        placed = self.config.place(q, qd, Qs, Ws, check_central=False)
+        return q, qd, Qs, Ws, placed, seconds
+
+    def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
+        q, qd, Qs, Ws, placed, _ = self._parts(t)
+        names = self.names
+        return (q, qd, np.stack([placed[n]["position"] for n in names], axis=1),
+                np.stack([placed[n]["velocity"] for n in names], axis=1),
+                np.stack([Qs[n] for n in names], axis=1), np.stack([Ws[n] for n in names], axis=1))
+
+    def state(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
+        """The state at times ``t`` of any shape, ``t.shape`` leading and the body axis next.
+
+        Returns
+        -------
+        q, qdot : ndarray, ``t.shape + (3,)``
+            System mass centre and its velocity.
+        position, velocity : ndarray, ``t.shape + (N, 3)``
+            Each body's own mass centre and its velocity, bodies in ``names`` order.
+        attitude : ndarray, ``t.shape + (N, 3, 3)``
+        omega : ndarray, ``t.shape + (N, 3)``
+            Body-frame angular velocities.
+        """
+        return super().__call__(t)
+
+    def __call__(self, t: ArrayLike) -> Trajectories:
+        """:class:`Trajectories` of every body at the 1-d times ``t``.
+
+        ``info`` holds ``models``, ``rotation_kind``, ``method`` and the seconds per part
+        (``mass_center_seconds`` and ``rotations[name]["seconds"]``: set-up plus this
+        evaluation; ``evaluation_seconds`` alone).
+        """
+        tt = V.times(t, "t")
+        if tt.ndim != 1 or tt.size == 0:
+            raise ValueError(f"t must be a non-empty 1-d array for Trajectories, got shape {tt.shape}; "
+                             "use .state(t) for other shapes")
+        q, qd, Qs, Ws, placed, seconds = self._parts(tt)
+        names = self.names
+        d = self.diagnostics
+        rot_info = {n: {"closed_form": r["closed_form"], "reason": r["reason"],
+                        "seconds": r["setup_seconds"] + seconds[n]} for n, r in d["rotations"].items()}
+        info = {"models": d["models"], "rotation_kind": d["rotation_kind"], "method": self.method,
+                "rotations": rot_info, "evaluation_seconds": seconds,
+                "mass_center_seconds": d["mass_center_setup_seconds"] + seconds["mass_center"]}
+        return Trajectories(
+            t=tt.copy(), names=names,
+            position=np.array([placed[n]["position"] for n in names]),
+            velocity=np.array([placed[n]["velocity"] for n in names]),
+            attitude=np.array([Qs[n] for n in names]),
+            omega=np.array([Ws[n] for n in names]),
+            mass_center=q, mass_center_velocity=qd, info=info)
+
+    def evaluate(self, t: ArrayLike) -> Trajectories:
+        """Alias of ``sol(t)``."""
+        return self(t)
+
+
+def _check_arguments(config: Configuration, rotation: str, check_central: bool) -> None:
+    if not isinstance(config, Configuration):
+        raise ValueError(f"config must be a Configuration, got {type(config).__name__}")
+    if rotation not in ("auto", "numerical"):
+        raise ValueError(f"rotation must be 'auto' or 'numerical', got {rotation!r}")
+    if check_central:
+        config.check_central()
+
+
+def _rotations(config: Configuration, a: np.ndarray, Qa: np.ndarray, wa: np.ndarray, rotation: str,
+               rtol: float, method: str, kind: str) -> tuple[dict, dict]:
+    """The rotation solution of every effective body and its diagnostics (model, reason, seconds)."""
+    sols, diag = {}, {}
+    for i, (n, e) in enumerate(config.effective_bodies().items()):
+        start = time.perf_counter()
+        sol, why = (None, "rotation='numerical'") if rotation == "numerical" else \
+            closed_form_rotation(e.J, a, Qa[i], wa[i])
+        closed = sol is not None
+        if closed:
+            model = f"{kind}: closed form {sol.method}"
+        else:
+            sol = numerical_rotation(e.J, a, Qa[i], wa[i], rtol=rtol, method=method)
+            model = f"{kind}: numerical fallback (integrate_rotation {method}, rtol={rtol:g})"
+        sols[n] = sol
+        diag[n] = {"model": model, "closed_form": closed, "reason": why,
+                   "setup_seconds": time.perf_counter() - start}
+    return sols, diag
+
+
+def _first_integrals(config: Configuration, a: np.ndarray, mc: MassCenterMotion, Qa: np.ndarray,
+                     wa: np.ndarray) -> dict:
+    rot = {}
+    for i, (n, e) in enumerate(config.effective_bodies().items()):
+        inv = rotation_invariants(e.J, a, Qa[i], wa[i])
+        rot[n] = {"energy": float(inv["energy"]), "I2": float(inv["I2"]), "I3": float(inv["I3"]),
+                  "curve": inv["curve"]}
+    energy = config.mass * mc.invariants["energy"] + sum(r["energy"] for r in rot.values())
+    return {"energy": float(energy), "mass_center": mc.invariants, "rotations": rot}
+
+
+def solve_configuration(config: Configuration, a: ArrayLike, b: ArrayLike, q0: ArrayLike, v0: ArrayLike,
+                        Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike], *,
+                        rotation: str = "auto", rtol: float = 1e-12, method: str = "DOP853",
+                        check_central: bool = True) -> ConfigurationSolution:
+    """Every body of a C^k-central configuration by the split (3.1), as a solution to evaluate.
+
+    Parameters
+    ----------
+    config : Configuration
+        A central tree (else ValueError listing the joints to shift, unless
+        ``check_central=False``, which evaluates the same formulas anyway: useful only to show
+        that a non-central tree does not split).
+    a, b : array_like
+        Potential ``phi(x) = 1/2 x^T a x + 1/2 b^T x`` (2.4).
+    q0, v0 : array_like (3,)
+        System mass centre and its velocity at ``t = 0``.
+    Q0 : mapping name -> (3, 3)
+        Attitudes (identity where missing).
+    omega0 : mapping name -> (3,)
+        Body-frame angular velocities (zero where missing).
+    rotation : {"auto", "numerical"}
+        ``"auto"`` uses ``thetasol.solutions.rotation.solve_rotation`` where it has a closed form
+        and :func:`~thetasol.integrate_rotation` (on demand) elsewhere; ``"numerical"`` always
+        integrates.
+    rtol, method : float, str
+        Passed to :func:`~thetasol.integrate_rotation` for the numerical rotations.
+
+    Returns
+    -------
+    ConfigurationSolution
+        ``sol(t)`` gives the :class:`Trajectories` at 1-d times ``t``; ``sol.state(t)`` arrays
+        for any shape.
+
+    Examples
+    --------
+    >>> from thetasol.mechanics.bodies import Body
+    >>> cfg = Configuration([Body(mass=1.0, J=[1.0, 2.0, 3.0], name="solo")])
+    >>> sol = solve_configuration(cfg, np.diag([1.0, 2.0, 3.0]), [0, 0, 0], [1, 0, 0], [0, 0, 0],
+    ...                           {}, {}, rotation="numerical")
+    >>> sol([0.0, 1.0]).position.shape
+    (1, 2, 3)
+    """
+    _check_arguments(config, rotation, check_central)
+    a = V.symmetric_matrix(a, "a")
+    b = V.vector3(b, "b")
+    Qa, wa = initial_attitudes(config, Q0, omega0)
+    start = time.perf_counter()
+    mc = MassCenterMotion(a, b, q0, v0)
+    mc_seconds = time.perf_counter() - start
+    kind = rotation_kind(a)
+    rots, rot_diag = _rotations(config, a, Qa, wa, rotation, rtol, method, kind)
+    models = {"mass_center": list(zip(mc.eigenvalues.tolist(), mc.kinds, strict=True)),
+              "rotations": {n: r["model"] for n, r in rot_diag.items()}}
+    diagnostics = {"models": models, "rotation_kind": kind, "rotations": rot_diag,
+                   "mass_center_setup_seconds": mc_seconds,
+                   "setup_seconds": mc_seconds + sum(r["setup_seconds"] for r in rot_diag.values())}
+    method_text = "split: " + mc.method + "; " + ", ".join(f"{n}={r.method}" for n, r in rots.items())
+    return ConfigurationSolution(config=config, a=a, b=b, mass_center=mc, rotations=rots, method=method_text,
+                                 invariants=_first_integrals(config, a, mc, Qa, wa), diagnostics=diagnostics)

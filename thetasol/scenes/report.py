@@ -1,0 +1,222 @@
+"""The report of a scene: the split solution against the numerical references, in text.
+
+:func:`run` solves a scene by the split (:mod:`thetasol.scenes.pipeline`) and reports the
+effective bodies, the model of each part, and the exact parts against numerical references
+that do not use them, each with its max deviation, a stated tolerance and timings:
+
+* the closed-form mass centre against DOP853 at rtol 1e-13 (tolerance 1e-9 times the scale);
+* each closed-form rotation against :func:`thetasol.integrate_rotation` at rtol 1e-13
+  (tolerance 1e-8);
+* the whole split against the unsplit multibody system of :mod:`thetasol.integrators.multibody`
+  (tolerance ``10 check_rtol (1 + t) (1 + max |x|)``, docs/mechanics.md);
+
+and the drift of the first integrals (4.9), (4.13), (4.12) along each rotation.
+"""
+from __future__ import annotations
+
+import io
+import time
+from dataclasses import dataclass
+from typing import TextIO
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from thetasol.integrators.multibody import integrate_multibody
+from thetasol.integrators.rotation import integrate_rotation
+from thetasol.mechanics.equations import invariants
+from thetasol.mechanics.trajectories import Trajectories
+from thetasol.scenes.format import Scene
+from thetasol.scenes.pipeline import ConfigurationSolution
+
+__all__ = ["Check", "run"]
+
+
+@dataclass
+class Check:
+    """One comparison of the report: a max deviation against a stated tolerance."""
+
+    what: str
+    deviation: float
+    tolerance: float
+    seconds: str
+
+    @property
+    def ok(self) -> bool:
+        """The deviation is within the tolerance."""
+        return bool(self.deviation <= self.tolerance)
+
+    def line(self) -> str:
+        """The report line of this check."""
+        return (f"  {self.what}: {self.deviation:.2e} (tolerance {self.tolerance:.1e}) [{self.seconds}]  "
+                f"{'ok' if self.ok else 'FAILED'}")
+
+
+class _Text:
+    """The report as it is written: kept, and echoed to ``out`` when given."""
+
+    def __init__(self, out: TextIO | None):
+        self.buf = io.StringIO()
+        self.out = out
+
+    def __call__(self, line: str = "") -> None:
+        self.buf.write(line + "\n")
+        if self.out is not None:
+            print(line, file=self.out, flush=True)
+
+
+def _fmt(x) -> str:
+    x = np.where(np.abs(x) < 5e-7, 0.0, x) + 0.0  # no "-0." in the report
+    return np.array2string(x, precision=6, suppress_small=True, floatmode="maxprec", separator=", ")
+
+
+def _mass_center_numerical(a, b, q0, v0, t) -> tuple[np.ndarray, np.ndarray]:
+    def rhs(_t, y):
+        return np.concatenate([y[3:], -(a @ y[:3] + 0.5 * b)])
+
+    sol = solve_ivp(rhs, (0.0, float(t[-1])), np.concatenate([q0, v0]), t_eval=t, method="DOP853",
+                    rtol=1e-13, atol=1e-15)
+    if not sol.success:
+        raise RuntimeError(f"mass-centre reference failed: {sol.message}")
+    return sol.y[:3].T, sol.y[3:].T
+
+
+def _describe_scene(scene: Scene, say: _Text) -> None:
+    cfg, t = scene.config, scene.t
+    say(f"scene: {scene.name or '(unnamed)'}" + (f"  -- {scene.description}" if scene.description else ""))
+    viol = max((v.relative for v in cfg.violations()), default=0.0)
+    say(f"{len(cfg)} bodies, root {cfg.root!r}, C^{cfg.depth}-central (max relative joint offset {viol:.2g}), "
+        f"total mass {cfg.mass:.6g}" + ("; joints shifted to central positions" if scene.solver.get("make_central") else ""))
+    say(f"output: {t.size} times in [{t[0]:g}, {t[-1]:g}]")
+    say()
+    say("effective bodies (2.15), (3.7), in each body's frame:")
+    for n, e in cfg.effective_bodies().items():
+        parent = cfg.parent(n)
+        say(f"  {n}" + (f" (on {parent!r})" if parent else " (root)") + f": mass {e.mass:.6g}, centre {_fmt(e.center)}")
+        say(f"      J principal {_fmt(e.principal_moments)}, I principal {_fmt(e.principal_inertia)}")
+        say(f"      principal axes (columns) {_fmt(e.axes).replace(chr(10), ' ')}")
+    say()
+
+
+def _describe_models(sol: ConfigurationSolution, say: _Text) -> None:
+    modes = sol.mass_center.describe()
+    say("models:")
+    say(f"  mass centre (3.2): closed form, {modes[0]}")
+    for line in modes[1:]:
+        say(f"                                  {line}")
+    rot = sol.diagnostics["rotations"]
+    for n, r in rot.items():
+        say(f"  rotation of {n}: {r['model']}")
+    for reason in sorted({r["reason"] for r in rot.values() if not r["closed_form"] and r["reason"]}):
+        say(f"    (no closed form: {reason})")
+    say()
+
+
+def _reference_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectories) -> list[Check]:
+    """The closed-form mass centre against DOP853, each closed-form rotation against integrate_rotation."""
+    t = scene.t
+    start = time.perf_counter()
+    qn, vn = _mass_center_numerical(scene.a, scene.b, scene.q0, scene.v0, t)
+    ref_seconds = time.perf_counter() - start
+    scale = 1.0 + float(np.max(np.abs(qn))) + float(np.max(np.abs(vn)))
+    dev = max(float(np.max(np.abs(qn - traj.mass_center))), float(np.max(np.abs(vn - traj.mass_center_velocity))))
+    checks = [Check("mass centre: closed form vs DOP853 (rtol 1e-13)", dev, 1e-9 * scale,
+                    f"{traj.info['mass_center_seconds'] * 1e3:.2f} ms vs {ref_seconds * 1e3:.1f} ms")]
+    for i, n in enumerate(traj.names):
+        r = traj.info["rotations"][n]
+        if not r["closed_form"]:
+            continue
+        e = scene.config.effective_body(n)
+        start = time.perf_counter()
+        wn, Qn = integrate_rotation(e.J, scene.a, scene.Q0[n], scene.omega0[n], t, rtol=1e-13)
+        ref_seconds = time.perf_counter() - start
+        dev = max(float(np.max(np.abs(Qn - traj.attitude[i]))), float(np.max(np.abs(wn - traj.omega[i]))))
+        checks.append(Check(f"rotation of {n}: {sol.rotations[n].method} vs integrate_rotation (DOP853, rtol 1e-13)",
+                            dev, 1e-8, f"{r['seconds'] * 1e3:.1f} ms vs {ref_seconds * 1e3:.1f} ms"))
+    return checks
+
+
+def _drift(scene: Scene, traj: Trajectories, say: _Text) -> None:
+    say()
+    say("first integrals of each effective rotation along the solution (max relative drift):")
+    for i, n in enumerate(traj.names):
+        e = scene.config.effective_body(n)
+        inv = invariants(e.J, scene.a, traj.attitude[i], traj.omega[i])
+        drift = {}
+        for k in ("energy", "I2", "I3"):
+            x = inv[k]
+            drift[k] = float(np.max(np.abs(x - x[0])) / max(abs(x[0]), 1e-300))
+        curve = inv["curve"]
+        cd = float(np.max(np.abs(curve - curve[0])) / np.max(np.abs(curve[0])))
+        say(f"  {n}: energy {drift['energy']:.1e}, I2 {drift['I2']:.1e}, I3 {drift['I3']:.1e}, "
+            f"spectral curve (4.12) {cd:.1e}")
+
+
+def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say: _Text) -> Check:
+    """The split against the unsplit multibody integration up to the scene's ``check_t_end``."""
+    s, t = scene.solver, scene.t
+    t_end = min(float(s.get("check_t_end", t[-1])), float(t[-1]))
+    sel = t <= t_end
+    say()
+    say(f"the split against the unsplit multibody system (maximal coordinates, KKT, t <= {t_end:g}):")
+    mb = integrate_multibody(scene.config, scene.a, scene.b, scene.q0, scene.v0, scene.Q0, scene.omega0, t[sel],
+                             rtol=s.get("check_rtol", 1e-12))
+    sub = Trajectories(t=t[sel], names=traj.names, position=traj.position[:, sel],
+                       velocity=traj.velocity[:, sel], attitude=traj.attitude[:, sel], omega=traj.omega[:, sel],
+                       mass_center=traj.mass_center[sel], mass_center_velocity=traj.mass_center_velocity[sel])
+    dv = sub.deviation(mb)
+    size = 1.0 + float(np.max(np.abs(traj.position[:, sel])))
+    # The gap is the multibody integrator's error (it falls with check_rtol; docs/mechanics.md):
+    # measured <= ~0.3 rtol (1 + t) |x|; a split that does not hold is off by ~ the joint offsets.
+    tol = 10.0 * s.get("check_rtol", 1e-12) * (1.0 + t_end) * size
+    say(f"  positions {dv['position']:.2e}, velocities {dv['velocity']:.2e}, attitudes {dv['attitude']:.2e}, "
+        f"angular velocities {dv['omega']:.2e}")
+    say(f"  multibody: {mb.info['nfev']} right-hand sides, max joint gap {mb.info['constraint_residual']:.1e}")
+    check = Check("split vs unsplit multibody: positions and attitudes", max(dv["position"], dv["attitude"]), tol,
+                  f"split {split_seconds:.2f} s vs multibody {mb.info['seconds']:.2f} s")
+    say(check.line())
+    return check
+
+
+def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Trajectories, str, list[Check]]:
+    """Solve a scene by the split and compare its exact parts with the numerical references.
+
+    Parameters
+    ----------
+    scene : Scene
+    check : bool
+        Also run the unsplit multibody reference (if the scene's ``check_multibody`` allows).
+    out : text stream, optional
+        Where to print the report as it is produced (besides returning it).
+
+    Returns
+    -------
+    trajectories : Trajectories
+        The split solution on the scene's times.
+    report : str
+    checks : list of Check
+        Every comparison with its tolerance; ``all(c.ok for c in checks)`` is the verdict.
+    """
+    say = _Text(out)
+    _describe_scene(scene, say)
+    start = time.perf_counter()
+    sol = scene.solution()
+    traj = sol(scene.t)
+    split_seconds = time.perf_counter() - start
+    _describe_models(sol, say)
+
+    say("exact parts against the numerical references (max abs deviation):")
+    checks = _reference_checks(scene, sol, traj)
+    for c in checks:
+        say(c.line())
+    if not any(r["closed_form"] for r in traj.info["rotations"].values()):
+        say("  rotations: no closed form applies to these data; they ARE the numerical reference")
+    _drift(scene, traj, say)
+    if check and scene.solver.get("check_multibody", True):
+        checks.append(_multibody_check(scene, traj, split_seconds, say))
+    say()
+    say(f"timings: split solution {split_seconds:.3f} s (mass centre {traj.info['mass_center_seconds'] * 1e3:.2f} ms; "
+        + ", ".join(f"{n} {r['seconds'] * 1e3:.0f} ms" for n, r in traj.info["rotations"].items()) + ")")
+    say("verdict: " + ("all checks passed" if all(c.ok for c in checks) else
+                       "FAILED: " + "; ".join(c.what for c in checks if not c.ok)))
+    return traj, say.buf.getvalue(), checks
