@@ -35,7 +35,9 @@ _group("thetasol.mechanics.equations", "invariants", "spectral_coefficients", "t
 _group("thetasol.integrators.rotation", "integrate_rotation")
 _group("thetasol.integrators.multibody", "integrate_multibody")
 # scenes: the split pipeline of a whole configuration
-_group("thetasol.scenes.scene", "Scene", "load_scene", "run", "solve_configuration")
+_group("thetasol.scenes.format", "Scene", "load_scene", "demo_scene_path")
+_group("thetasol.scenes.pipeline", "solve_configuration", "ConfigurationSolution")
+_group("thetasol.scenes.report", "run")
 # the machinery: theta functions and curves
 _group("thetasol.theta.riemann", "RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce")
 _group("thetasol.curves.plane_curve", "PlaneCurve", "Place")
@@ -67,7 +69,9 @@ if TYPE_CHECKING:
     from thetasol.mechanics.configuration import Configuration, Joint
     from thetasol.mechanics.equations import invariants, spectral_coefficients, torque
     from thetasol.mechanics.trajectories import Trajectories
-    from thetasol.scenes.scene import Scene, load_scene, run, solve_configuration
+    from thetasol.scenes.format import Scene, demo_scene_path, load_scene
+    from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
+    from thetasol.scenes.report import run
     from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution, Solution
     from thetasol.solutions.gyrostat import solve_gyrostat
     from thetasol.solutions.mass_center import MassCenterMotion, mass_center
