@@ -613,8 +613,12 @@ def group_scene(rec):
     rec.guard("scene/demo/run", demo_run)
 
     def demo_numerical():
-        traj = solve_configuration(sc.config, sc.a, sc.b, sc.q0, sc.v0, sc.Q0, sc.omega0, sc.t[:61],
-                                   rotation="numerical")
+        try:  # a callable solution: solve_configuration(...)(t)
+            traj = solve_configuration(sc.config, sc.a, sc.b, sc.q0, sc.v0, sc.Q0, sc.omega0,
+                                       rotation="numerical")(sc.t[:61])
+        except TypeError:  # the older form that took the times
+            traj = solve_configuration(sc.config, sc.a, sc.b, sc.q0, sc.v0, sc.Q0, sc.omega0, sc.t[:61],
+                                       rotation="numerical")
         _record_trajectories(rec, "scene/demo/numerical", traj)
     rec.guard("scene/demo/numerical", demo_numerical)
 
