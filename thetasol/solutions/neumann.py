@@ -575,7 +575,7 @@ def _pendulum(psi0: float, psidot0: float, nu: float):
     """psi'' = -nu^2 sin psi from (psi0 in (-pi, pi], psidot0): the constants of
     :func:`thetasol.special.pendulum.pendulum_angle` (which returns half of ``psi(t) - psi0`` and
     ``psidot(t)``) and the kind of motion."""
-    if nu == 0.0 or (psidot0 == 0.0 and np.sin(psi0) == 0.0):
+    if nu == 0.0 or (psidot0 == 0.0 and (np.sin(psi0) == 0.0 or abs(psi0) == np.pi)):     # at rest on an axis
         return {"kind": "uniform", "phi0": 0.0, "w0": 0.5 * psidot0}, ("uniform" if psidot0 else "rest")
     c, _ = pendulum_params(psi0, psidot0, nu)
     return c, c["kind"]
@@ -586,7 +586,7 @@ class PlanarNeumann:
     eigen-coordinates): ``x = cos v p + sin v q``, ``psi = 2 v`` a pendulum of frequency
     ``sqrt(k_q - k_p)``; :meth:`angle` gives ``v - v0`` and ``vdot``."""
 
-    def __init__(self, k, x0, y0, normal):
+    def __init__(self, k, x0, y0, normal, isotropic: bool = False):
         n = normal / np.linalg.norm(normal)
         # p, q: an orthonormal eigenbasis of k in the plane, p the lower eigenvalue
         Pn = np.eye(3) - np.outer(n, n)
@@ -600,7 +600,7 @@ class PlanarNeumann:
         psi0 = np.remainder(2.0 * v0 + np.pi, 2.0 * np.pi) - np.pi
         nu2 = ev[1] - ev[0]
         scale = abs(vdot0) + np.sqrt(np.abs(k).max())
-        self.nu = 0.0 if nu2 <= 4 * _EPS * scale ** 2 else float(np.sqrt(nu2))
+        self.nu = 0.0 if isotropic or nu2 <= 4 * _EPS * scale ** 2 else float(np.sqrt(nu2))
         self.pend, self.kind = _pendulum(psi0, 2.0 * vdot0, self.nu)
         self.method = f"neumann/planar-{self.kind}"
         x0n = x0 - (x0 @ n) * n
@@ -644,7 +644,7 @@ def neumann_model(k: np.ndarray, x0: np.ndarray, y0: np.ndarray):
     :class:`PlanarNeumann`.  Raises :class:`ClosedFormUnavailable` where the models lose accuracy."""
     span = k[2] - k[0]
     if span <= 8 * _EPS * np.abs(k).max():
-        return PlanarNeumann(k, x0, y0, _great_circle_normal(x0, y0, int(np.argmin(np.abs(x0)))))
+        return PlanarNeumann(k, x0, y0, _great_circle_normal(x0, y0, int(np.argmin(np.abs(x0)))), isotropic=True)
     wscale = np.sqrt(span)
     gaps = np.diff(k)
     if gaps.min() <= SNAP_TOL * span:
@@ -684,8 +684,10 @@ class NeumannSolution(Solution):
         ``"neumann/genus-2"``, ``"neumann/elliptic"``, ``"neumann/latitude"`` or ``"neumann/planar-<kind>"``.
     invariants : dict
         ``energy`` (``1/2 |v|^2 + 1/2 q.aq``) and Uhlenbeck's integrals in the eigenbasis of ``a``
-        (ascending eigenvalues): ``F`` (distinct eigenvalues), ``F_axis`` and ``L_axis`` (a repeated
-        eigenvalue: ``F`` of the other axis and the angular momentum about it) or ``L`` (isotropic ``a``).
+        (ascending eigenvalues), ``F_k = x_k^2 + sum_{j != k} (x_k y_j - x_j y_k)^2 / (a_k - a_j)`` with
+        ``x = q / R``, ``y = v / R`` (``sum F_k = 1``): ``F`` (distinct eigenvalues), ``F_axis`` and
+        ``L_axis`` (a repeated eigenvalue: ``F`` of the other axis and the angular momentum ``q x v``
+        about it) or ``L`` (isotropic ``a``: the angular momentum).
     diagnostics : dict
         ``eigenvalues``, ``axes`` (columns, right-handed), ``radius``, ``time_scale`` (the unit of time
         of the models, ``1 / sqrt(sigma)``), ``branch_points`` of the genus-2 curve, the model's
@@ -711,13 +713,14 @@ class NeumannSolution(Solution):
         return R * (x @ axes.T), (R * rate) * (xd @ axes.T)
 
 
-def _uhlenbeck(k: np.ndarray, q: np.ndarray, v: np.ndarray, snapped: bool, isotropic: bool) -> dict:
-    """Uhlenbeck's integrals F_k = q_k^2 + sum_{j != k} (q_k v_j - q_j v_k)^2 / (a_k - a_j) in the
-    eigenbasis (where their divisors are not zero) and the angular momenta that replace them."""
-    L = np.cross(q, v)
+def _uhlenbeck(k: np.ndarray, x: np.ndarray, y: np.ndarray, R: float, snapped: bool, isotropic: bool) -> dict:
+    """Uhlenbeck's integrals F_k = x_k^2 + sum_{j != k} (x_k y_j - x_j y_k)^2 / (a_k - a_j) of the
+    unit sphere (x = q / R, y = v / R in the eigenbasis; sum F_k = 1, sum a_k F_k = 2 H / R^2) where
+    their divisors are not zero, and the angular momenta q x v that replace them."""
+    L = np.cross(x, y)
     if isotropic:
-        return {"L": L}
-    F = q * q
+        return {"L": L * R * R}
+    F = x * x
     gaps = np.diff(k)
     idx = 0 if gaps[1] <= gaps[0] else 2
     for i in range(3):
@@ -725,7 +728,7 @@ def _uhlenbeck(k: np.ndarray, q: np.ndarray, v: np.ndarray, snapped: bool, isotr
             if j != i and not (snapped and idx not in (i, j)):
                 F[i] += L[3 - i - j] ** 2 / (k[i] - k[j])
     if snapped:
-        return {"F_axis": float(F[idx]), "L_axis": float(L[idx])}
+        return {"F_axis": float(F[idx]), "L_axis": float(L[idx] * R * R)}
     return {"F": F}
 
 
@@ -792,7 +795,7 @@ def solve_neumann(a, q0, v0, *, reference: str = "an integrator of the constrain
     gaps = np.diff(ks)
     snapped = not isotropic and bool(gaps.min() <= SNAP_TOL * (ks[2] - ks[0]))
     inv = {"energy": float(0.5 * (v0 @ v0) + 0.5 * (q0 @ a @ q0))}
-    inv.update(_uhlenbeck(k, R * x0, R * rate * y0, snapped, isotropic))
+    inv.update(_uhlenbeck(k, x0, rate * y0, R, snapped, isotropic))
     diag = {"eigenvalues": k, "axes": axes, "radius": R, "time_scale": 1.0 / rate}
     diag.update(model.info())
     if isinstance(model, NeumannTorus):
