@@ -270,7 +270,7 @@ def test_time_map_tables_and_fallback(label, monkeypatch):
     assert len(calls) == 1                             # the tables' path: one series evaluation
     t_s, _ = series(s)
     assert np.all(np.abs(t_s - t) <= 1e-15 * (np.abs(t) + 1.0 / T.drift))
-    th_direct = np.array([o.theta(x) for o, x in zip(T.osc, al)])
+    th_direct = np.array([o.theta(x) for o, x in zip(T.osc, al, strict=True)])
     assert np.all(np.abs(th - th_direct) <= 2e-15 * (1.0 + np.abs(al)))
     # tables of zero: the model is t = drift s, off by up to Pspan
     monkeypatch.setattr(T, "tables", [HermiteTable(np.zeros(2, complex), 1.0)] * 2)

@@ -10,28 +10,24 @@ Units.  With ``a = V diag(k) V^T``, ``x = V^T q / R`` is on the unit sphere and 
 scaled by ``sigma``, a power of 4 near ``k3 - k1`` (exact in binary, so is ``sqrt(sigma)``): the models
 below see ``x'' = -k x / sigma + ...`` in the time ``sqrt(sigma) t`` and never the user's units.
 
-The models (``method``):
+The models (``method``), docs/neumann.md has the table:
 
 * ``neumann/genus-2`` (distinct eigenvalues): sphero-conical coordinates ``u1 < u2``
   (``sum x_i^2 / (z - k_i) = (z - u1)(z - u2) / A(z)``, ``A = prod (z - k_i)``) separate with the time
   ``ds = dt / (u2 - u1)``: ``(du_k / ds)^2 = -4 A(u_k) B(u_k)``, ``B(z) = N(z) + sum_m L_m^2 (z - k_m)``,
   ``N(z) = sum_i x_i^2 prod_{j != i} (z - k_j)``, ``L = x cross xdot`` (Uhlenbeck's integrals
-  ``sum F_i / (z - k_i) = B / A`` summed without their divisors ``k_i - k_j``): the genus-2 curve
-  ``y^2 = -4 A(z) B(z)``.  Each ``u_k`` oscillates between two neighbouring roots of ``A B``;
-  ``u = lo + (hi - lo) sin^2(theta / 2)`` makes ``dtheta / ds`` analytic and positive, so ``s(theta)``
-  and its inverse are a linear term plus a Fourier series, and so is ``t(s) = int (u2 - u1) ds``.
-  ``x_i = prod_k sqrt(k_i - u_k) / sqrt(prod_{j != i} (k_i - k_j))`` with square roots that are smooth
-  in theta.  A time is mapped to ``s`` by safeguarded Newton on ``t(s)``: a far time costs what
-  ``t = 1`` costs.
-* ``neumann/elliptic`` (a repeated eigenvalue, ``k = k_perp + kappa n n^T``): ``z = x.n`` in a quartic
-  well, the azimuth about ``n`` a quadrature: Fourier series on one circle.  ``neumann/latitude``: a
-  circle of constant ``z`` run uniformly.
-* ``neumann/planar-*`` (the point on an invariant great circle): a pendulum in twice the angle, in
-  Jacobi functions (:mod:`thetasol.special.pendulum`); ``neumann/planar-uniform`` for an isotropic ``a``.
+  ``sum F_i / (z - k_i) = B / A`` without their divisors ``k_i - k_j``): the curve ``y^2 = -4 A B``.
+  With ``u = lo + (hi - lo) sin^2(theta / 2)`` between neighbouring roots of ``A B``, ``s(theta)``, its
+  inverse and ``t(s) = int (u2 - u1) ds`` are linear terms plus Fourier series, and
+  ``x_i = prod_k sqrt(k_i - u_k) / sqrt(prod_{j != i} (k_i - k_j))`` (square roots smooth in theta).
+  A time is mapped to ``s`` by safeguarded Newton: a far time costs what ``t = 1`` costs.
+* ``neumann/elliptic``, ``neumann/latitude`` (a repeated eigenvalue): ``z = x.n`` in a quartic well,
+  the azimuth about ``n`` a quadrature on the same circle, or a uniform circle of latitude.
+* ``neumann/planar-*`` (an invariant great circle, or an isotropic ``a``): a pendulum in twice the
+  angle, in Jacobi functions (:mod:`thetasol.special.pendulum`).
 
-Hand-written because no library has Neumann's problem in real time; the theta-function form
-``x_k^2 = (a_k - l1)(a_k - l2) / prod_{i != k} (a_k - a_i)`` (Moser, Mumford's Tata lectures II) is
-checked against this one in tests/test_neumann_point.py.
+Hand-written because no library has Neumann's problem in real time (the theta-function form of
+Moser and Mumford's Tata lectures II needs the same curve and degenerates in the same places).
 """
 from __future__ import annotations
 
@@ -43,6 +39,7 @@ import numpy as np
 from thetasol.core import validate as V
 from thetasol.core.periodic import (HermiteTable, SeriesNotConverged, eval_series, fit_series, integrated,
                                     powers, sum_series, sum_series_derivative)
+from thetasol.core.roots import monotone_newton, quadratic_roots
 from thetasol.special.pendulum import pendulum_angle, pendulum_params
 from thetasol.solutions.base import ClosedFormUnavailable, Solution
 from thetasol.solutions._symmetry import SNAP_TOL
@@ -123,7 +120,7 @@ class Oscillator:
             return th + g, 1.0 + dg
 
         span = 2.0 * np.abs(self.A[1:]).sum() + 1e-300
-        return _monotone_newton(fun, al, al.copy(), al - span, al + span,
+        return monotone_newton(fun, al, al.copy(), al - span, al + span,
                                 lambda new, th: np.abs(new - th) <= 1e-9, 100, 2)
 
     def theta(self, al):
@@ -131,44 +128,6 @@ class Oscillator:
 
     def alpha(self, th):
         return th + eval_series(self.A, th)
-
-
-def _monotone_newton(fun, y, x, lo, hi, converged, maxiter: int, polish: int):
-    """x with fun(x)[0] = y for an increasing fun (returning value and derivative; 1-d arrays):
-    Newton steps, bisection of the bracket [lo, hi] where a step leaves it, each point until
-    ``converged(new, old)`` (elementwise) holds for it (the others go on alone); then ``polish``
-    plain steps on all (quadratic convergence reaches rounding)."""
-    x = np.array(x, float)
-    idx = np.arange(x.size)
-    xa, ya = x, y
-    lo, hi = np.broadcast_to(lo, x.shape), np.broadcast_to(hi, x.shape)
-    for _ in range(maxiter):
-        f, df = fun(xa)
-        r = f - ya
-        lo = np.where(r < 0, xa, lo)
-        hi = np.where(r > 0, xa, hi)
-        step = xa - r / df
-        bad = (step < lo) | (step > hi) | ~np.isfinite(step)
-        new = np.where(bad, 0.5 * (lo + hi), step)
-        more = ~converged(new, xa)
-        x[idx] = new
-        if not more.any():
-            break
-        idx, xa, ya, lo, hi = idx[more], new[more], ya[more], lo[more], hi[more]
-    for _ in range(polish):
-        f, df = fun(x)
-        x = x - (f - y) / df
-    return x
-
-
-def _quadratic_roots(a2: float, a1: float, a0: float):
-    """Real roots (ascending) of a2 z^2 + a1 z + a0 without cancellation (discriminant clipped at 0)."""
-    disc = max(a1 * a1 - 4.0 * a2 * a0, 0.0)
-    q = -0.5 * (a1 + np.copysign(np.sqrt(disc), a1))
-    if q == 0.0:
-        return np.array([0.0, 0.0])
-    r = np.array([q / a2, a0 / q])
-    return np.sort(r)
 
 
 # -- the genus-2 torus (distinct eigenvalues) ------------------------------------------------------
@@ -204,9 +163,9 @@ class NeumannTorus:
         a2 = x2.sum()
         a1 = -sum(x2[i] * (d[j] + d[l]) for i, (j, l) in enumerate(_JL))
         a0 = sum(x2[i] * d[j] * d[l] for i, (j, l) in enumerate(_JL))
-        zu = _quadratic_roots(a2, a1, a0)              # u1 <= k2 <= u2 (shifted)
+        zu = quadratic_roots(a2, a1, a0)              # u1 <= k2 <= u2 (shifted)
         L2 = L * L
-        zb = _quadratic_roots(a2, a1 + L2.sum(), a0 - (L2 * d).sum())
+        zb = quadratic_roots(a2, a1 + L2.sum(), a0 - (L2 * d).sum())
         roots = sorted([(d[i], "k", i) for i in range(3)] + [(zb[j], "b", j) for j in range(2)],
                        key=lambda r: r[0])
         vals = np.array([r[0] for r in roots])
@@ -377,7 +336,7 @@ class NeumannTorus:
         def close(tol):
             return lambda new, s: np.abs(new - s) <= np.maximum(tol * unit, 64 * _EPS * np.abs(s))
 
-        s0 = _monotone_newton(self._time_model, t, t / self.drift, lo, hi, close(1e-10), 200, 0)
+        s0 = monotone_newton(self._time_model, t, t / self.drift, lo, hi, close(1e-10), 200, 0)
         # the tables are good to 1e-12 unit: one series step lands at rounding (the step after it
         # would be ~1e-24 unit), and theta follows to first order (the second is ~1e-24 too)
         t0, dt0, th0, dth0 = self.time_of_s(s0, angles=True)
@@ -385,7 +344,7 @@ class NeumannTorus:
         s = s0 + step
         if np.all(close(1e-9)(s, s0)):
             return s, self._alpha(s), th0 + dth0 * (step / self.fbar[:, None])
-        s = _monotone_newton(self.time_of_s, t, s0, lo, hi, close(1e-9), 200, 1)     # a poor table
+        s = monotone_newton(self.time_of_s, t, s0, lo, hi, close(1e-9), 200, 1)     # a poor table
         al = self._alpha(s)
         return s, al, np.array([o.theta(a) for o, a in zip(self.osc, al, strict=True)])
 
@@ -408,7 +367,7 @@ def _axes_of_symmetry(idx: int):
 def _latitude_roots(kappa: float, h: float, ell: float):
     """The roots in z of zdot^2 = kappa z^4 - (kappa + 2h) z^2 + 2h - ell^2, as (root, 1 - root when
     known accurately): z^2 = 1 - v with kappa v^2 + (2h - kappa) v - ell^2 = 0 (v accurate near the poles)."""
-    v = _quadratic_roots(kappa, 2.0 * h - kappa, -ell * ell)
+    v = quadratic_roots(kappa, 2.0 * h - kappa, -ell * ell)
     roots = []
     for vv in v:
         w = 1.0 - vv
