@@ -55,6 +55,8 @@ MIN_WIDTH = 1e-8
 PLANAR_TOL = 64 * _EPS
 #: Relative tolerance on q0 . v0 (the velocity must be tangent to the sphere).
 TANGENT_TOL = 1e-12
+#: The numerical reference named where no closed form is built.
+_REFERENCE = "a numerical integration of qddot = -a q + lambda q, lambda = (q.aq - |qdot|^2) / |q|^2"
 
 
 @contextmanager
@@ -706,7 +708,7 @@ def _validated(a, q0, v0):
     return a, q0, v0, R
 
 
-def solve_neumann(a, q0, v0, *, reference: str = "an integrator of the constrained equations") -> NeumannSolution:
+def solve_neumann(a, q0, v0, *, reference: str = _REFERENCE) -> NeumannSolution:
     """Exact motion of a point on the sphere ``|q| = |q0|`` in the potential ``phi = 1/2 q^T a q``
     (Section 6, (6.1)-(6.2); Theorem 3: the mass centre of the configuration).
 
