@@ -79,8 +79,8 @@ def test_against_heyoka_far_times(label, J, a, Q0, w0, method):
 
 
 def _check_against_heyoka(J, a, Q0, w0):
-    """Issue 6's times to t = 4002 against heyoka 80-bit: the issue asks 1e-9; measured <= 3.8e-12 on
-    every case (docs/neumann.md), so 1e-10 leaves room for the reference and still catches a drift."""
+    """Times to t = 4002 against heyoka 80-bit: measured <= 3.8e-12 on every case (docs/neumann.md),
+    so 1e-10 leaves room for the reference and still catches a drift."""
     pytest.importorskip("heyoka")
     sol = solve_rotation(J, a, Q0, w0)
     w, Q = sol(T_FAR)
@@ -236,12 +236,12 @@ def test_near_separatrix_is_refused_not_wrong():
 
 
 def test_powers_against_mpmath():
-    """e^{ikx} by doubling (thetasol.solutions.neumann_rotation._powers): at most log2(k) roundings, measured 4e-16 to k = 460
+    """e^{ikx} by doubling (thetasol.core.periodic.powers): at most log2(k) roundings, measured 4e-16 to k = 460
     (x in [0, 2 pi): larger x are reduced by the float 2 pi, a relative change of x of order eps)."""
     import mpmath                                      # a core dependency
-    from thetasol.solutions.neumann_rotation import _powers
+    from thetasol.core.periodic import powers
     x = np.random.default_rng(7).uniform(0.0, 2 * np.pi, 40)
-    E = _powers(x, 460)
+    E = powers(x, 460)
     assert E.shape == (460, 40)
     with mpmath.workdps(40):
         xr = [mpmath.mpf(v) for v in x]
@@ -257,23 +257,23 @@ def test_time_map_tables_and_fallback(label, monkeypatch):
     useless tables the safeguarded series Newton takes over and gives the same s and angles.
     Measured (per point, relative to |t| + 1/drift, 1 + |s|/drift, 1 + |alpha|): <= 4.2e-16, 6.3e-16,
     1.5e-15, 7.1e-16 on these cases, t in [-50, 1e6]."""
-    from thetasol.solutions.neumann_rotation import _HermiteTable
+    from thetasol.core.periodic import HermiteTable
 
     J, a, Q0, w0 = next(c[1:5] for c in CASES if c[0] == label)
-    T = solve_rotation(J, a, Q0, w0)._c["axis_motion"].torus
+    T = solve_rotation(J, a, Q0, w0).model
     assert all(tab.error <= 1e-12 / T.drift for tab in T.tables)
-    series = T._time
+    series = T.time_of_s
     calls = []
-    monkeypatch.setattr(T, "_time", lambda *args, **kw: calls.append(1) or series(*args, **kw))
+    monkeypatch.setattr(T, "time_of_s", lambda *args, **kw: calls.append(1) or series(*args, **kw))
     t = np.concatenate([np.linspace(-50.0, 50.0, 41), np.geomspace(50.0, 1e6, 40)])
     s, al, th = T.s_of_t(t)
     assert len(calls) == 1                             # the tables' path: one series evaluation
     t_s, _ = series(s)
     assert np.all(np.abs(t_s - t) <= 1e-15 * (np.abs(t) + 1.0 / T.drift))
-    th_direct = np.array([o.theta(x) for o, x in zip(T.osc, al)])
+    th_direct = np.array([o.theta(x) for o, x in zip(T.osc, al, strict=True)])
     assert np.all(np.abs(th - th_direct) <= 2e-15 * (1.0 + np.abs(al)))
     # tables of zero: the model is t = drift s, off by up to Pspan
-    monkeypatch.setattr(T, "tables", [_HermiteTable(np.zeros(2, complex), 1.0)] * 2)
+    monkeypatch.setattr(T, "tables", [HermiteTable(np.zeros(2, complex), 1.0)] * 2)
     monkeypatch.setattr(T, "table0", [0.0, 0.0])
     s2, al2, th2 = T.s_of_t(t)
     assert len(calls) > 2                              # the series Newton took over

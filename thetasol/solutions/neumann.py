@@ -1,0 +1,766 @@
+"""A point on a sphere in a quadratic potential: C. Neumann's problem (Section 6, Theorem 3).
+
+The mass centre constrained to the sphere ``|q| = R`` (6.1) in the potential ``phi = 1/2 q^T a q`` (6.2)
+moves, per unit mass, by ``qddot = -a q + lambda q`` with ``lambda = (q.aq - |qdot|^2) / |q|^2`` (the
+multiplier that keeps ``d^2 |q|^2 / dt^2 = 0``).  :func:`solve_neumann` returns its exact solution;
+the rotation of a symmetric body without axial spin (:mod:`thetasol.solutions.neumann_rotation`) uses
+the same models for the body's axis.  docs/neumann.md has the derivation and the checks.
+
+Units.  With ``a = V diag(k) V^T``, ``x = V^T q / R`` is on the unit sphere and the eigenvalues are
+scaled by ``sigma``, a power of 4 near ``k3 - k1`` (exact in binary, so is ``sqrt(sigma)``): the models
+below see ``x'' = -k x / sigma + ...`` in the time ``sqrt(sigma) t`` and never the user's units.
+
+The models (``method``), docs/neumann.md has the table:
+
+* ``neumann/genus-2`` (distinct eigenvalues): sphero-conical coordinates ``u1 < u2``
+  (``sum x_i^2 / (z - k_i) = (z - u1)(z - u2) / A(z)``, ``A = prod (z - k_i)``) separate with the time
+  ``ds = dt / (u2 - u1)``: ``(du_k / ds)^2 = -4 A(u_k) B(u_k)``, ``B(z) = N(z) + sum_m L_m^2 (z - k_m)``,
+  ``N(z) = sum_i x_i^2 prod_{j != i} (z - k_j)``, ``L = x cross xdot`` (Uhlenbeck's integrals
+  ``sum F_i / (z - k_i) = B / A`` without their divisors ``k_i - k_j``): the curve ``y^2 = -4 A B``.
+  With ``u = lo + (hi - lo) sin^2(theta / 2)`` between neighbouring roots of ``A B``, ``s(theta)``, its
+  inverse and ``t(s) = int (u2 - u1) ds`` are linear terms plus Fourier series, and
+  ``x_i = prod_k sqrt(k_i - u_k) / sqrt(prod_{j != i} (k_i - k_j))`` (square roots smooth in theta).
+  A time is mapped to ``s`` by safeguarded Newton: a far time costs what ``t = 1`` costs.
+* ``neumann/elliptic``, ``neumann/latitude`` (a repeated eigenvalue): ``z = x.n`` in a quartic well,
+  the azimuth about ``n`` a quadrature on the same circle, or a uniform circle of latitude.
+* ``neumann/planar-*`` (an invariant great circle, or an isotropic ``a``): a pendulum in twice the
+  angle, in Jacobi functions (:mod:`thetasol.special.pendulum`).
+
+Hand-written because no library has Neumann's problem in real time (the theta-function form of
+Moser and Mumford's Tata lectures II needs the same curve and degenerates in the same places).
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from thetasol.core import validate as V
+from thetasol.core.periodic import (HermiteTable, SeriesNotConverged, eval_series, fit_series, integrated,
+                                    powers, sum_series, sum_series_derivative)
+from thetasol.core.roots import monotone_newton, quadratic_roots
+from thetasol.special.pendulum import pendulum_angle, pendulum_params
+from thetasol.solutions.base import ClosedFormUnavailable, Solution
+from thetasol.solutions._symmetry import SNAP_TOL
+
+__all__ = ["NeumannSolution", "solve_neumann", "NeumannTorus", "Oscillator", "EllipticNeumann",
+           "LatitudeCircle", "PlanarNeumann", "neumann_model", "series_or_unavailable",
+           "MIN_WIDTH", "PLANAR_TOL"]
+
+_EPS = np.finfo(float).eps
+#: Thinnest interval of a sphero-conical coordinate (relative to k3 - k1) that is accepted.
+MIN_WIDTH = 1e-8
+#: Out-of-plane size (|x_i|, |xdot_i| / sqrt(k3 - k1)) below which the point is put on the great circle.
+PLANAR_TOL = 64 * _EPS
+#: Relative tolerance on q0 . v0 (the velocity must be tangent to the sphere).
+TANGENT_TOL = 1e-12
+#: The numerical reference named where no closed form is built.
+_REFERENCE = "a numerical integration of qddot = -a q + lambda q, lambda = (q.aq - |qdot|^2) / |q|^2"
+
+
+@contextmanager
+def series_or_unavailable(reference: str):
+    """Turn a Fourier series that did not converge into :class:`ClosedFormUnavailable` naming
+    ``reference``, the numerical integrator to use instead."""
+    try:
+        yield
+    except SeriesNotConverged as err:
+        raise ClosedFormUnavailable(
+            f"Neumann solution: {err}: the torus is too close to a separatrix or the trajectory too close "
+            f"to the reference axis; use {reference}") from None
+
+
+# -- one separated coordinate ----------------------------------------------------------------------
+
+class Oscillator:
+    """``u = lo + w sin^2(theta/2)`` on ``[lo, hi]`` with ``dtheta/dtau = sqrt(C prod_r |u - r|)``.
+
+    ``below``/``above``: gaps ``lo - r`` / ``r - hi`` to the other real roots (given accurately by the
+    caller); ``complex_roots``: the others.  ``alpha`` (the angle linear in tau, ``alpha = tau / fbar``
+    + const) and its inverse ``theta = alpha + B(alpha)`` are Fourier series.
+    """
+
+    def __init__(self, lo, hi, C, below=(), above=(), complex_roots=(), name="u"):
+        self.lo, self.hi, self.w = float(lo), float(hi), float(hi - lo)
+        self.C = float(C)
+        self.below = np.asarray(below, float)
+        self.above = np.asarray(above, float)
+        self.cplx = np.asarray(complex_roots, complex)
+        self.f = fit_series(lambda th: 1.0 / self.rate(th), f"d{name}/rate")
+        self.fbar = self.f[0].real
+        self.A = integrated(self.f) / self.fbar            # alpha = theta + A(theta)
+        # theta is known to eps * 2 pi at best: that is the noise floor of its series
+        self.B = fit_series(lambda al: self._invert(al) - al, f"the inverse angle of {name}",
+                            floor=2 * np.pi * _EPS)
+
+    def parts(self, th):
+        """``(u - lo, hi - u, sin(th/2), cos(th/2))``, each accurate near its zero."""
+        s, c = np.sin(0.5 * th), np.cos(0.5 * th)
+        return self.w * s * s, self.w * c * c, s, c
+
+    def u(self, th):
+        dlo, dhi, _, _ = self.parts(th)
+        return np.where(dlo <= dhi, self.lo + dlo, self.hi - dhi)
+
+    def dists(self, th):
+        """|u - r| for every other root, shape th.shape + (n_roots,)."""
+        dlo, dhi, _, _ = self.parts(th)
+        out = [d + dlo for d in self.below] + [d + dhi for d in self.above]
+        if self.cplx.size:
+            u = self.u(th)
+            out += [np.abs(u - r) for r in self.cplx]
+        return np.stack(out, -1)
+
+    def rate(self, th):
+        return np.sqrt(self.C * np.prod(self.dists(th), -1))
+
+    def _invert(self, al):
+        """theta with theta + A(theta) = al (safeguarded Newton; the map is increasing)."""
+        def fun(th):
+            g, dg = eval_series(self.A, th, derivative=True)
+            return th + g, 1.0 + dg
+
+        span = 2.0 * np.abs(self.A[1:]).sum() + 1e-300
+        return monotone_newton(fun, al, al.copy(), al - span, al + span,
+                                lambda new, th: np.abs(new - th) <= 1e-9, 100, 2)
+
+    def theta(self, al):
+        return al + eval_series(self.B, al)
+
+    def alpha(self, th):
+        return th + eval_series(self.A, th)
+
+
+# -- the genus-2 torus (distinct eigenvalues) ------------------------------------------------------
+
+_JL = [(1, 2), (0, 2), (0, 1)]                      # the other two indices of each eigenvalue
+
+
+class NeumannTorus:
+    """Neumann's problem ``xddot = -k x + (x.kx - |xdot|^2) x`` on the unit sphere (k ascending,
+    distinct) from ``(x0, y0)``: the separated solution ``x(t)``, ``xdot(t)``.
+
+    Public state read by the rotation: ``osc`` (the two :class:`Oscillator`), ``role[i][kk]`` (how
+    ``k_i`` sits in the interval of ``u_kk``: ``'lo'``/``'hi'`` endpoint or ``'below'``/``'above'`` with
+    its gap), ``norm``, ``th0``, ``alpha0``, ``fbar``, ``drift``, :meth:`state`, :meth:`s_of_t`.
+    """
+
+    method = "neumann/genus-2"
+
+    def __init__(self, k: np.ndarray, x0: np.ndarray, y0: np.ndarray):
+        zu, a2, a1 = self._separation(k, x0, y0)
+        self._oscillators()
+        self._roles()
+        self._initial_angles(x0, y0, zu, a2, a1)
+        self._signs(x0, y0)
+        self._time_series()
+
+    # -- set-up stages -----------------------------------------------------------------------------
+    def _separation(self, k, x0, y0):
+        """The sphero-conical coordinates zu = (u1, u2) and the roots of A B, shifted to k2 (exact)."""
+        d = k - k[1]
+        L = np.cross(x0, y0)
+        x2 = x0 * x0
+        a2 = x2.sum()
+        a1 = -sum(x2[i] * (d[j] + d[l]) for i, (j, l) in enumerate(_JL))
+        a0 = sum(x2[i] * d[j] * d[l] for i, (j, l) in enumerate(_JL))
+        zu = quadratic_roots(a2, a1, a0)              # u1 <= k2 <= u2 (shifted)
+        L2 = L * L
+        zb = quadratic_roots(a2, a1 + L2.sum(), a0 - (L2 * d).sum())
+        roots = sorted([(d[i], "k", i) for i in range(3)] + [(zb[j], "b", j) for j in range(2)],
+                       key=lambda r: r[0])
+        vals = np.array([r[0] for r in roots])
+        scale = max(abs(d[0]), abs(d[2]))
+        tol = 1e-9 * scale
+        if not (vals[1] - tol <= zu[0] <= vals[2] + tol and vals[3] - tol <= zu[1] <= vals[4] + tol):
+            raise ClosedFormUnavailable(f"Neumann solution: the sphero-conical coordinates {zu} are not in "
+                                        f"their oscillation intervals {vals} (internal inconsistency)")
+        self.d, self.zb, self.roots, self.vals, self.scale = d, zb, roots, vals, scale
+        self.ivals = [(1, 2), (3, 4)]
+        return zu, a2, a1
+
+    def _oscillators(self):
+        """One :class:`Oscillator` per coordinate; thin intervals bounded by a root of B are refused."""
+        vals, roots, scale = self.vals, self.roots, self.scale
+        self.osc = []
+        for kk, (i_lo, i_hi) in enumerate(self.ivals):
+            lo, hi = vals[i_lo], vals[i_hi]
+            if hi - lo <= MIN_WIDTH * scale and "b" in (roots[i_lo][1], roots[i_hi][1]):
+                # the width is a difference with a root of B known to eps * scale: the angle on a
+                # thin torus is known to ~eps / width (measured 5e-12 at width 1e-10, t = 40); an
+                # interval [k_i, k_j] (nearly repeated eigenvalues) is exact and kept
+                raise ClosedFormUnavailable(
+                    f"Neumann solution: nearly degenerate torus (a sphero-conical coordinate stays within "
+                    f"{(hi - lo) / scale:.1e} of the span of k: the point within ~{np.sqrt((hi - lo) / scale):.0e} "
+                    "of an invariant great circle, or of a periodic orbit); the separated coordinates lose "
+                    "accuracy there (nearly planar motion is not handled); integrate numerically")
+            others = [vals[m] for m in range(5) if m not in (i_lo, i_hi)]
+            self.osc.append(Oscillator(lo, hi, 4.0, below=[lo - r for r in others if r < lo],
+                                       above=[r - hi for r in others if r >= hi], name=f"u{kk + 1}"))
+
+    def _roles(self):
+        """The role of each k_i in each interval: 'lo', 'hi' endpoint or a gap to the nearer endpoint."""
+        d, vals, roots = self.d, self.vals, self.roots
+        self.role = []
+        for i in range(3):
+            row = []
+            for i_lo, i_hi in self.ivals:
+                if roots[i_lo][1:] == ("k", i):
+                    row.append(("lo", 0.0))
+                elif roots[i_hi][1:] == ("k", i):
+                    row.append(("hi", 0.0))
+                elif d[i] < vals[i_lo]:
+                    row.append(("below", vals[i_lo] - d[i]))
+                else:
+                    row.append(("above", d[i] - vals[i_hi]))
+            self.role.append(row)
+        self.norm = np.array([np.sqrt(abs((d[i] - d[j]) * (d[i] - d[l]))) for i, (j, l) in enumerate(_JL)])
+
+    def _initial_angles(self, x0, y0, zu, a2, a1):
+        """theta_k at t = 0: cos from the position, sin from the velocity (both absolutely accurate):
+        du/ds = (u2 - u1) du/dt = (w/2) sin(theta) dtheta/ds = w sin(theta) sqrt(prod_others |u - r|)."""
+        d, vals = self.d, self.vals
+        th0 = []
+        gap0 = zu[1] - zu[0]
+        for kk, o in enumerate(self.osc):
+            z = zu[kk]
+            udot = -sum(2.0 * x0[i] * y0[i] * (z - d[j]) * (z - d[l])
+                        for i, (j, l) in enumerate(_JL)) / (2.0 * a2 * z + a1)
+            cos_th = ((o.hi - z) - (z - o.lo)) / o.w
+            dist = [abs(z - vals[m]) for m in range(5) if m not in self.ivals[kk]]
+            sin_th = gap0 * udot / (o.w * np.sqrt(np.prod(dist)))
+            th0.append(np.arctan2(sin_th, cos_th))
+        self.th0 = np.array(th0)
+
+    def _signs(self, x0, y0):
+        """The constant signs sigma_i of x_i fitted at t = 0, and how well the data are reproduced."""
+        self.sigma = np.ones(3)
+        xm, dxm, gm = self.state(self.th0[0], self.th0[1])
+        tau2 = 1.0 / self.scale
+        self.sigma = np.where(x0 * xm + tau2 * y0 * dxm / gm >= 0, 1.0, -1.0)
+        xm, dxm, gm = self.state(self.th0[0], self.th0[1])
+        self.fit_residual = float(max(np.abs(xm - x0).max(), np.sqrt(tau2) * np.abs(dxm / gm - y0).max()))
+
+    def _time_series(self):
+        """The time along the torus, t(s) = <u2 - u1> s + bounded, and cheap tables of the bounded
+        parts (to 1e-12 of the time scale 1/drift) for the first Newton steps."""
+        self.alpha0 = np.array([o.alpha(th) for o, th in zip(self.osc, self.th0, strict=True)])
+        self.cu = [fit_series(lambda al, o=o: o.u(o.theta(al)), f"u{kk + 1}(alpha)",
+                              floor=4 * _EPS * self.scale)
+                   for kk, o in enumerate(self.osc)]
+        self.P = [integrated(c) for c in self.cu]
+        self.fbar = np.array([o.fbar for o in self.osc])
+        self.drift = self.cu[1][0].real - self.cu[0][0].real
+        self.P0 = np.array([eval_series(P, a) for P, a in zip(self.P, self.alpha0, strict=True)])
+        self.Pspan = sum(2 * f * np.abs(P).sum() for f, P in zip(self.fbar, self.P, strict=True)) * 2
+        self.tables = [HermiteTable(f * P, 1e-12 / self.drift) for f, P in zip(self.fbar, self.P, strict=True)]
+        self.table0 = [tab(a)[0] for tab, a in zip(self.tables, self.alpha0, strict=True)]
+
+    # -- the state on the torus --------------------------------------------------------------------
+    def _rho(self, i, kk, th):
+        """Signed smooth sqrt|k_i - u_kk| and its theta-derivative."""
+        o = self.osc[kk]
+        kind, g = self.role[i][kk]
+        s, c = np.sin(0.5 * th), np.cos(0.5 * th)
+        rw = np.sqrt(o.w)
+        if kind == "lo":
+            return rw * s, 0.5 * rw * c
+        if kind == "hi":
+            return rw * c, -0.5 * rw * s
+        if kind == "below":
+            r = np.sqrt(g + o.w * s * s)
+            return r, o.w * s * c / (2.0 * r)
+        r = np.sqrt(g + o.w * c * c)
+        return r, -o.w * s * c / (2.0 * r)
+
+    def state(self, th1, th2):
+        """x, dx/ds and u2 - u1 at the angles (th1, th2) (broadcast: a grid costs two 1-d passes)."""
+        th1, th2 = np.asarray(th1, float), np.asarray(th2, float)
+        r1 = self.osc[0].rate(th1)
+        r2 = self.osc[1].rate(th2)
+        xs, dxs = [], []
+        for i in range(3):
+            p1, q1 = self._rho(i, 0, th1)
+            p2, q2 = self._rho(i, 1, th2)
+            xs.append(self.sigma[i] / self.norm[i] * p1 * p2)
+            dxs.append(self.sigma[i] / self.norm[i] * ((q1 * r1) * p2 + p1 * (q2 * r2)))
+        o1, o2 = self.osc
+        # u2 - u1 from the gap between the intervals (no cancellation)
+        gap = ((o2.lo - o1.hi) + o1.parts(th1)[1]) + o2.parts(th2)[0]
+        return np.stack(np.broadcast_arrays(*xs), -1), np.stack(np.broadcast_arrays(*dxs), -1), gap
+
+    def motion(self, t: np.ndarray):
+        """(x, xdot) at the times t (1-d)."""
+        _, _, th = self.s_of_t(t)
+        x, dx, gap = self.state(th[0], th[1])
+        return x, dx / gap[:, None]
+
+    # -- time -> s ---------------------------------------------------------------------------------
+    def _alpha(self, s):
+        """The two angles alpha_k(s), linear in s: shape (2, s.size)."""
+        return self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
+
+    def time_of_s(self, s, angles: bool = False):
+        """t(s) and dt/ds = u2 - u1 at s (one set of powers e^{i n alpha} per coordinate); with
+        ``angles`` also theta_k(alpha_k(s)) and dtheta_k/dalpha_k."""
+        al = self._alpha(s)
+        t = self.drift * s
+        u, th, dth = [], [], []
+        for kk, (o, P) in enumerate(zip(self.osc, self.P, strict=True)):
+            E = powers(al[kk], max(P.size, o.B.size) - 1)
+            t = t + (1 if kk else -1) * self.fbar[kk] * (sum_series(E, P) - self.P0[kk])
+            th.append(al[kk] + sum_series(E, o.B))
+            u.append(o.u(th[-1]))
+            if angles:
+                dth.append(1.0 + sum_series_derivative(E, o.B))
+        if angles:
+            return t, u[1] - u[0], np.array(th), np.array(dth)
+        return t, u[1] - u[0]
+
+    def _time_model(self, s):
+        """t(s) and dt/ds from the Hermite tables of the bounded parts."""
+        t, dt = self.drift * s, self.drift
+        for kk, (tab, f, a0) in enumerate(zip(self.tables, self.fbar, self.alpha0, strict=True)):
+            g, dg = tab(a0 + s / f)
+            sgn = 1 if kk else -1
+            t, dt = t + sgn * (g - self.table0[kk]), dt + sgn * dg / f
+        return t, dt
+
+    def s_of_t(self, t: np.ndarray):
+        """s with t(s) = t (t(s) is increasing) and alpha(s), theta(s): safeguarded Newton on the
+        tables of t(s), then one Newton step on the series; if a step is above 1e-9 / drift and the
+        rounding of s (64 eps |s|), a table was poor (it stopped at its node limit) and the
+        safeguarded Newton goes on on the series."""
+        lo, hi = (t - self.Pspan) / self.drift, (t + self.Pspan) / self.drift
+        unit = 1.0 / self.drift
+
+        def close(tol):
+            return lambda new, s: np.abs(new - s) <= np.maximum(tol * unit, 64 * _EPS * np.abs(s))
+
+        s0 = monotone_newton(self._time_model, t, t / self.drift, lo, hi, close(1e-10), 200, 0)
+        # the tables are good to 1e-12 unit: one series step lands at rounding (the step after it
+        # would be ~1e-24 unit), and theta follows to first order (the second is ~1e-24 too)
+        t0, dt0, th0, dth0 = self.time_of_s(s0, angles=True)
+        step = (t - t0) / dt0
+        s = s0 + step
+        if np.all(close(1e-9)(s, s0)):
+            return s, self._alpha(s), th0 + dth0 * (step / self.fbar[:, None])
+        s = monotone_newton(self.time_of_s, t, s0, lo, hi, close(1e-9), 200, 1)     # a poor table
+        al = self._alpha(s)
+        return s, al, np.array([o.theta(a) for o, a in zip(self.osc, al, strict=True)])
+
+    def info(self) -> dict:
+        """Periods and sizes of the series (for diagnostics)."""
+        return {"genus": 2, "torus_dimension": 2, "frequencies_s": 1.0 / self.fbar,
+                "time_drift": float(self.drift), "series_terms": [int(o.f.size) for o in self.osc]}
+
+
+# -- a repeated eigenvalue: an axis of symmetry n --------------------------------------------------
+
+def _axes_of_symmetry(idx: int):
+    """The indices (o1, o2) of the other two eigen-axes with (m1, m2, n) right-handed."""
+    o1, o2 = [j for j in range(3) if j != idx]
+    if (o1, o2) not in ((0, 1), (1, 2), (2, 0)):
+        o1, o2 = o2, o1
+    return o1, o2
+
+
+def _latitude_roots(kappa: float, h: float, ell: float):
+    """The roots in z of zdot^2 = kappa z^4 - (kappa + 2h) z^2 + 2h - ell^2, as (root, 1 - root when
+    known accurately): z^2 = 1 - v with kappa v^2 + (2h - kappa) v - ell^2 = 0 (v accurate near the poles)."""
+    v = quadratic_roots(kappa, 2.0 * h - kappa, -ell * ell)
+    roots = []
+    for vv in v:
+        w = 1.0 - vv
+        if w >= 0:
+            rt = np.sqrt(w)
+            roots += [(rt, vv / (1.0 + rt)), (-rt, None)]
+        else:
+            roots += [(1j * np.sqrt(-w), None), (-1j * np.sqrt(-w), None)]
+    return roots
+
+
+def _turning_points(roots, z0: float):
+    """The two real roots around z0 (the oscillation interval of z)."""
+    real = sorted([r for r in roots if np.isreal(r[0])], key=lambda r: r[0].real)
+    below = [r for r in real if r[0].real <= z0]
+    above = [r for r in real if r[0].real > z0]
+    if not below or not above:
+        # z0 at a turning point within rounding: take the nearest pair around it
+        zs = np.array([r[0].real for r in real])
+        i = int(np.argmin(np.abs(zs - z0)))
+        below, above = (real[:i + 1], real[i + 1:]) if i + 1 < len(real) and z0 >= zs[i] else (real[:i], real[i:])
+    return below[-1], above[0]
+
+
+@dataclass(frozen=True)
+class _Axial:
+    """The data of a motion about the symmetry axis n = e_idx: the frame (m1, m2, n), the height
+    z0 = x0.n, the angular momentum ell about n, the energy h and the anisotropy kappa."""
+    idx: int
+    o1: int
+    o2: int
+    kappa: float
+    z0: float
+    ell: float
+    h: float
+    lam0: float
+
+    @classmethod
+    def of(cls, k, x0, y0, idx):
+        o1, o2 = _axes_of_symmetry(idx)
+        kperp = 0.5 * (k[o1] + k[o2])
+        kappa = k[idx] - kperp
+        z0 = x0[idx]
+        ell = x0[o1] * y0[o2] - x0[o2] * y0[o1]
+        h = 0.5 * (y0 @ y0) + 0.5 * kappa * z0 * z0
+        return cls(idx, o1, o2, kappa, z0, ell, h, np.arctan2(x0[o2], x0[o1]))
+
+    def basis(self):
+        return np.eye(3)[self.o1], np.eye(3)[self.o2], np.eye(3)[self.idx]
+
+
+class LatitudeCircle:
+    """A circle of latitude z0 about the symmetry axis run at a constant rate (a relative equilibrium)."""
+
+    method = "neumann/latitude"
+
+    def __init__(self, ax: _Axial, x0: np.ndarray):
+        self.ax = ax
+        self.rho0 = np.hypot(x0[ax.o1], x0[ax.o2])
+        self.rate = ax.ell / self.rho0 ** 2
+
+    def motion(self, t):
+        ax = self.ax
+        m1, m2, n = ax.basis()
+        lam = ax.lam0 + self.rate * t
+        cl, sl = np.cos(lam)[:, None], np.sin(lam)[:, None]
+        x = ax.z0 * n + self.rho0 * (cl * m1 + sl * m2)
+        xd = ax.ell / self.rho0 * (-sl * m1 + cl * m2)
+        return x, xd
+
+    def info(self) -> dict:
+        return {"torus_dimension": 1, "reference_axis": self.ax.idx, "azimuth_drift": float(self.rate)}
+
+
+class EllipticNeumann:
+    """a with a repeated eigenvalue: ``K = k_perp + kappa n n^T`` with ``n = e_idx``.  ``z = x.n``
+    oscillates in a quartic well, ``zdot^2 = kappa z^4 - (kappa + 2h) z^2 + 2h - ell^2``; the azimuth
+    ``int ell / (1 - z^2) dt`` is a Fourier series on the same circle."""
+
+    method = "neumann/elliptic"
+
+    def __init__(self, ax: _Axial, roots, lo, hi, y0: np.ndarray):
+        self.ax = ax
+        zlo, zhi = float(lo[0].real), float(hi[0].real)
+        self.one_minus_hi = hi[1] if hi[1] is not None else 1.0 - zhi
+        self.one_plus_lo = 1.0 + zlo
+        others = [r[0] for r in roots if r is not lo and r is not hi]
+        self.osc = osc = Oscillator(zlo, zhi, abs(ax.kappa),
+                                    below=[zlo - r.real for r in others if np.isreal(r) and r.real < zlo],
+                                    above=[r.real - zhi for r in others if np.isreal(r) and r.real >= zhi],
+                                    complex_roots=[r for r in others if not np.isreal(r)], name="z")
+        self.c_lam = self.series(lambda th: ax.ell / self.rho2(th), "the azimuth rate")
+        # initial angle theta0: cos from the position, sin from zdot = (w/2) sin(theta) rate
+        z0, zd0 = ax.z0, y0[ax.idx]
+        cos0 = ((zhi - z0) - (z0 - zlo)) / osc.w
+        sin0 = 2.0 * zd0 / (osc.w * np.sqrt(osc.C * np.prod(np.abs(np.array(others) - z0))))
+        self.al0 = osc.alpha(np.arctan2(sin0, cos0))
+        self.fbar = osc.fbar
+        self.P_lam = integrated(self.c_lam)
+        self.Pl0 = eval_series(self.P_lam, self.al0)
+        self.n_pow = max(osc.B.size, self.P_lam.size) - 1
+
+    def rho2(self, th):
+        """1 - z^2 without cancellation."""
+        dlo, dhi, _, _ = self.osc.parts(th)
+        return (self.one_minus_hi + dhi) * (self.one_plus_lo + dlo)
+
+    def series(self, g, what):
+        """The Fourier series in alpha of g(theta(alpha)) (noise floor from ell)."""
+        return fit_series(lambda al: g(self.osc.theta(al)), what, floor=4 * _EPS * (abs(self.ax.ell) + 1.0))
+
+    def angle(self, t, n_pow: int = 0):
+        """alpha(t) and its powers e^{ij alpha}, j = 1..max(self.n_pow, n_pow) (shared by the series)."""
+        al = self.al0 + t / self.fbar
+        return al, powers(al, max(self.n_pow, n_pow))
+
+    def state(self, t, al, E):
+        """(x, xdot, theta) at the times t from alpha(t) and its powers (:meth:`angle`)."""
+        ax, osc = self.ax, self.osc
+        m1, m2, n = ax.basis()
+        th = al + sum_series(E, osc.B)
+        z = osc.u(th)
+        rho = np.sqrt(self.rho2(th))
+        lam = ax.lam0 + self.c_lam[0].real * t + self.fbar * (sum_series(E, self.P_lam) - self.Pl0)
+        zd = 0.5 * osc.w * np.sin(th) * osc.rate(th)
+        cl, sl = np.cos(lam)[:, None], np.sin(lam)[:, None]
+        radial = cl * m1 + sl * m2
+        east = -sl * m1 + cl * m2
+        x = z[:, None] * n + rho[:, None] * radial
+        xd = zd[:, None] * n - (z * zd / rho)[:, None] * radial + (ax.ell / rho)[:, None] * east
+        return x, xd, th
+
+    def motion(self, t):
+        al, E = self.angle(t)
+        x, xd, _ = self.state(t, al, E)
+        return x, xd
+
+    def info(self) -> dict:
+        return {"torus_dimension": 1, "reference_axis": self.ax.idx, "period": float(2 * np.pi * self.fbar),
+                "azimuth_drift": float(self.c_lam[0].real),
+                "series_terms": [int(self.osc.f.size), int(self.c_lam.size)]}
+
+
+def _repeated_model(k, x0, y0, idx):
+    """The motion for a repeated eigenvalue (the other one at idx): a latitude circle or the
+    elliptic model."""
+    ax = _Axial.of(k, x0, y0, idx)
+    roots = _latitude_roots(ax.kappa, ax.h, ax.ell)
+    lo, hi = _turning_points(roots, ax.z0)
+    if float(hi[0].real) - float(lo[0].real) <= 64 * _EPS:
+        return LatitudeCircle(ax, x0)
+    return EllipticNeumann(ax, roots, lo, hi, y0)
+
+
+# -- the point on an invariant great circle --------------------------------------------------------
+
+def _rotate(v: np.ndarray, n: np.ndarray, angle: np.ndarray) -> np.ndarray:
+    """v turned by ``angle`` (array) about the unit vector n (Rodrigues), shape angle.shape + (3,)."""
+    c, s = np.cos(angle)[..., None], np.sin(angle)[..., None]
+    return c * v + s * np.cross(n, v) + (1.0 - c) * (n @ v) * n
+
+
+def _pendulum(psi0: float, psidot0: float, nu: float):
+    """psi'' = -nu^2 sin psi from (psi0 in (-pi, pi], psidot0): the constants of
+    :func:`thetasol.special.pendulum.pendulum_angle` (which returns half of ``psi(t) - psi0`` and
+    ``psidot(t)``) and the kind of motion."""
+    if nu == 0.0 or (psidot0 == 0.0 and (np.sin(psi0) == 0.0 or abs(psi0) == np.pi)):     # at rest on an axis
+        return {"kind": "uniform", "phi0": 0.0, "w0": 0.5 * psidot0}, ("uniform" if psidot0 else "rest")
+    c, _ = pendulum_params(psi0, psidot0, nu)
+    return c, c["kind"]
+
+
+class PlanarNeumann:
+    """The point on the invariant great circle with the unit normal ``normal`` (an eigenvector of k,
+    eigen-coordinates): ``x = cos v p + sin v q``, ``psi = 2 v`` a pendulum of frequency
+    ``sqrt(k_q - k_p)``; :meth:`angle` gives ``v - v0`` and ``vdot``."""
+
+    def __init__(self, k, x0, y0, normal, isotropic: bool = False):
+        n = normal / np.linalg.norm(normal)
+        # p, q: an orthonormal eigenbasis of k in the plane, p the lower eigenvalue
+        Pn = np.eye(3) - np.outer(n, n)
+        B = Pn @ np.diag(k) @ Pn
+        ev, W = np.linalg.eigh(B + 10.0 * (np.abs(k).max() + 1.0) * np.outer(n, n))
+        p, q = W[:, 0], W[:, 1]
+        if np.cross(p, q) @ n < 0:
+            q = -q
+        v0 = np.arctan2(x0 @ q, x0 @ p)
+        vdot0 = y0 @ np.cross(n, x0)
+        psi0 = np.remainder(2.0 * v0 + np.pi, 2.0 * np.pi) - np.pi
+        nu2 = ev[1] - ev[0]
+        scale = abs(vdot0) + np.sqrt(np.abs(k).max())
+        self.nu = 0.0 if isotropic or nu2 <= 4 * _EPS * scale ** 2 else float(np.sqrt(nu2))
+        self.pend, self.kind = _pendulum(psi0, 2.0 * vdot0, self.nu)
+        self.method = f"neumann/planar-{self.kind}"
+        x0n = x0 - (x0 @ n) * n
+        self.x0n = x0n / np.linalg.norm(x0n)
+        self.n = n
+
+    def angle(self, t):
+        """(v(t) - v0, vdot(t)): v - v0 = (psi - psi0) / 2."""
+        return pendulum_angle(self.pend, t)
+
+    def state(self, dv, vdot):
+        """(x, xdot) at the angles dv from x0 (turned about the fixed normal: |x| = 1 at far times)."""
+        x = _rotate(self.x0n, self.n, dv)
+        return x, vdot[:, None] * np.cross(self.n, x)
+
+    def turn(self, v: np.ndarray, dv: np.ndarray) -> np.ndarray:
+        """v turned about the normal by the angles dv, shape dv.shape + (3,)."""
+        return _rotate(v, self.n, dv)
+
+    def motion(self, t):
+        return self.state(*self.angle(t))
+
+    def info(self) -> dict:
+        return {"torus_dimension": 1 if self.nu else 0, "pendulum_nu": self.nu, "plane_normal": self.n}
+
+
+def _great_circle_normal(x0, y0, fallback: int):
+    """The normal of the great circle through x0 along y0 (for y0 = 0, one through e_fallback)."""
+    if np.linalg.norm(y0) > 0.0:
+        return np.cross(x0, y0)
+    normal = np.cross(x0, np.eye(3)[fallback])
+    if np.linalg.norm(normal) <= PLANAR_TOL:
+        normal = np.cross(x0, np.eye(3)[(fallback + 1) % 3])
+    return normal
+
+
+def neumann_model(k: np.ndarray, x0: np.ndarray, y0: np.ndarray):
+    """The model of Neumann's problem ``xddot = -k x + (x.kx - |xdot|^2) x`` (k ascending, |x0| = 1,
+    y0 tangent), chosen from the data: an object with ``method``, ``motion(t) -> (x, xdot)`` and
+    ``info()``: :class:`NeumannTorus`, :class:`EllipticNeumann`, :class:`LatitudeCircle` or
+    :class:`PlanarNeumann`.  Raises :class:`ClosedFormUnavailable` where the models lose accuracy."""
+    span = k[2] - k[0]
+    if span <= 8 * _EPS * np.abs(k).max():
+        return PlanarNeumann(k, x0, y0, _great_circle_normal(x0, y0, int(np.argmin(np.abs(x0)))), isotropic=True)
+    wscale = np.sqrt(span)
+    gaps = np.diff(k)
+    if gaps.min() <= SNAP_TOL * span:
+        idx = 0 if gaps[1] <= gaps[0] else 2                # the eigenvalue that is not repeated
+        n = np.eye(3)[idx]
+        ell = np.cross(x0, y0) @ n
+        if abs(ell) <= PLANAR_TOL * (np.linalg.norm(y0) + wscale):
+            normal = np.cross(x0, y0) if np.linalg.norm(y0) > PLANAR_TOL * wscale else np.cross(x0, n)
+            if np.linalg.norm(normal) <= PLANAR_TOL:
+                normal = np.cross(x0, np.eye(3)[(idx + 1) % 3])   # the point on n at rest
+            return PlanarNeumann(k, x0, y0, normal)
+        return _repeated_model(k, x0, y0, idx)
+    for i in range(3):
+        if max(abs(x0[i]), abs(y0[i]) / wscale) <= PLANAR_TOL:
+            return PlanarNeumann(k, x0, y0, np.eye(3)[i])
+    T = NeumannTorus(k, x0, y0)
+    if T.fit_residual > 1e-9:
+        raise ClosedFormUnavailable(f"Neumann solution: the initial state is reproduced only to "
+                                    f"{T.fit_residual:.1e} (nearly degenerate torus)")
+    return T
+
+
+# -- the public solution ---------------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class NeumannSolution(Solution):
+    """The motion ``t -> (q(t), v(t))`` of a point on the sphere ``|q| = |q0|`` in ``phi = 1/2 q^T a q``
+    (per unit mass), from :func:`solve_neumann`.
+
+    Attributes
+    ----------
+    a : ndarray, shape (3, 3)
+        The potential matrix (symmetrized).
+    q0, v0 : ndarray, shape (3,)
+        The initial position and (tangent) velocity.
+    method : str
+        ``"neumann/genus-2"``, ``"neumann/elliptic"``, ``"neumann/latitude"`` or ``"neumann/planar-<kind>"``.
+    invariants : dict
+        ``energy`` (``1/2 |v|^2 + 1/2 q.aq``) and Uhlenbeck's integrals in the eigenbasis of ``a``
+        (ascending eigenvalues), ``F_k = x_k^2 + sum_{j != k} (x_k y_j - x_j y_k)^2 / (a_k - a_j)`` with
+        ``x = q / R``, ``y = v / R`` (``sum F_k = 1``): ``F`` (distinct eigenvalues), ``F_axis`` and
+        ``L_axis`` (a repeated eigenvalue: ``F`` of the other axis and the angular momentum ``q x v``
+        about it) or ``L`` (isotropic ``a``: the angular momentum).
+    diagnostics : dict
+        ``eigenvalues``, ``axes`` (columns, right-handed), ``radius``, ``time_scale`` (the unit of time
+        of the models, ``1 / sqrt(sigma)``), ``branch_points`` of the genus-2 curve, the model's
+        periods and series sizes and ``fit_residual`` (the data reproduced at t = 0, unit sphere).
+    """
+
+    a: np.ndarray
+    q0: np.ndarray
+    v0: np.ndarray
+    method: str
+    invariants: dict = field(repr=False)
+    diagnostics: dict = field(default_factory=dict, repr=False)
+    _model: object = field(default=None, repr=False)
+    _units: tuple = field(default=None, repr=False)
+
+    def __call__(self, t):
+        """``(q(t), v(t))``, each of shape ``t.shape + (3,)``."""
+        return super().__call__(t)
+
+    def _evaluate(self, t: np.ndarray):
+        R, rate, axes = self._units
+        x, xd = self._model.motion(t * rate)             # rate is a power of 2: exact
+        return R * (x @ axes.T), (R * rate) * (xd @ axes.T)
+
+
+def _uhlenbeck(k: np.ndarray, x: np.ndarray, y: np.ndarray, R: float, snapped: bool, isotropic: bool) -> dict:
+    """Uhlenbeck's integrals F_k = x_k^2 + sum_{j != k} (x_k y_j - x_j y_k)^2 / (a_k - a_j) of the
+    unit sphere (x = q / R, y = v / R in the eigenbasis; sum F_k = 1, sum a_k F_k = 2 H / R^2) where
+    their divisors are not zero, and the angular momenta q x v that replace them."""
+    L = np.cross(x, y)
+    if isotropic:
+        return {"L": L * R * R}
+    F = x * x
+    gaps = np.diff(k)
+    idx = 0 if gaps[1] <= gaps[0] else 2
+    for i in range(3):
+        for j in range(3):
+            if j != i and not (snapped and idx not in (i, j)):
+                F[i] += L[3 - i - j] ** 2 / (k[i] - k[j])
+    if snapped:
+        return {"F_axis": float(F[idx]), "L_axis": float(L[idx] * R * R)}
+    return {"F": F}
+
+
+def _validated(a, q0, v0):
+    """(a, q0, v0, radius) checked: a symmetric, q0 != 0, v0 tangent within TANGENT_TOL relative."""
+    a = V.symmetric_matrix(a, "a")
+    q0 = V.vector3(q0, "q0")
+    v0 = V.vector3(v0, "v0")
+    R = float(np.linalg.norm(q0))
+    if R == 0.0:
+        raise ValueError("q0 must be non-zero: it fixes the radius of the sphere")
+    vn = float(np.linalg.norm(v0))
+    if abs(q0 @ v0) > TANGENT_TOL * R * vn:
+        raise ValueError(f"v0 must be tangent to the sphere |q| = |q0|: q0.v0 / (|q0| |v0|) = "
+                         f"{(q0 @ v0) / (R * vn):.3g} (tolerance {TANGENT_TOL:g})")
+    return a, q0, v0, R
+
+
+def solve_neumann(a, q0, v0, *, reference: str = _REFERENCE) -> NeumannSolution:
+    """Exact motion of a point on the sphere ``|q| = |q0|`` in the potential ``phi = 1/2 q^T a q``
+    (Section 6, (6.1)-(6.2); Theorem 3: the mass centre of the configuration).
+
+    Per unit mass ``qddot = -a q + lambda q``, ``lambda = (q.aq - |qdot|^2) / |q|^2``.  Any symmetric
+    ``a`` (definite, indefinite, repeated eigenvalues); the radius and the scale of ``a`` do not matter.
+
+    Parameters
+    ----------
+    a : array_like, shape (3, 3)
+        Symmetric potential matrix.
+    q0 : array_like, shape (3,)
+        Initial position (non-zero; its length is the radius of the sphere).
+    v0 : array_like, shape (3,)
+        Initial velocity, tangent to the sphere (``|q0.v0| <= 1e-12 |q0| |v0|``; projected exactly).
+    reference : str
+        What the message of :class:`ClosedFormUnavailable` recommends instead.
+
+    Returns
+    -------
+    NeumannSolution
+        ``sol(t) -> (q, v)`` with shapes ``t.shape + (3,)``.
+
+    Raises
+    ------
+    ValueError
+        ``a`` not symmetric, NaN or inf in the data, ``q0 = 0``, ``v0`` not tangent.
+    ClosedFormUnavailable
+        The torus within ~1e-4 (relative) of a separatrix or ~1e-8 of an invariant great circle
+        without being on it (the series would not converge or lose accuracy).
+    """
+    a, q0, v0, R = _validated(a, q0, v0)
+    k, axes = np.linalg.eigh(a)
+    axes[:, 2] *= np.sign(np.linalg.det(axes))
+    span = k[2] - k[0]
+    isotropic = bool(span <= 8 * _EPS * np.abs(k).max())
+    # sigma = 4^m near the span: k / sigma, sqrt(sigma) t and v / sqrt(sigma) are exact scalings
+    rate = 1.0 if isotropic else float(2.0 ** np.round(0.5 * np.log2(span)))
+    ks = np.zeros(3) if isotropic else (k - k[1]) / (rate * rate)
+    x0 = axes.T @ q0 / R
+    y0 = axes.T @ v0 / (R * rate)
+    x0 = x0 / np.linalg.norm(x0)
+    y0 = y0 - x0 * (x0 @ y0)
+    with series_or_unavailable(reference):
+        model = neumann_model(ks, x0, y0)
+    gaps = np.diff(ks)
+    snapped = not isotropic and bool(gaps.min() <= SNAP_TOL * (ks[2] - ks[0]))
+    inv = {"energy": float(0.5 * (v0 @ v0) + 0.5 * (q0 @ a @ q0))}
+    inv.update(_uhlenbeck(k, x0, rate * y0, R, snapped, isotropic))
+    diag = {"eigenvalues": k, "axes": axes, "radius": R, "time_scale": 1.0 / rate}
+    diag.update(model.info())
+    if isinstance(model, NeumannTorus):
+        diag["fit_residual"] = model.fit_residual
+        diag["branch_points"] = np.sort(np.r_[k, model.zb * rate * rate + k[1]])
+    return NeumannSolution(a=a, q0=q0, v0=v0, method=model.method, invariants=inv, diagnostics=diag,
+                           _model=model, _units=(R, rate, axes))
