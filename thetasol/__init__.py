@@ -25,6 +25,7 @@ _group("thetasol.solutions.base", "Solution", "RotationSolution", "ClosedFormUna
 # closed forms, one per physical model
 _group("thetasol.solutions.rotation", "solve_rotation")
 _group("thetasol.solutions.gyrostat", "solve_gyrostat")
+_group("thetasol.solutions.neumann", "solve_neumann", "NeumannSolution")
 _group("thetasol.solutions.mass_center", "MassCenterMotion", "mass_center")
 # mechanics: bodies, configurations, equations and first integrals
 _group("thetasol.mechanics.bodies", "Body")
@@ -75,5 +76,6 @@ if TYPE_CHECKING:
     from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution, Solution
     from thetasol.solutions.gyrostat import solve_gyrostat
     from thetasol.solutions.mass_center import MassCenterMotion, mass_center
+    from thetasol.solutions.neumann import NeumannSolution, solve_neumann
     from thetasol.solutions.rotation import solve_rotation
     from thetasol.theta.riemann import RiemannTheta, riemann_theta, riemann_theta_separated, siegel_reduce
