@@ -1,9 +1,9 @@
-"""Random bodies of every kind issue 6 names, against heyoka: error at t <= 4002 and set-up cost.
+"""Random bodies of every kind the theta rotation covers, against heyoka: error at t <= 4002 and set-up cost.
 
 Usage: ``python benchmarks/bench_hidden_cases.py [seed [count]]`` (defaults 2026, 45: five of each
 kind).  Needs heyoka (``pip install .[bench]``); the references are 80-bit Taylor integrations
 (``--f128`` re-runs the worst in quadruple precision, ~1 min each, to tell the reference's error from
-the solution's).  Results of the default run: docs/theta_rotation.md ("hidden cases").
+the solution's).  Results of the default run: docs/theta_rotation.md ("Accuracy and cost", random data).
 """
 from __future__ import annotations
 

@@ -13,7 +13,8 @@ import pytest
 from thetasol import ClosedFormUnavailable, integrate_rotation, invariants, solve_rotation
 from thetasol.mechanics.lax import eigenvector_poles
 from thetasol.core.so3 import hat
-from thetasol.solutions.theta_rotation import ThetaRotation, _lattice_coords
+from thetasol.solutions.theta_rotation import ThetaRotation
+from thetasol.solutions.theta_rotation.lattice import lattice_coords as _lattice_coords
 
 REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
 # Every reference case passes.  The near-unstable-equilibrium case once "drifted" to 1.3e-9 against
@@ -47,7 +48,7 @@ def test_node_exponent_gap_is_exact_and_used(name):
     accuracy, modulo 2 pi n.U) and replaces it: without it the fast spin drifted 1.2e-13 per unit time."""
     J, a, Q0, w0, _ = _case(name)
     sol = solve_rotation(J, a, Q0, w0)
-    change = sol.invariants["node_gap_change"]
+    change = sol.diagnostics["node_gap_change"]
     assert change is not None and abs(change) <= 1e-12, change
 
 
@@ -85,7 +86,7 @@ def test_linear_flow_velocity_is_the_drift_of_the_eigenvector_divisor():
     sol = solve_rotation(J, a, Q0, w0)
     curve, tau, U, alpha = sol.curve, sol.riemann_matrix, sol.U, sol.alpha
     Jp = np.sqrt(curve.J2)
-    Pf = sol._c["P"]
+    Pf = sol.evaluator.P
     # the documented basis: the curve's periods times sol.basis give tau
     g = curve.genus
     Pn = curve.period_matrix() @ sol.basis
@@ -114,12 +115,12 @@ def test_linear_flow_velocity_is_the_drift_of_the_eigenvector_divisor():
 def test_adapted_basis_makes_the_flow_real_on_the_prym():
     J, a, Q0, w0, _ = _case("generic")
     sol = solve_rotation(J, a, Q0, w0)
-    assert sol.invariants["torus_dimension"] == 3          # the Prym variety of the genus-4 curve
+    assert sol.diagnostics["torus_dimension"] == 3          # the Prym variety of the genus-4 curve
     assert np.all(np.isreal(sol.U)) and sol.U[3] == 0
     tau = sol.riemann_matrix
     assert np.abs(tau - tau.T).max() < 1e-14 and np.linalg.eigvalsh(tau.imag).min() > 0
     sol1 = solve_rotation(*_case("rank_one")[:4])
-    assert sol1.invariants["torus_dimension"] == 2 and sol1.curve.genus == 3
+    assert sol1.diagnostics["torus_dimension"] == 2 and sol1.curve.genus == 3
 
 
 def test_baker_akhiezer_function_at_generic_points():
@@ -130,12 +131,12 @@ def test_baker_akhiezer_function_at_generic_points():
     """
     J, a, Q0, w0, _ = _case("saddle")
     sol = solve_rotation(J, a, Q0, w0)
-    c = sol._c
+    c = sol.evaluator
     t = np.array([0.5, 2.0, 6.0])
     w, Q = integrate_rotation(J, a, Q0, w0, t, rtol=1e-13)
-    Pf = c["P"]
-    Phi_num = np.swapaxes(Q @ Pf, -1, -2) @ c["Q0p"]
-    Phi, _ = sol._phi0(t, derivative=False)
+    Pf = c.P
+    Phi_num = np.swapaxes(Q @ Pf, -1, -2) @ c.Q0p
+    Phi, _ = sol.evaluator.phi0(t, derivative=False)
     assert np.abs(Phi.imag).max() < 1e-11
     assert np.abs(Phi.real - Phi_num).max() < 1e-11
 
@@ -230,7 +231,7 @@ def test_spectral_coefficients_are_exact_for_the_floats_given():
     L = sp.Matrix(3, 3, lambda i, j: (R(J[i]) ** 2 * E ** 2 if i == j else 0) + R(M[i, j]) * E + R(u[i, j])
                   - (w if i == j else 0))
     exact = sp.Poly(sp.expand(L.det()), E, w)
-    got = sp.Poly(C._poly.sympy_expr(), E, w)
+    got = sp.Poly(C.polynomial(), E, w)
     for (k, l), c in exact.terms():
         if k % 2 == 0:
             assert got.coeff_monomial(E ** k * w ** l) == c
@@ -241,13 +242,13 @@ def test_flow_velocity_divided_difference_equals_the_sum_over_the_places():
     # -h_i(x_j) / (lc prod_{l != j} (x_j - x_l)), well conditioned for well separated J
     import sympy as sp
     from thetasol.curves.spectral import spectral_curve
-    from thetasol.solutions.theta_rotation import _infinity_data, _velocity_at_infinity
+    from thetasol.solutions.theta_rotation.infinity import infinity_data as _infinity_data, velocity_at_infinity as _velocity_at_infinity
     J, a, Q0, w0, _ = _case("generic")
     C = spectral_curve(J, hat(J @ w0), -(Q0.T @ a @ Q0), tol=1e-12)
     nums = C.holomorphic_differentials()
     Pinf, Jinf, _ = _infinity_data(C, C.J2, C.M)
     x = Jinf ** 2
-    lc = float(sp.Poly(C._poly.sympy_expr(), C.y).LC())
+    lc = float(sp.Poly(C.polynomial(), C.y).LC())
     direct = np.zeros(len(nums))
     for i, gn in enumerate(nums):
         terms = sp.Poly(sp.sympify(gn), C.x, C.y).terms()
@@ -304,7 +305,7 @@ def test_nearly_symmetric_body_with_far_cell_vertices_against_dop853():
 def test_symmetric_body_with_little_axial_spin_is_refused_at_once(monkeypatch):
     # below MIN_AXIAL_SPIN (relative) the curve engine's set-up grows to minutes: refused before the curve
     # (the message of a failed set-up also says "little spin": the curve must not be built at all)
-    import thetasol.solutions.theta_rotation as tr
+    import thetasol.solutions.theta_rotation.spectral_data as tr
     from thetasol.solutions.theta_rotation import MIN_AXIAL_SPIN
 
     def no_curve(*args, **kwargs):
@@ -320,7 +321,7 @@ def test_nearly_spherical_symmetric_body_with_small_spin_is_refused_at_once(monk
     """J gap 0.25 %, axial spin 1e-3 relative: branch points at |E| ~ 4.2e4 sqrt|a| / J (the set-up
     took 4.8 s CPU with the guard lifted; at spin 3e-4, 1.4e5, the curve alone took 114 s): refused
     before the curve is built."""
-    import thetasol.solutions.theta_rotation as tr
+    import thetasol.solutions.theta_rotation.spectral_data as tr
 
     def no_curve(*args, **kwargs):
         raise AssertionError("the spectral curve was built")
@@ -380,9 +381,9 @@ def test_exponents_obey_the_exact_relations(name):
     (the small-spin body; fast spin 3.9e-14, 4.8e-13 with float64 periods)."""
     J, a, Q0, w0 = _rank_one_symmetric_body(1.5e-3) if name == "spin 1.5e-3" else _case(name)[:4]
     sol = solve_rotation(J, a, Q0, w0)
-    change = sol.invariants["nu_exact_change"]
+    change = sol.diagnostics["nu_exact_change"]
     assert change is not None and change <= 2e-11, change
-    nu = sol._c["nu"]
+    nu = sol.evaluator.nu
     assert np.abs(nu - nu[:, :1] - nu[:1, :] + nu[0, 0]).max() <= 1e-14 * np.abs(nu).max()
 
 
@@ -403,7 +404,7 @@ def test_node_velocity_closed_form_against_a_contour_integral():
     import sympy as sp
     from thetasol.mechanics.equations import inertia_from_moments
     from thetasol.curves.spectral import spectral_curve
-    from thetasol.solutions.theta_rotation import _infinity_data, _velocity_at_infinity
+    from thetasol.solutions.theta_rotation.infinity import infinity_data as _infinity_data, velocity_at_infinity as _velocity_at_infinity
 
     J, a, Q0, w0 = _small_spin_body(1e-3)
     C = spectral_curve(J, hat(inertia_from_moments(J) @ w0), -(Q0.T @ a @ Q0), tol=1e-12)
@@ -415,7 +416,7 @@ def test_node_velocity_closed_form_against_a_contour_integral():
     E = 3 * bp[-3] * np.exp(2j * np.pi * np.arange(64) / 64)
     W = np.linalg.eigvals(np.diag(C.J2)[None] * E[:, None, None] ** 2 + C.M[None] * E[:, None, None] + C.u[None])
     x = C.J2
-    fw = sp.lambdify((C.x, C.y), sp.diff(C._poly.sympy_expr(), C.y))
+    fw = sp.lambdify((C.x, C.y), sp.diff(C.polynomial(), C.y))
     direct = np.zeros(len(nums), complex)
     for i, gn in enumerate(nums):
         g = sp.lambdify((C.x, C.y), sp.sympify(gn))
@@ -489,7 +490,7 @@ def test_node_branch_eigenvectors_against_mpmath():
     import mpmath
 
     from thetasol.mechanics.lax import lax_matrix, right_eigenvector
-    from thetasol.solutions.theta_rotation import _node_branch, _node_slopes
+    from thetasol.solutions.theta_rotation.node import node_branch as _node_branch, node_slopes as _node_slopes
 
     curve = solve_rotation(*_NODE_NEAR_BRANCH).curve
     lb = curve.node[1]

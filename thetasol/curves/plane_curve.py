@@ -24,7 +24,7 @@ import numpy as np
 import sympy as sp
 
 from thetasol.curves._places import (adjoint_subspace, expansion, laurent, local_data, local_of, noise_level, perm_cycles,
-                            place_series, series_eval, series_integral)
+                            place_series, regular_samples, series_eval, series_integral)
 from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections
 from thetasol.curves._quad import Piece, Tracker
 from thetasol.curves._homology import LiftedGraph, symplectic_basis
@@ -121,6 +121,23 @@ class Place:
         """
         P = self.curve._numerators([numerator])
         return expansion(self.curve, self, P, int(order), "differential" if differential else "function")
+
+    @property
+    def sampling_radius(self) -> float:
+        """Radius ``|t|`` of the circle of the local parameter on which :meth:`series` and :meth:`expand`
+        sample this place.
+
+        The FFT coefficients are accurate relative to the largest term ``|c_k| r^k`` on that circle, not
+        to the largest ``|c_k|``: a coefficient is significant when ``|c_k| r^k`` is.  Where the series
+        converges only in a small disc (branch points close to the place) the ``c_k`` grow like
+        ``r^-k`` and only the scaled comparison reads orders of vanishing correctly.
+        """
+        if self.kind == "regular":
+            key = ("regsamples", self.x, self.y)
+            if key not in self.curve._cache:
+                self.curve._cache[key] = regular_samples(self.curve, self.x, self.y)
+            return float(abs(self.curve._cache[key][0][0]))
+        return float(abs(self.curve._place_data(self, None, None)[1]))
 
     def local_parameter(self) -> str:
         """The local parameter t, as text."""
@@ -297,6 +314,41 @@ class PlaneCurve:
         P = P.view(_Numerators)
         P.exact = exact
         return P
+
+    def polynomial(self):
+        """The curve's polynomial f(x, y) as an exact sympy expression (rational coefficients)."""
+        return self._poly.sympy_expr()
+
+    def differential_values(self, numerators, x, y) -> np.ndarray:
+        """Values ``g_d(x, y) / f_y(x, y)`` of the differentials ``g_d dx / f_y`` at points of the curve.
+
+        Parameters
+        ----------
+        numerators : sequence of sympy expressions or str
+            Polynomials ``g_d`` in ``x``, ``y`` (e.g. :meth:`holomorphic_differentials`).
+        x, y : array_like, same shape
+            Points ``(x, y)`` on the curve (``y`` a root of ``f(x, .)``).
+
+        Returns
+        -------
+        ndarray, shape ``(len(numerators),) + x.shape``
+            Integrands with respect to ``x``: a quadrature rule in ``x`` applied to them integrates the
+            differentials along a path on the sheet the ``y`` values follow.
+        """
+        key = ("numer", tuple(str(g) for g in numerators))
+        if key not in self._cache:
+            self._cache[key] = np.asarray(self._numerators(numerators))
+        P = self._cache[key]
+        x = np.asarray(x, complex)
+        y = np.asarray(y, complex)
+        col = (slice(None),) + (None,) * x.ndim
+        num = np.zeros(P.shape[:1] + x.shape, complex)
+        for i in range(P.shape[1]):
+            for j in range(P.shape[2]):
+                if np.any(P[:, i, j]):
+                    num += P[:, i, j][col] * (x ** i * y ** j)[None]
+        fy, _ = self._poly.fy_fx(x.ravel(), y.ravel()[:, None])
+        return num / fy.reshape(x.shape)[None]
 
     def holomorphic_differentials(self) -> list:
         """Numerators g (sympy polynomials in x, y) of a basis of holomorphic differentials g dx / f_y.

@@ -35,9 +35,10 @@ import numpy as np
 import sympy as sp
 
 from thetasol.core.validate import finite_array, second_moments
+from thetasol.curves._poly import CurvePoly
 from thetasol.curves.plane_curve import Place, PlaneCurve
 
-__all__ = ["spectral_curve", "SpectralCurve"]
+__all__ = ["spectral_curve", "SpectralCurve", "farthest_branch_point"]
 
 E_SYM, W_SYM = sp.symbols("E w")
 
@@ -106,6 +107,36 @@ def _exact_coefficients(J, M, u) -> list:
     for (k, l), c in det.items():
         C[k][l] = c
     return C
+
+
+def farthest_branch_point(J, M, u) -> float:
+    """max ``|E|`` over the finite branch points of (4.12) for exactly these ``J, M, u``, without the curve.
+
+    The roots of the critical polynomial (the square-free part of ``disc_w(f) lc_w(f)``) of the exact
+    coefficients: a few ms, where building the Riemann surface of a curve with branch points far out
+    (a nearly spherical symmetric body with a small axial spin) takes seconds to minutes.  No snapping:
+    pass the data as the curve is to be built (e.g. two ``J_i`` already made equal).
+
+    Parameters
+    ----------
+    J : array_like, shape (3, 3)
+        Second moments (diagonal in the principal frame).
+    M : array_like, shape (3, 3)
+        Skew angular momentum ``hat(m)``.
+    u : array_like, shape (3, 3)
+        Symmetric ``u = -Q^T a Q``.
+
+    Returns
+    -------
+    float
+        The largest modulus of the critical values (0.0 when there are none).
+    """
+    C = _exact_coefficients(J, M, u)
+    f = sp.Poly({(k, l): sp.Rational(c.numerator, c.denominator)
+                 for k, row in enumerate(C) for l, c in enumerate(row) if c}, E_SYM, W_SYM)
+    F = CurvePoly(f, E_SYM, W_SYM).critical_polynomial()[0]
+    cf = np.array([complex(c) for c in F.all_coeffs()])
+    return float(np.abs(np.roots(cf)).max()) if len(cf) > 1 else 0.0
 
 
 def spectral_curve(J, M, u, *, tol: float = 1e-9) -> "SpectralCurve":

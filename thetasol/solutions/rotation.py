@@ -103,7 +103,7 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     -------
     RotationSolution
         ``sol(t) -> (omega, Q)``, ``sol.omega(t)``, ``sol.Q(t)``, ``sol.M(t)``, ``sol.u(t)``,
-        ``sol.method``, ``sol.invariants``.
+        ``sol.method``, ``sol.invariants`` (first integrals), ``sol.diagnostics`` (self-checks).
 
     Raises
     ------
@@ -121,9 +121,8 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     RuntimeWarning
         The theta-function set-up lost accuracy (``|Im Phi(0, t)|`` above 1e-8 at ``t = 1000``,
         the size is stated): errors of that size are to be expected.  The check cannot see an
-        error of the torus position along the real torus (near an unstable relative equilibrium
-        1.5e-8 went unseen before the curve engine's fix for clustered branch points; the reference
-        case is at 6.7e-12 at ``t = 4002`` since: docs/theta_rotation.md).
+        error of the torus position along the real torus: cross-check motion near an unstable
+        relative equilibrium with :func:`thetasol.integrate_rotation` (docs/theta_rotation.md, Limits).
 
     Examples
     --------

@@ -1,0 +1,133 @@
+"""Stage 4a: the constants rho_k and the exponents c_k at t = 0, as Cauchy means.
+
+At ``t = 0`` the theta quotient must give ``Psi_k(P, 0) = psi_k(P)``: this fixes
+``rho_k(P) = psi_k(P) / theta(A(P) - e_k)``, and its t-derivative, ``psidot = -A(E, 0) psi`` (4.11),
+fixes ``c_k(P)``.  At the places ``P_s`` over ``E = 0`` both are taken as means over a circle ``|E| = r``
+around the place (``N_CIRCLE`` points; the Abel map there from the place along the radii by
+``N_RAY``-point Gauss-Legendre): a component of the initial eigenvector that vanishes at ``P_s`` (a
+removable 0/0, data aligned with principal axes) costs no accuracy.  The means at two radii are
+compared in the diagnostics.  :func:`auxiliary_rows` adds exponents at points near the branch points,
+where eigenvectors mix, for the fit of stage 4b.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from thetasol.mechanics.lax import lax_matrix, right_eigenvector
+from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
+from thetasol.solutions.theta_rotation.node import local_branch, node_branch
+from thetasol.solutions.theta_rotation.riemann import ThetaShifts
+from thetasol.solutions.theta_rotation.spectral_data import SpectralData
+
+__all__ = ["N_CIRCLE", "N_RAY", "CauchyMeans", "cauchy_means", "auxiliary_rows"]
+
+#: Points on the circles of the Cauchy means, and Gauss-Legendre nodes on their radii.
+N_CIRCLE = 32
+N_RAY = 16
+
+
+@dataclass(frozen=True, eq=False)
+class CauchyMeans:
+    """Means over the circle ``|E| = radius`` around each place ``P_s`` over ``E = 0``.
+
+    Attributes
+    ----------
+    X0 : ndarray, shape (3, 3)
+        ``psi_k(P_s)`` as ``[k, s]``: the initial eigenvectors in the components of ``B``.
+    rho : ndarray, shape (3, 3)
+        ``rho_k(P_s) theta(d_k)`` as ``[s, k]``.
+    nu : ndarray, shape (3, 3)
+        The exponents' constants ``c_k(P_s)`` as ``[s, k]`` (imaginary for consistent data).
+    """
+
+    X0: np.ndarray
+    rho: np.ndarray
+    nu: np.ndarray
+
+
+def circle_data(sd: SpectralData, s_: int, radius: float):
+    """Points on a circle |E| = radius around the place P_s (over E = 0), their w, and the local
+    Abel integrals from the place along the radii (Gauss-Legendre)."""
+    curve, place, slope = sd.curve, sd.P0[s_], sd.slopes[s_]
+    phis = 2 * np.pi * np.arange(N_CIRCLE) / N_CIRCLE
+    Ec = radius * np.exp(1j * phis)
+    xg, wg = np.polynomial.legendre.leggauss(N_RAY)
+    sg = 0.5 * (xg + 1)
+    Eq = Ec[:, None] * sg[None, :]                                   # (N, n) nodes on the radii
+    wq = local_branch(curve, place, slope, Eq)
+    vals = curve.differential_values(sd.nums, Eq, wq)                # g dE / f_w over dE, (d, N, n)
+    local = 0.5 * np.einsum("dnq,q->nd", vals * Ec[None, :, None], wg)   # (N, g_raw)
+    wc = local_branch(curve, place, slope, Ec)
+    return Ec, wc, local
+
+
+def cauchy_means(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts, theta_d, radius: float) -> CauchyMeans:
+    """X0, rho and the exponents' constants at the places over E = 0 (module docstring).
+
+    ``theta_d = (ed, vd, dlog_d)``: theta at ``d_k`` (exponent, value) and its log-derivative along U.
+    """
+    curve, th, U, Bc = sd.curve, sd.theta, sd.U, sd.Bc
+    Jp, M, u, W0 = sd.frame.Jp, curve.M, curve.u, sd.frame.W0
+    ed_, vd_, dlog_d = theta_d
+    X0 = np.zeros((3, 3), complex)
+    rho = np.zeros((3, 3), complex)                      # rho_k(P_s) theta(d_k), [s, k]
+    cst = np.zeros((3, 3), complex)
+    for s_ in range(3):
+        Ec, wc, local = circle_data(sd, s_, radius)
+        A_loc = dv.AP0[s_][None, :] + local @ sd.Ainv.T         # (N, g)
+        if sd.slopes[s_] is not None:
+            v = node_branch(curve, sd.slopes[s_], Ec)[1]
+        else:
+            v = right_eigenvector(lax_matrix(Jp, M, u, Ec), wc)
+        psi = v / (v @ dv.alpha)[:, None]
+        dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * Ec[:, None, None] + W0[None], psi) @ Bc
+        psi = psi @ Bc
+        X0[:, s_] = psi.mean(axis=0)
+        eb, vb, gb = th.jet(A_loc[:, None, :] - ts.e[None, :, :], order=1, separated=True)
+        rho[s_] = (psi / vb * np.exp(ed_[None, :] - eb)).mean(axis=0) * vd_
+        cst[s_] = (dpsi / psi - (gb @ U) / vb).mean(axis=0) + dlog_d
+    return CauchyMeans(X0=X0, rho=rho, nu=cst)
+
+
+def auxiliary_rows(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts, dlog_d: np.ndarray):
+    """Exponent constants nu(P, k) at points P where eigenvectors mix (near branch points).
+
+    Returns (nu (n, 3), relative component sizes |psi_k| / |psi| (n, 3)).
+    """
+    curve, th, U, Bc = sd.curve, sd.theta, sd.U, sd.Bc
+    Jp, M, u, W0, alpha, e = sd.frame.Jp, curve.M, curve.u, sd.frame.W0, dv.alpha, ts.e
+    bp = np.asarray(curve.branch_points)
+    scale = float(np.abs(bp).max())
+    R = float(np.abs(bp)[np.abs(bp) > 1e-8 * scale].min())   # a branch point may sit at E = 0 (rank-one a)
+    trial = [0.35 * R * np.exp(1j * ang) for ang in (0.3, 1.1, 1.9, 2.7)]
+    # Far branch points (|E| ~ 1/(J_2 - J_1) for nearly symmetric bodies) are where L ~ J^2 E^2 and
+    # eigenvectors lose accuracy: use the core of the set only.
+    core = bp[np.abs(bp) <= 10.0 * np.median(np.abs(bp))]
+    for b in core:
+        sep = np.abs(bp - b)
+        sep = min(sep[sep > 0].min(), abs(b))
+        if sep <= 1e-8 * scale:
+            continue                        # a branch point at E = 0 (rank-one a): a singular point
+        trial += [b + 0.25 * sep * np.exp(1j * ang) for ang in (0.4, 2.5, 4.6)]
+    cands = {}
+    for E in trial:
+        for w in np.linalg.eigvals(lax_matrix(Jp, M, u, E)):
+            v = right_eigenvector(lax_matrix(Jp, M, u, E), w) @ Bc
+            h = np.abs(v) / np.linalg.norm(v)
+            order = np.argsort(h)
+            pair = tuple(sorted(order[1:]))
+            if h[order[1]] > cands.get(pair, (0.0,))[0]:
+                cands[pair] = (h[order[1]], E, w)
+    pts = sorted(cands.values(), key=lambda c: -c[0])
+    E = np.array([c[1] for c in pts])
+    w = np.array([c[2] for c in pts])
+    A = sd.abel([(complex(a_), complex(b_)) for a_, b_ in zip(E, w, strict=True)])
+    v = right_eigenvector(lax_matrix(Jp, M, u, E), w)
+    psi = v / (v @ alpha)[:, None]
+    dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * E[:, None, None] + W0[None], psi) @ Bc
+    psi = psi @ Bc
+    _, vb, gb = th.jet(A[:, None, :] - e[None, :, :], order=1, separated=True)
+    nu = dpsi / psi - (gb @ U) / vb + dlog_d[None, :]
+    return nu, np.abs(psi) / np.linalg.norm(psi, axis=1, keepdims=True)
