@@ -17,6 +17,7 @@ from thetasol.core.attitude import norm3 as _norm, principal_frame as _principal
 from thetasol.solutions.rotation import RotationSolution, solve_rotation
 from thetasol.solutions.gyrostat._elliptic import EllipticMotion, reanchor
 from thetasol.solutions.gyrostat._forms import Axisymmetric, BodyMap, Delegate, Scaled, Sphere, Steady
+from thetasol.solutions.gyrostat._rotors import RotorAngles, parse_rotors
 
 __all__ = ["GyrostatSolution", "solve_gyrostat"]
 
@@ -28,11 +29,15 @@ class GyrostatSolution(RotationSolution):
     """Closed-form motion of a free gyrostat; built by :func:`solve_gyrostat`.
 
     Besides the :class:`~thetasol.RotationSolution` protocol it has ``N`` (the rotor
-    momentum, body frame) and ``h(t)`` (the total body momentum ``I omega + N``).
+    momentum (8.33), body frame) and ``h(t)`` (the total body momentum ``I omega + N``); built
+    with ``rotors``, also ``rotors`` (the :class:`Rotor` data: axis, ``A``, ``B`` and the
+    conserved ``p`` of (8.25)), ``rotor_angles(t)`` and ``rotor_rates(t)``.
     """
 
     N: np.ndarray = None
+    rotors: tuple = ()
     _impl: object = field(default=None, repr=False)
+    _rotor_angles: object = field(default=None, repr=False)
 
     def _evaluate(self, t):
         return self._impl.evaluate(t)
@@ -43,6 +48,26 @@ class GyrostatSolution(RotationSolution):
     def h(self, t):
         """Total angular momentum in the body frame, ``I omega + N``, shape ``t.shape + (3,)``."""
         return self.m(t) + self.N
+
+    def _rotor_impl(self) -> RotorAngles:
+        if self._rotor_angles is None:
+            raise ValueError("this gyrostat was built without rotors (pass rotors= to solve_gyrostat)")
+        return self._rotor_angles
+
+    def rotor_angles(self, t, wrap: bool = False) -> np.ndarray:
+        """Rotor angles ``phi_k(t)`` relative to the carrier, ``phi_k(0) = 0``, shape
+        ``t.shape + (n_rotors,)``: ``phidot_k = p_k / A_k - omega . l_k`` (8.28) integrated in
+        closed form (module :mod:`thetasol.solutions.gyrostat._rotors`).  Unwrapped by default;
+        ``wrap=True`` reduces them to ``(-pi, pi]`` with an exact product (far times)."""
+        ra = self._rotor_impl()
+        tt, flat = self._times(t)
+        out = self._chunked(lambda x: ra.angles(x, wrap), flat)
+        return out.reshape(tt.shape + (len(self.rotors),))
+
+    def rotor_rates(self, t) -> np.ndarray:
+        """Rotor rates ``phidot_k(t) = p_k / A_k - omega . l_k`` (8.28), shape ``t.shape + (n_rotors,)``."""
+        ra = self._rotor_impl()
+        return ra.rates(self.omega(t))
 
 
 # -- stages ------------------------------------------------------------------------------------
@@ -174,52 +199,83 @@ def _elliptic_form(d: _Data) -> _Form:
 
 # -- entry point -------------------------------------------------------------------------------
 
-def solve_gyrostat(J, N, Q0, omega0) -> GyrostatSolution:
-    """Exact motion of a free gyrostat, (8.39)-(8.40) (Zhukovsky-Volterra case).
+def solve_gyrostat(J, N, Q0, omega0, *, rotors=None) -> GyrostatSolution:
+    """Exact motion of a free gyrostat, (8.39)-(8.40) (Zhukovsky-Volterra case), with the
+    angles of its rotors when they are given.
+
+    The carrier obeys ``I omega_dot = (I omega + N) x omega`` with ``I = tr(J) 1 - J`` and a
+    constant ``N``, and ``Qdot = Q hat(omega)``.
 
     Parameters
     ----------
     J : array_like, shape (3,) or (3, 3)
-        Second moments of the gyrostat with its rotors locked (``I = tr(J) 1 - J`` is the
-        inertia in ``m = I omega``, the paper's (8.33) with the rotor terms folded in).
-    N : array_like, shape (3,)
-        Constant rotor angular momentum in the body frame (the paper's ``N_k``).
+        Second moments of the carrier INCLUDING the rotors' masses and transverse moments but
+        NOT the rotors' axial moments ``A_k``: the ``I`` above is the paper's (8.33) inertia of
+        the effective carrier.  (Equivalently, without ``rotors``: ``J`` with the rotors locked,
+        axial moments included, when the rotors spin at constant rates relative to the carrier
+        and ``N = sum A_k phidot_k l_k``.)
+    N : array_like, shape (3,), or None
+        Constant rotor angular momentum in the body frame, ``N = sum_k p_k l_k`` (8.33).  With
+        ``rotors`` it is checked against that sum (relative tolerance 1e-12 of
+        ``|N| + sum |p_k|``, else :class:`ValueError`); None takes the sum.
     Q0 : array_like, shape (3, 3)
         Initial attitude, body to space.
     omega0 : array_like, shape (3,)
         Initial body angular velocity of the carrier.
+    rotors : sequence of mappings, optional
+        One mapping per rotor with keys ``axis`` (its unit axis ``l_k`` in the carrier frame;
+        a norm off 1 by more than 1e-12 is refused, else it is normalized), ``A`` (axial moment,
+        > 0), ``B`` (transverse moment, >= 0; already part of ``J``, kept for inspection) and
+        ``p`` (the conserved rotor momentum ``p_k = A_k (omega . l_k + phidot_k)``, (8.25)).
+        The rotor angles start at ``phi_k(0) = 0``.
 
     Returns
     -------
     GyrostatSolution
         The :class:`~thetasol.RotationSolution` protocol (``omega(t)``, ``Q(t)``, ``M(t)``,
-        ``u(t)``, ``method``, ``invariants``, ``diagnostics``) plus ``N`` and ``h(t)``.
+        ``u(t)``, ``method``, ``invariants``, ``diagnostics``) plus ``N`` and ``h(t)``; with
+        ``rotors``, also ``rotors``, ``rotor_angles(t)`` and ``rotor_rates(t)``.
         ``invariants`` (first integrals) has ``energy`` (``1/2 m . omega``), ``H`` ((8.40):
         ``1/2 tr(M omega) = -2 energy``), ``H2`` ((8.40): ``tr (M + N)^2 = -2 |h|^2``),
-        ``h2 = |h|^2`` and ``m2 = |m|^2``.  ``diagnostics`` has ``period`` (of ``omega``; 0
-        when constant, ``inf`` on a separatrix), ``precession_rate`` (the mean rate; on a
-        separatrix the saddle's) and ``error_estimate`` (relative error of ``m(t)`` per
-        period, see the package notes).  ``method`` is one of ``gyrostat/elliptic``,
-        ``gyrostat/separatrix``, ``gyrostat/steady``, ``gyrostat/sphere``,
-        ``gyrostat/axisymmetric``, ``rest`` or the Euler top's.
+        ``h2 = |h|^2``, ``m2 = |m|^2`` and with rotors ``rotor_momenta`` (the ``p_k``).
+        ``diagnostics`` has ``period`` (of ``omega``; 0 when constant, ``inf`` on a separatrix),
+        ``precession_rate`` (the mean rate; on a separatrix the saddle's) and
+        ``error_estimate`` (relative error of ``m(t)`` per period, see the package notes); with
+        rotors ``rotor_mean_rates`` (the secular rates of ``phi_k``), ``rotor_series_terms`` and
+        ``rotor_series_tail`` (the Fourier series of ``omega . l_k``).  ``method`` is one of
+        ``gyrostat/elliptic``, ``gyrostat/separatrix``, ``gyrostat/steady``,
+        ``gyrostat/sphere``, ``gyrostat/axisymmetric``, ``rest`` or the Euler top's.
 
     Raises
     ------
     ValueError
-        Bad data (non-finite, wrong shapes, unphysical ``J``, ``Q0`` not a rotation).
+        Bad data (non-finite, wrong shapes, unphysical ``J``, ``Q0`` not a rotation, a rotor
+        with a non-unit axis, ``A <= 0``, ``B < 0``, or ``N`` not ``sum p_k l_k``).
     NotImplementedError
         An orbit within 1e-307 of a separatrix but not on it (the elliptic parameter is not
-        representable), or a motion within 1e-60 of a relative equilibrium.
+        representable), a motion within 1e-60 of a relative equilibrium, or rotor angles on a
+        separatrix.
 
     Warns
     -----
     RuntimeWarning
         When ``error_estimate`` exceeds 1e-10 (nearly planar orbits, see the package notes).
     """
+    rs = ()
+    if rotors is not None:
+        rs, N = parse_rotors(rotors, N)
+    elif N is None:
+        raise ValueError("N is required without rotors")
     d = _data(J, N, Q0, omega0)
     inv = _first_integrals(d)
     form = _degenerate_form(d) or _elliptic_form(d)
     diag = {"period": float(form.period), "precession_rate": float(form.rate),
             "error_estimate": float(form.err)}
+    angles = None
+    if rs:
+        angles = RotorAngles(rs, form.impl.omega, form.period, d.omega0)
+        inv["rotor_momenta"] = np.array([r.p for r in rs])
+        diag.update(rotor_mean_rates=angles.drift.copy(), rotor_series_terms=int(angles.nterms),
+                    rotor_series_tail=float(angles.tail))
     return GyrostatSolution(d.J, np.zeros((3, 3)), d.Q0, d.omega0, form.method, inv, None,
-                            diag, N=d.N, _impl=form.impl)
+                            diag, N=d.N, rotors=rs, _impl=form.impl, _rotor_angles=angles)
