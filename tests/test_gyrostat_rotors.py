@@ -312,10 +312,28 @@ def test_without_rotors_there_are_no_angles():
         sol.rotor_angles(1.0)
 
 
-def test_exact_separatrix_refuses_rotor_angles():
+def test_rotors_on_the_separatrix():
+    """Exactly on the gyrostat's separatrix (Chebyshev series in tanh u), t in [0, 30] (the
+    reference leaves the separatrix at its own rounding: its spread under a 1e-15 change of
+    omega0 is 1.1e-10 in omega and Q, 5.0e-10 in the angles at t = 30): measured omega 1.7e-11,
+    Q 1.7e-11, angles 7.5e-11 (bound max(1e-11, 100 x conditioning))."""
     body = separatrix_body(0.0)
-    with pytest.raises(NotImplementedError, match="separatrix"):
-        solve_gyrostat(body["J"], None, np.eye(3), body["omega0"], rotors=solver_rotors(body))
+    Q0 = rand_Q(np.random.default_rng(23))
+    t = np.linspace(0.0, 30.0, 61)
+    sol, err, cond, _ = compare(body, Q0, t)
+    assert sol.method == "gyrostat/separatrix"
+    _check(err, cond, floor=1e-11)
+    # omega . l_k tends to the saddle's value: the rotor rates tend to p_k / A_k - omega_s . l_k
+    ws = np.array([0.0, 0.0, 3.0])  # the saddle (test_gyrostat.test_separatrix_limits_are_the_saddle)
+    late = sol.rotor_rates(np.array([60.0]))[0]
+    assert np.allclose(late, [r["p"] / r["A"] - ws @ r["axis"] for r in body["rotors"]], rtol=0, atol=1e-8)
+
+
+def test_euler_top_separatrix_refuses_rotor_angles():
+    """Rotors whose momenta cancel on an Euler top's separatrix (I = (3, 4, 6), m = (6, 0, 6))."""
+    r = [dict(axis=[0.0, 0.0, 1.0], A=0.1, B=0.0, p=0.5), dict(axis=[0.0, 0.0, -1.0], A=0.1, B=0.0, p=0.5)]
+    with pytest.raises(NotImplementedError, match="Euler top"):
+        solve_gyrostat([3.5, 2.5, 0.5], None, np.eye(3), [2.0, 0.0, 1.0], rotors=r)
 
 
 _R = {"axis": [0.0, 0.0, 1.0], "A": 0.1, "B": 0.02, "p": 0.5}

@@ -1,11 +1,15 @@
 """The free gyrostat (Zhukovsky-Volterra case): (8.39)-(8.40) in closed form.
 
 A carrier with rotors of constant axial momentum (Section 8, Corollary 8): with the rotor
-momentum ``N`` (constant in the body frame) and the body angular momentum ``m = I omega``
-(the paper's ``M`` of (8.33), rotor inertia about the axes folded into ``I``), (8.39)
+momentum ``N = sum p_k l_k`` (8.33) (constant in the body frame) and the body angular momentum
+``m = I omega`` (the paper's ``M`` of (8.33); ``I`` is the carrier's inertia with the rotors'
+masses and transverse moments, without their axial moments), (8.39)
 ``Mdot = [M + N, omega]`` reads ``mdot = (m + N) x omega`` and conserves (8.40)
 ``T = 1/2 m . omega`` and ``|h|^2 = |m + N|^2``; the total momentum ``h = m + N`` is fixed in
-space (``Q h`` constant).  The attitude obeys ``Qdot = Q hat(omega)``.
+space (``Q h`` constant).  The attitude obeys ``Qdot = Q hat(omega)``.  Given the rotors (axis
+``l_k``, moments ``A_k, B_k``, the conserved ``p_k`` of (8.25)), the rotor angles follow from
+(8.28), ``phidot_k = p_k / A_k - omega . l_k`` (:mod:`thetasol.solutions.gyrostat._rotors`,
+docs/gyrostat.md).
 
 Method
 ------

@@ -396,6 +396,16 @@ class EllipticMotion:
     def omega(self, t):
         return (self.a * self.momentum(t)) @ self.P.T
 
+    # the separatrix in s = tanh(u) (the saddle at s = +-1), for integrals along it ----------
+    def separatrix_argument(self, t):
+        """``s = tanh(u)``, ``u = scale (t - t_r)`` the elliptic argument, at flat times t."""
+        return np.tanh(sum(self._u(t)))
+
+    def omega_at_tanh(self, s):
+        """Body-frame omega at the points ``s = tanh(u)`` in (-1, 1) of a separatrix."""
+        u = np.arctanh(s)
+        return (self.a * (self.m0 + self._dW_u(u, 0 * u)[0])) @ self.P.T
+
 
 def _dct2(f):
     """Chebyshev coefficients of the interpolant at the first-kind nodes (c_0 full weight)."""

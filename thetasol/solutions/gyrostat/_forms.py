@@ -132,6 +132,18 @@ class Scaled:
     def omega(self, t):
         return self.G * self.impl.omega(self.G * t)
 
+    def separatrix_argument(self, t):
+        """``tanh`` of the elliptic argument at the times ``t`` (on a separatrix)."""
+        return self.impl.separatrix_argument(self.G * t)
+
+    def omega_at_tanh(self, s):
+        return self.G * self.impl.omega_at_tanh(s)
+
+    @property
+    def du_dt(self):
+        """The rate of the elliptic argument in the data's time."""
+        return self.impl.scale * self.G
+
     def __getattr__(self, name):  # expose the elliptic details (T, m, kind, ...) for inspection
         return getattr(self.impl, name)
 

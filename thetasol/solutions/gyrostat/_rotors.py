@@ -13,7 +13,9 @@ term integral of the Fourier series of the closed-form integrand, whose coeffici
 FFT of ``omega`` on one period (geometric convergence: the number of terms doubles until the tail
 is at round-off, as for the precession angle).  The argument ``2 pi t / T`` is reduced modulo
 ``2 pi`` with an exact product, so a far time costs and loses what a near one does.  A constant
-``omega`` (rest, steady rotation) integrates exactly; a motion on a separatrix (period ``inf``)
+``omega`` (rest, steady rotation) integrates exactly.  On a separatrix of the gyrostat (period
+``inf``) the integrand is a rational function of ``s = tanh(u)`` and its integral a Chebyshev
+series in ``s`` (:class:`RotorAngles`); the Euler top's separatrix (rotors whose momenta cancel)
 is refused.
 """
 from __future__ import annotations
@@ -114,30 +116,67 @@ def _fourier_series(f, T, nmax=2 ** 17):
     if tail / scale > 1e-9:
         raise NotImplementedError(f"solve_gyrostat: the rotor angles' Fourier series does not converge "
                                   f"(tail {tail / scale:.1e}; orbit too close to a separatrix)")
-    return c, tail / scale
+    return _trim(c, scale), tail / scale
+
+
+def _trim(c, scale):
+    """The coefficients up to the last one above eps/8 of the largest (the rest add nothing)."""
+    big = np.nonzero(np.max(np.abs(c), axis=1) > 0.125 * _EPS * scale)[0]
+    return c[:max(int(big[-1]) + 2, 2)] if len(big) else c[:2]
+
+
+def _chebyshev_series(f, nmax=2 ** 14):
+    """Chebyshev coefficients (n, k) of the interpolant of ``f(s)`` (values (n, k)) at the
+    first-kind nodes, ``n`` doubled from 64 until the tail is at round-off or stops decreasing;
+    returns them and the tail relative to the largest."""
+    from scipy.fft import dct
+
+    n, prev = 64, np.inf
+    while True:
+        x = np.cos(np.pi * (np.arange(n) + 0.5) / n)
+        c = dct(f(x), type=2, axis=0) / n
+        c[0] *= 0.5
+        scale = np.max(np.abs(c))
+        if scale == 0:
+            return c, 0.0
+        tail = np.max(np.abs(c[3 * len(c) // 4:]))
+        if tail <= 4 * _EPS * scale or (tail > 0.5 * prev and tail < 1e-11 * scale) or n >= nmax:
+            break
+        prev = tail
+        n *= 2
+    if tail / scale > 1e-9:
+        raise NotImplementedError(f"solve_gyrostat: the rotor angles' Chebyshev series on the separatrix "
+                                  f"does not converge (tail {tail / scale:.1e})")
+    return _trim(c, scale), tail / scale
 
 
 class RotorAngles:
     """``phi_k(t) = (p_k / A_k - nu_k) t - (S_k(t) - S_k(0))``: ``nu_k`` the mean of
-    ``omega . l_k``, ``S_k`` the integral of its periodic part (a Fourier series in ``2 pi t / T``).
+    ``omega . l_k`` (on a separatrix its value at the saddle), ``S_k`` the integral of the rest.
 
-    ``omega(t)`` is the motion's body angular velocity (flat ``t`` -> (n, 3)), ``period`` its
-    period (0: constant ``omega``)."""
+    ``impl`` is the motion (``omega(t)`` on flat times, body frame; on a separatrix also
+    ``separatrix_argument(t)``, ``omega_at_tanh(s)`` and ``du_dt``), ``period`` its period (0:
+    constant ``omega``; ``inf``: a separatrix).  Periodic motion: ``S_k`` is a Fourier series in
+    ``2 pi t / T``.  Separatrix: in ``s = tanh(u)`` (``u`` the elliptic argument) the integrand
+    ``omega . l_k`` is a rational function equal to the saddle's value ``nu_k`` at ``s = +-1``, and
+    ``S_k`` is the integral of ``(omega . l_k - nu_k) / (du/dt (1 - s^2))`` in ``s``: its Chebyshev
+    interpolant, less its linear part at ``+-1`` (the rounding at the saddle), divided exactly by
+    ``1 - s^2`` and integrated term by term (as for the precession angle)."""
 
-    def __init__(self, rotors, omega, period, omega0):
+    def __init__(self, rotors, impl, period, omega0):
         self.L = np.array([r.axis for r in rotors]).reshape(-1, 3)
         self.rate = np.array([r.p / r.A for r in rotors])
         self.period = float(period)
-        self.nterms, self.tail = 0, 0.0
-        if not np.isfinite(self.period):
-            raise NotImplementedError("solve_gyrostat: rotor angles on a separatrix (period inf) are not "
-                                      "supported; use thetasol.integrate_multibody")
-        if self.period == 0.0:  # constant omega: the integral is exact
+        self.impl = impl
+        self.nterms, self.tail, self.cheb = 0, 0.0, None
+        self.d = np.zeros((0, len(self.rate)), dtype=complex)
+        if self.period == np.inf:
+            self._separatrix()
+        elif self.period == 0.0:  # constant omega: the integral is exact
             self.nu = self.L @ np.asarray(omega0, dtype=float)
-            self.d = np.zeros((0, len(self.rate)), dtype=complex)
             self.Om = 0.0
         else:
-            c, self.tail = _fourier_series(lambda t: omega(t) @ self.L.T, self.period)
+            c, self.tail = _fourier_series(lambda t: impl.omega(t) @ self.L.T, self.period)
             self.nu = c[0].real
             self.Om = 2 * np.pi / self.period
             k = np.arange(1, len(c) - 1)
@@ -149,9 +188,30 @@ class RotorAngles:
             self.d_sum = self.d_sum + dk
         self.drift = self.rate - self.nu  # the secular rate of each phi_k
 
+    def _separatrix(self):
+        impl = self.impl
+        if not hasattr(impl, "separatrix_argument"):
+            raise NotImplementedError("solve_gyrostat: rotor angles on this separatrix (the Euler top's) "
+                                      "are not supported; use thetasol.integrate_multibody")
+        C = np.polynomial.chebyshev
+        c, self.tail = _chebyshev_series(lambda s: impl.omega_at_tanh(s) @ self.L.T)
+        p1, m1 = C.chebval(1.0, c), C.chebval(-1.0, c)
+        self.nu = 0.5 * (p1 + m1)
+        c[0] -= self.nu
+        c[1] -= 0.5 * (p1 - m1)
+        self.cheb = np.stack([C.chebint(C.chebdiv(c[:, j], [0.5, 0.0, -0.5])[0]) / impl.du_dt
+                              for j in range(c.shape[1])], axis=1)
+        self.nterms = len(self.cheb)
+        self.s0 = impl.separatrix_argument(np.zeros(1))
+        self.Om = 0.0
+
     def periodic(self, t):
         """``-(S_k(t) - S_k(0))``, shape (n, k)."""
-        if self.nterms == 0:
+        if self.cheb is not None:
+            C = np.polynomial.chebyshev
+            s = self.impl.separatrix_argument(t)
+            return -(C.chebval(s, self.cheb).T - C.chebval(self.s0, self.cheb).T)
+        if len(self.d) == 0:
             return np.zeros(t.shape + (len(self.rate),))
         th = _angle_mod_2pi(self.Om, t, 0.0)
         z = np.exp(1j * th)[:, None]

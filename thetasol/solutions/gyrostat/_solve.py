@@ -253,8 +253,8 @@ def solve_gyrostat(J, N, Q0, omega0, *, rotors=None) -> GyrostatSolution:
         with a non-unit axis, ``A <= 0``, ``B < 0``, or ``N`` not ``sum p_k l_k``).
     NotImplementedError
         An orbit within 1e-307 of a separatrix but not on it (the elliptic parameter is not
-        representable), a motion within 1e-60 of a relative equilibrium, or rotor angles on a
-        separatrix.
+        representable), a motion within 1e-60 of a relative equilibrium, or rotor angles on the
+        Euler top's separatrix (rotors whose momenta cancel).
 
     Warns
     -----
@@ -273,7 +273,7 @@ def solve_gyrostat(J, N, Q0, omega0, *, rotors=None) -> GyrostatSolution:
             "error_estimate": float(form.err)}
     angles = None
     if rs:
-        angles = RotorAngles(rs, form.impl.omega, form.period, d.omega0)
+        angles = RotorAngles(rs, form.impl, form.period, d.omega0)
         inv["rotor_momenta"] = np.array([r.p for r in rs])
         diag.update(rotor_mean_rates=angles.drift.copy(), rotor_series_terms=int(angles.nterms),
                     rotor_series_tail=float(angles.tail))
