@@ -95,6 +95,7 @@ on) a separatrix, and motions within 1e-60 (relative) of a relative equilibrium,
 from __future__ import annotations
 from __future__ import annotations
 
+from thetasol.solutions.gyrostat._rotors import Rotor
 from thetasol.solutions.gyrostat._solve import GyrostatSolution, solve_gyrostat
 
-__all__ = ["GyrostatSolution", "solve_gyrostat"]
+__all__ = ["GyrostatSolution", "Rotor", "solve_gyrostat"]
