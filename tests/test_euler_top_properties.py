@@ -93,4 +93,4 @@ def test_regime_labels_are_consistent(data):
         assert sol.method == "euler-top/steady"
     else:
         assert sol.method in ("euler-top/elliptic", "euler-top/separatrix", "euler-top/symmetric")
-        assert 0.0 <= sol.invariants["m"] <= 1.0
+        assert 0.0 <= sol.diagnostics["m"] <= 1.0

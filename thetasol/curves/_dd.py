@@ -16,6 +16,7 @@ double-double arithmetic.  The primitives are those of :mod:`thetasol.core.dd`.
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from functools import lru_cache
 
 import mpmath
@@ -108,28 +109,12 @@ def piece_x_dd(kind, a, b, e, tau):
     return x, cdd_scale(d, *dd_mul(inv2_h, inv2_l, np.full_like(th, float(e)), 0.0))
 
 
-def intervals_dd(pieces, crit, seeds, curve_cdd, numer_cdd, rounded=True):
-    """Double-double Gauss-Legendre sums over critical intervals, for every track.
-
-    Parameters
-    ----------
-    pieces : list of :class:`thetasol.curves._quad.Piece`
-    crit : list of (piece index, first node, (lo, hi, N)) as from ``Tracked.critical_intervals``.
-    seeds : list (per interval) of complex arrays (m, N): float roots at the float nodes, one row per track.
-    curve_cdd : complex double-double coefficients of f, arrays (n + 1, dx + 1) indexed [j, i].
-    numer_cdd : complex double-double numerator coefficients, arrays (ndiff, J, I).
-    rounded : if False, return the unrounded sums as complex double-double 4-tuples (for tests).
-
-    Returns
-    -------
-    list (per interval) of complex arrays (m, ndiff), each the interval's sum rounded to complex128.
-    """
-    if not crit:
-        return []
-    # ---- nodes (per interval, shared by its tracks), grouped by parametrization
+def _nodes_dd(pieces, crit):
+    """Gauss-Legendre nodes of every interval on its piece, in double-double: the points
+    ``X`` (complex double-double), ``w dx/dtau`` per node, and the interval of each node."""
     node_tau_h, node_tau_l, node_w_h, node_w_l = [], [], [], []
-    node_int, node_q = [], []
-    for c, (p, k, (lo, hi, N)) in enumerate(crit):
+    node_int = []
+    for c, (_, _, (lo, hi, N)) in enumerate(crit):
         th_, tl_, wh_, wl_ = gauss_legendre_dd(N)
         mh, ml = dd_add(lo, 0.0, hi, 0.0)
         hh, hl = dd_add(hi, 0.0, -lo, 0.0)
@@ -141,7 +126,6 @@ def intervals_dd(pieces, crit, seeds, curve_cdd, numer_cdd, rounded=True):
         node_w_h.append(wh)
         node_w_l.append(wl)
         node_int.append(np.full(N, c))
-        node_q.append(np.arange(N))
     tau_h, tau_l = np.concatenate(node_tau_h), np.concatenate(node_tau_l)
     w_h, w_l = np.concatenate(node_w_h), np.concatenate(node_w_l)
     nint = np.concatenate(node_int)
@@ -161,29 +145,44 @@ def intervals_dd(pieces, crit, seeds, curve_cdd, numer_cdd, rounded=True):
         for c in range(4):
             X[c][sel] = x[c]
             DX[c][sel] = dx[c]
-    X, DX = tuple(X), tuple(DX)
-    wdx = cdd_scale(DX, w_h, w_l)                                     # weight * dx/dtau per node
-    # coefficients a_j(x) of f and b_dj(x) of the numerators at every node
-    A = _horner(curve_cdd, tuple(v[:, None] for v in X))              # (K, n + 1)
-    B = _horner(numer_cdd, tuple(v[:, None, None] for v in X))        # (K, ndiff, J)
-    # ---- (node, track) pairs
+    return tuple(X), cdd_scale(tuple(DX), w_h, w_l)
+
+
+@dataclass(frozen=True)
+class _Pairs:
+    """The (node, track) pairs, interval by interval: each pair's node, float seed, quadrature
+    index ``q`` and group (interval, track) ``grp``; ``gstart`` the first group of each interval."""
+
+    node: np.ndarray
+    seed: np.ndarray
+    q: np.ndarray
+    grp: np.ndarray
+    gstart: np.ndarray
+
+
+def _pairs(crit, seeds) -> _Pairs:
     pair_node, pair_seed, pair_group, pair_q = [], [], [], []
     base = np.cumsum([0] + [N for _, _, (_, _, N) in crit])
     gstart = np.cumsum([0] + [s.shape[0] for s in seeds])
-    for c, (p, k, (lo, hi, N)) in enumerate(crit):
+    for c, (_, _, (_, _, N)) in enumerate(crit):
         m = seeds[c].shape[0]
         pair_node.append(np.tile(base[c] + np.arange(N), m))
         pair_q.append(np.tile(np.arange(N), m))
         pair_group.append(np.repeat(gstart[c] + np.arange(m), N))
         pair_seed.append(np.asarray(seeds[c], dtype=complex).ravel())
-    pn = np.concatenate(pair_node)
-    y0 = np.concatenate(pair_seed)
-    Ap = tuple(v[pn] for v in A)
+    return _Pairs(node=np.concatenate(pair_node), seed=np.concatenate(pair_seed),
+                  q=np.concatenate(pair_q), grp=np.concatenate(pair_group), gstart=gstart)
+
+
+def _newton_dd(Ap, y0):
+    """Newton's method on all roots at once, from the float seeds ``y0``; returns the roots
+    (complex double-double) and ``f_y`` there.
+
+    Steps in float (they are small corrections).  A root is done when its step is below the
+    rounding bound of the double-double residual, 2^-104 (n + 1) sum |a_j| |y|^j / |f_y|
+    (ill-conditioned roots near colliding sheets), or when its steps stop decreasing below
+    1e-26 relative."""
     y = cdd(y0)
-    # ---- Newton's method on all roots at once; steps in float (they are small corrections).  A root
-    # is done when its step is below the rounding bound of the double-double residual,
-    # 2^-104 (n + 1) sum |a_j| |y|^j / |f_y| (ill-conditioned roots near colliding sheets), or when
-    # its steps stop decreasing below 1e-26 relative.
     prev = np.full(len(y0), np.inf)
     absA = np.abs(Ap[0] + 1j * Ap[2])
     done = np.zeros(len(y0), bool)
@@ -212,20 +211,19 @@ def intervals_dd(pieces, crit, seeds, curve_cdd, numer_cdd, rounded=True):
     if np.any((moved > 1e-4 * (np.abs(y0) + 1e-300) + 1e-300) & (moved > 1e-6)):
         raise ValueError("multiprecision quadrature: a root moved away from its sheet "
                          "(numerically singular curve)")
-    fac = cdd_div(tuple(v[pn] for v in wdx), fy)                      # w dx/dtau / f_y per pair
-    Bp = tuple(v[pn] for v in B)                                       # (P, ndiff, J)
-    g = _horner(Bp, tuple(v[:, None] for v in y))                      # (P, ndiff)
-    term = cdd_mul(g, tuple(v[:, None] for v in fac))
-    # ---- sums per (interval, track) in double-double: padded (node, group, ndiff) layout
+    return y, fy
+
+
+def _interval_sums(term, pr: _Pairs, crit, rounded):
+    """Sums per (interval, track) in double-double: padded (node, group, ndiff) layout."""
+    gstart = pr.gstart
     G = int(gstart[-1])
     Nmax = int(max(N for _, _, (_, _, N) in crit))
     nd = term[0].shape[1]
-    q = np.concatenate(pair_q)
-    grp = np.concatenate(pair_group)
     sums = []
     for c in range(4):
         buf = np.zeros((Nmax, G, nd))
-        buf[q, grp] = term[c]
+        buf[pr.q, pr.grp] = term[c]
         sums.append(buf)
     re = dd_sum(DD(sums[0], sums[1]))
     im = dd_sum(DD(sums[2], sums[3]))
@@ -234,3 +232,35 @@ def intervals_dd(pieces, crit, seeds, curve_cdd, numer_cdd, rounded=True):
                  im.hi[gstart[c]:gstart[c + 1]], im.lo[gstart[c]:gstart[c + 1]]) for c in range(len(crit))]
     tot = (re.hi + re.lo) + 1j * (im.hi + im.lo)                       # (G, ndiff)
     return [tot[gstart[c]:gstart[c + 1]] for c in range(len(crit))]
+
+
+def intervals_dd(pieces, crit, seeds, curve_cdd, numer_cdd, rounded=True):
+    """Double-double Gauss-Legendre sums over critical intervals, for every track.
+
+    Parameters
+    ----------
+    pieces : list of :class:`thetasol.curves._quad.Piece`
+    crit : list of (piece index, first node, (lo, hi, N)) as from ``Tracked.critical_intervals``.
+    seeds : list (per interval) of complex arrays (m, N): float roots at the float nodes, one row per track.
+    curve_cdd : complex double-double coefficients of f, arrays (n + 1, dx + 1) indexed [j, i].
+    numer_cdd : complex double-double numerator coefficients, arrays (ndiff, J, I).
+    rounded : if False, return the unrounded sums as complex double-double 4-tuples (for tests).
+
+    Returns
+    -------
+    list (per interval) of complex arrays (m, ndiff), each the interval's sum rounded to complex128.
+    """
+    if not crit:
+        return []
+    X, wdx = _nodes_dd(pieces, crit)                                   # weight * dx/dtau per node
+    # coefficients a_j(x) of f and b_dj(x) of the numerators at every node
+    A = _horner(curve_cdd, tuple(v[:, None] for v in X))              # (K, n + 1)
+    B = _horner(numer_cdd, tuple(v[:, None, None] for v in X))        # (K, ndiff, J)
+    pr = _pairs(crit, seeds)
+    pn = pr.node
+    y, fy = _newton_dd(tuple(v[pn] for v in A), pr.seed)
+    fac = cdd_div(tuple(v[pn] for v in wdx), fy)                      # w dx/dtau / f_y per pair
+    Bp = tuple(v[pn] for v in B)                                       # (P, ndiff, J)
+    g = _horner(Bp, tuple(v[:, None] for v in y))                      # (P, ndiff)
+    term = cdd_mul(g, tuple(v[:, None] for v in fac))
+    return _interval_sums(term, pr, crit, rounded)

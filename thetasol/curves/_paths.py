@@ -20,6 +20,8 @@ Paths (documented in docs/curves.md):
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 
@@ -77,169 +79,21 @@ class CellGraph:
         self.sites = sites
         allsites = sites if extra_sites is None else np.concatenate([sites, np.asarray(extra_sites, complex)])
         m = len(allsites)
-        if m:
-            lo = np.array([allsites.real.min(), allsites.imag.min()])
-            hi = np.array([allsites.real.max(), allsites.imag.max()])
-            c = complex(*(0.5 * (lo + hi)))
-            R = float(np.max(np.abs(allsites - c)))
-        else:
-            c, R = 0j, 0.0
-        H = 1.5 * R if R > 0 else max(1.0, abs(c))
-        H = max(H, 1e-12 * max(abs(c), 1.0))
-        self.center, self.H = c, H
-        if m > 1:
-            D = np.abs(allsites[:, None] - allsites[None, :]) + np.diag(np.full(m, np.inf))
-            min_sep = float(D.min())
-        else:
-            min_sep = H
-        self.min_sep = min_sep
-        # clipping decisions are only as good as float rounding at the scale of the box
-        tol = 8 * np.finfo(float).eps * (abs(c) + 2 * H)
-        self.tol = tol
-        box = c + H * np.array([-1 - 1j, 1 - 1j, 1 + 1j, -1 + 1j])
-        cells_poly = []
-        for k in range(max(m, 1)):
-            poly = box.copy()
-            labels = [("box", i) for i in range(4)]
-            if m:
-                sk = allsites[k]
-                order = np.argsort(np.abs(allsites - sk))
-                for j in order:
-                    if j == k:
-                        continue
-                    d = allsites[j] - sk
-                    # skip sites that cannot cut the current polygon
-                    hmax = np.max(((poly - 0.5 * (sk + allsites[j])) * np.conj(d)).real) / abs(d)
-                    if hmax <= tol:
-                        continue
-                    poly, labels = _clip(poly, labels, 0.5 * (sk + allsites[j]), d, ("site", int(j)), tol)
-            cells_poly.append((poly, labels))
-        # Merge the corners of the cells into graph vertices.  A Voronoi vertex is identified by the
-        # sites (and box sides) it is equidistant to, read off the labels of the two cell edges
-        # meeting there; this is exact even where two nearly parallel bisectors make its
-        # coordinates ill-conditioned.  Rounding-level geometric proximity merges the corners of
-        # co-circular (degenerate) configurations.
-        keys, pts = [], []
-        for k, (poly, labels) in enumerate(cells_poly):
-            kl = []
-            for i in range(len(poly)):
-                key = frozenset([("site", k), labels[i - 1], labels[i]]) if m else frozenset([labels[i - 1], labels[i]])
-                kl.append(len(keys))
-                keys.append(key)
-                pts.append(complex(poly[i]))
-        parent = list(range(len(keys)))
-
-        def find(i):
-            while parent[i] != i:
-                parent[i] = parent[parent[i]]
-                i = parent[i]
-            return i
-
-        first = {}
-        for i, key in enumerate(keys):
-            if key in first:
-                parent[find(i)] = find(first[key])
-            else:
-                first[key] = i
-        P = np.asarray(pts)
-        for i in range(len(P)):
-            dsite = np.min(np.abs(allsites - P[i])) if m else H
-            close = np.nonzero(np.abs(P[:i] - P[i]) <= max(2 * tol, 1e-9 * dsite))[0]
-            for j in close:
-                parent[find(i)] = find(int(j))
-        groups = {}
-        for i in range(len(keys)):
-            groups.setdefault(find(i), []).append(i)
-        Vlist = []
-        gid = {}
-        for r, members in groups.items():
-            gid[r] = len(Vlist)
-            Vlist.append(_vertex_position([keys[i] for i in members], [pts[i] for i in members], allsites, box))
-        cell_vids = []
-        pos = 0
-        for poly, _ in cells_poly:
-            cell_vids.append([gid[find(pos + i)] for i in range(len(poly))])
-            pos += len(poly)
-        self.V = np.asarray(Vlist, dtype=complex)
-        edge_index: dict[tuple[int, int], int] = {}
-        edges: list[tuple[int, int]] = []
-        count: dict[int, int] = {}
-        cells = []
-        cell_vertices = []
-        box_directed = {}
-        for k, ((poly, labels), vids) in enumerate(zip(cells_poly, cell_vids)):
-            seq = []
-            verts = []
-            N = len(vids)
-            for i in range(N):
-                a, b = vids[i], vids[(i + 1) % N]
-                if a == b:
-                    continue
-                verts.append(a)
-                key = (min(a, b), max(a, b))
-                if key not in edge_index:
-                    edge_index[key] = len(edges)
-                    edges.append(key)
-                e = edge_index[key]
-                count[e] = count.get(e, 0) + 1
-                seq.append((e, 1 if (a, b) == key else -1))
-                if labels[i][0] == "box":
-                    box_directed[a] = (e, 1 if (a, b) == key else -1, b)
-            cells.append(seq)
-            cell_vertices.append(verts)
-        self.edges = np.asarray(edges, dtype=int).reshape(-1, 2)
-        ne = len(edges)
-        nbox = len(box_directed)
-        bad = [e for e in range(ne) if count[e] > 2]
-        if bad:
-            raise RuntimeError("inconsistent Voronoi graph (an edge borders more than two cells)")
-        # outer boundary walk, ccw, from the base vertex (lower-left corner)
-        base = int(np.argmin(np.abs(self.V - box[0])))
-        self.base = base
-        outer = []
-        v = base
-        for _ in range(nbox + 1):
-            if v not in box_directed:
-                raise RuntimeError("the box boundary of the Voronoi graph is not closed")
-            e, s, w = box_directed[v]
-            outer.append((e, s))
-            v = w
-            if v == base:
-                break
-        else:
-            raise RuntimeError("the box boundary of the Voronoi graph is not closed")
-        if len(outer) != nbox:
-            raise RuntimeError("the box boundary of the Voronoi graph is not a single cycle")
-        # every interior edge twice, every box edge once
-        on_box = {e for e, _ in outer}
-        for e in range(ne):
-            want = 1 if e in on_box else 2
-            if count[e] != want:
-                raise RuntimeError("inconsistent Voronoi graph (edge multiplicities)")
-        nv = len(self.V)
-        F = len(cells) + 1
-        if nv - ne + F != 2:
-            raise RuntimeError(f"Voronoi graph fails Euler's formula: V - E + F = {nv - ne + F}")
-        self.cells = cells[:len(sites)] if m else []
-        self.extra_cells = cells[len(sites):] if m else cells
-        self.cell_vertices = cell_vertices[:len(sites)] if m else []
+        bx = _box(allsites)
+        self.center, self.H, self.min_sep, self.tol = bx.center, bx.H, bx.min_sep, bx.tol
+        cells_poly = _clipped_cells(allsites, bx)
+        self.V, cell_vids = _merge_vertices(cells_poly, allsites, bx)
+        top = _topology(cells_poly, cell_vids)
+        self.edges = np.asarray(top.edges, dtype=int).reshape(-1, 2)
+        self.base, self.outer = _outer_walk(self.V, bx.box, top)
+        _check_graph(len(self.V), len(top.edges), top, self.outer)
+        self.cells = top.cells[:len(sites)] if m else []
+        self.extra_cells = top.cells[len(sites):] if m else top.cells
+        self.cell_vertices = top.cell_vertices[:len(sites)] if m else []
         self.cells_poly = [p for p, _ in cells_poly[:len(sites)]] if m else []
         self.allsites = allsites
-        self.outer = outer
-        self.box = box
-        # counter-clockwise star of each vertex
-        star = [[] for _ in range(nv)]
-        for e, (a, b) in enumerate(self.edges):
-            star[a].append((e, True))
-            star[b].append((e, False))
-        for v in range(nv):
-            def ang(item, v=v):
-                e, is_tail = item
-                a, b = self.edges[e]
-                other = b if is_tail else a
-                return np.angle(self.V[other] - self.V[v])
-            star[v].sort(key=ang)
-        self.star = star
+        self.box = bx.box
+        self.star = _stars(self.V, self.edges)
 
     # ------------------------------------------------------------------ point location
     def locate(self, x):
@@ -318,3 +172,210 @@ def _vertex_position(keys, pts, sites, box):
         return complex(np.mean(pts))
     return complex(best)
 
+
+# -- the stages of CellGraph's construction -------------------------------------------------------
+
+@dataclass(frozen=True)
+class _Box:
+    """The square box around the sites: centre, half-width, corners (ccw from the lower left),
+    the smallest site separation and the clipping tolerance."""
+
+    center: complex
+    H: float
+    box: np.ndarray
+    min_sep: float
+    tol: float
+
+
+def _box(allsites) -> _Box:
+    m = len(allsites)
+    if m:
+        lo = np.array([allsites.real.min(), allsites.imag.min()])
+        hi = np.array([allsites.real.max(), allsites.imag.max()])
+        c = complex(*(0.5 * (lo + hi)))
+        R = float(np.max(np.abs(allsites - c)))
+    else:
+        c, R = 0j, 0.0
+    H = 1.5 * R if R > 0 else max(1.0, abs(c))
+    H = max(H, 1e-12 * max(abs(c), 1.0))
+    if m > 1:
+        D = np.abs(allsites[:, None] - allsites[None, :]) + np.diag(np.full(m, np.inf))
+        min_sep = float(D.min())
+    else:
+        min_sep = H
+    # clipping decisions are only as good as float rounding at the scale of the box
+    tol = 8 * np.finfo(float).eps * (abs(c) + 2 * H)
+    box = c + H * np.array([-1 - 1j, 1 - 1j, 1 + 1j, -1 + 1j])
+    return _Box(center=c, H=H, box=box, min_sep=min_sep, tol=tol)
+
+
+def _clipped_cells(allsites, bx: _Box):
+    """Per site its cell (the box clipped by the bisectors, nearest sites first) and the labels
+    of the cell's edges (``("box", i)`` or ``("site", j)``)."""
+    m, tol = len(allsites), bx.tol
+    cells_poly = []
+    for k in range(max(m, 1)):
+        poly = bx.box.copy()
+        labels = [("box", i) for i in range(4)]
+        if m:
+            sk = allsites[k]
+            order = np.argsort(np.abs(allsites - sk))
+            for j in order:
+                if j == k:
+                    continue
+                d = allsites[j] - sk
+                # skip sites that cannot cut the current polygon
+                hmax = np.max(((poly - 0.5 * (sk + allsites[j])) * np.conj(d)).real) / abs(d)
+                if hmax <= tol:
+                    continue
+                poly, labels = _clip(poly, labels, 0.5 * (sk + allsites[j]), d, ("site", int(j)), tol)
+        cells_poly.append((poly, labels))
+    return cells_poly
+
+
+def _merge_vertices(cells_poly, allsites, bx: _Box):
+    """Merge the corners of the cells into graph vertices; returns the vertices and, per cell,
+    the vertex index of each corner.
+
+    A Voronoi vertex is identified by the sites (and box sides) it is equidistant to, read off the
+    labels of the two cell edges meeting there; this is exact even where two nearly parallel
+    bisectors make its coordinates ill-conditioned.  Rounding-level geometric proximity merges
+    the corners of co-circular (degenerate) configurations.
+    """
+    m, tol, H = len(allsites), bx.tol, bx.H
+    keys, pts = [], []
+    for k, (poly, labels) in enumerate(cells_poly):
+        for i in range(len(poly)):
+            key = frozenset([("site", k), labels[i - 1], labels[i]]) if m else frozenset([labels[i - 1], labels[i]])
+            keys.append(key)
+            pts.append(complex(poly[i]))
+    parent = list(range(len(keys)))
+
+    def find(i):
+        while parent[i] != i:
+            parent[i] = parent[parent[i]]
+            i = parent[i]
+        return i
+
+    first = {}
+    for i, key in enumerate(keys):
+        if key in first:
+            parent[find(i)] = find(first[key])
+        else:
+            first[key] = i
+    P = np.asarray(pts)
+    for i in range(len(P)):
+        dsite = np.min(np.abs(allsites - P[i])) if m else H
+        close = np.nonzero(np.abs(P[:i] - P[i]) <= max(2 * tol, 1e-9 * dsite))[0]
+        for j in close:
+            parent[find(i)] = find(int(j))
+    groups = {}
+    for i in range(len(keys)):
+        groups.setdefault(find(i), []).append(i)
+    Vlist = []
+    gid = {}
+    for r, members in groups.items():
+        gid[r] = len(Vlist)
+        Vlist.append(_vertex_position([keys[i] for i in members], [pts[i] for i in members], allsites, bx.box))
+    cell_vids = []
+    pos = 0
+    for poly, _ in cells_poly:
+        cell_vids.append([gid[find(pos + i)] for i in range(len(poly))])
+        pos += len(poly)
+    return np.asarray(Vlist, dtype=complex), cell_vids
+
+
+@dataclass(frozen=True)
+class _Topology:
+    """Edges (tail, head) with their multiplicities, each cell's (edge, sign) cycle and vertex
+    list, and the box edges by their tail vertex: ``{tail: (edge, sign, head)}``."""
+
+    edges: list
+    count: dict
+    cells: list
+    cell_vertices: list
+    box_directed: dict
+
+
+def _topology(cells_poly, cell_vids) -> _Topology:
+    edge_index: dict[tuple[int, int], int] = {}
+    edges: list[tuple[int, int]] = []
+    count: dict[int, int] = {}
+    cells = []
+    cell_vertices = []
+    box_directed = {}
+    for (_, labels), vids in zip(cells_poly, cell_vids, strict=True):
+        seq = []
+        verts = []
+        N = len(vids)
+        for i in range(N):
+            a, b = vids[i], vids[(i + 1) % N]
+            if a == b:
+                continue
+            verts.append(a)
+            key = (min(a, b), max(a, b))
+            if key not in edge_index:
+                edge_index[key] = len(edges)
+                edges.append(key)
+            e = edge_index[key]
+            count[e] = count.get(e, 0) + 1
+            seq.append((e, 1 if (a, b) == key else -1))
+            if labels[i][0] == "box":
+                box_directed[a] = (e, 1 if (a, b) == key else -1, b)
+        cells.append(seq)
+        cell_vertices.append(verts)
+    if any(count[e] > 2 for e in range(len(edges))):
+        raise RuntimeError("inconsistent Voronoi graph (an edge borders more than two cells)")
+    return _Topology(edges=edges, count=count, cells=cells, cell_vertices=cell_vertices,
+                     box_directed=box_directed)
+
+
+def _outer_walk(V, box, top: _Topology):
+    """The base vertex (the lower-left corner) and the box boundary walked ccw from it."""
+    box_directed = top.box_directed
+    nbox = len(box_directed)
+    base = int(np.argmin(np.abs(V - box[0])))
+    outer = []
+    v = base
+    for _ in range(nbox + 1):
+        if v not in box_directed:
+            raise RuntimeError("the box boundary of the Voronoi graph is not closed")
+        e, s, w = box_directed[v]
+        outer.append((e, s))
+        v = w
+        if v == base:
+            break
+    else:
+        raise RuntimeError("the box boundary of the Voronoi graph is not closed")
+    if len(outer) != nbox:
+        raise RuntimeError("the box boundary of the Voronoi graph is not a single cycle")
+    return base, outer
+
+
+def _check_graph(nv, ne, top: _Topology, outer):
+    """Every interior edge twice, every box edge once, and Euler's formula."""
+    on_box = {e for e, _ in outer}
+    for e in range(ne):
+        want = 1 if e in on_box else 2
+        if top.count[e] != want:
+            raise RuntimeError("inconsistent Voronoi graph (edge multiplicities)")
+    F = len(top.cells) + 1
+    if nv - ne + F != 2:
+        raise RuntimeError(f"Voronoi graph fails Euler's formula: V - E + F = {nv - ne + F}")
+
+
+def _stars(V, edges):
+    """Counter-clockwise star of each vertex: [(edge, is_tail)] sorted by direction."""
+    nv = len(V)
+    star = [[] for _ in range(nv)]
+    for e, (a, b) in enumerate(edges):
+        star[a].append((e, True))
+        star[b].append((e, False))
+    for v in range(nv):
+        def ang(item, v=v):
+            e, is_tail = item
+            a, b = edges[e]
+            other = b if is_tail else a
+            return np.angle(V[other] - V[v])
+        star[v].sort(key=ang)
+    return star

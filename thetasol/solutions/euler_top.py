@@ -28,7 +28,7 @@ Attitude
     ``psi' = G/I_c + (2T - G^2/I_c) / (G + m_c)``.  The published formulas have a sign error
     in lambda (case i), a wrong separatrix solution, a wrong characteristic of Pi and a frame
     singular where mdot = 0; all are avoided here by the construction above, and every formula
-    below was re-derived and is tested against numerical integration.
+    below is derived anew and tested against numerical integration.
 
     ``int dtau / (G + A dn tau)`` is an integral of the third kind.  The textbook
     decomposition into ``Pi(n; am tau | m)`` and an arctangent (Principia's (integraldn))
@@ -57,11 +57,9 @@ import numpy as np
 from scipy import special as _sp
 
 from thetasol.special import elliptic as _el
-from thetasol.core.so3 import hat, rotation_about
-from thetasol.core.attitude import (TWO_PI_HI as _TWO_PI_HI, TWO_PI_LO as _TWO_PI_LO, angle_mod_2pi as _angle_mod_2pi,
+from thetasol.core.attitude import (angle_mod_2pi as _angle_mod_2pi,
                                      attitude_from_precession as _attitude, minimal_rotation as _minimal_rotation,
-                                     norm3 as _norm, rotation_about_axis as _rot_about,
-                                     principal_frame as _principal_frame, uniform_rotation as _uniform_rotation,
+                                     norm3 as _norm, principal_frame as _principal_frame, uniform_rotation as _uniform_rotation,
                                      unit_rows as _unit)
 from thetasol.solutions.rotation import RotationSolution
 
@@ -184,6 +182,140 @@ class _Consts:
     P0: object = 0.0          # periodic part of psi at t = 0
 
 
+@dataclass(frozen=True)
+class _Axes:
+    """Which principal axis the momentum circles (``c``), the middle axis ``b`` and the third
+    ``a``; ``sep`` on the separatrix; ``hi`` the axis of largest inertia."""
+
+    a: int
+    b: int
+    c: int
+    sep: bool
+    hi: int
+    rho4: object
+
+
+def _axes(J, Ip, n, dI) -> _Axes:
+    """Order by the exact second moments (I ascending = J descending), not by rounded inertias,
+    and classify the orbit by the sign of ``G^2 - 2T I_mid``."""
+    lo, mid, hi = sorted(range(3), key=lambda i: (-J[i], i))
+    sep = False
+    rho4 = None
+    if dI(mid, lo) == 0:
+        c, a = hi, lo
+    elif dI(hi, mid) == 0:
+        c, a = lo, hi
+    else:
+        rho4 = dI(mid, lo) * Ip[hi] / (dI(hi, mid) * Ip[lo])
+        # sign of G^2 - 2T I_mid; scaled so that tiny components do not underflow to "0"
+        sc_ = max(abs(n[hi]), abs(n[lo]))
+        num = (n[hi] / sc_) ** 2 - rho4 * (n[lo] / sc_) ** 2 if sc_ > 0 else 0 * sc_
+        if num > 0:
+            c, a = hi, lo
+        elif num < 0:
+            c, a = lo, hi
+        else:
+            c, a, sep = hi, lo, True
+    return _Axes(a=a, b=mid, c=c, sep=sep, hi=hi, rho4=rho4)
+
+
+@dataclass(frozen=True)
+class _Amplitudes:
+    """Unit amplitudes ``A_a, A_b, A_c``, the parameter ``m = k^2`` and ``mc = k'^2``, the
+    inertia differences ``|I_c - I_b|``, ``|I_c - I_a|`` and ``sg`` = sign of ``I_c - I_b``."""
+
+    Aa: object
+    Ab: object
+    Ac: object
+    m: object
+    mc: object
+    dcb: object
+    dca: object
+    sg: int
+    symmetric: bool
+
+
+def _amplitudes(X, Ip, n, dI, ax: _Axes) -> _Amplitudes:
+    a, b, c = ax.a, ax.b, ax.c
+    Ia, Ib, Ic = Ip[a], Ip[b], Ip[c]
+    dcb, dca, dba = abs(dI(c, b)), abs(dI(c, a)), abs(dI(b, a))
+    sg = 1 if c == ax.hi else -1  # sign of I_c - I_b (from J, not from rounded inertias)
+    symmetric = dba == 0
+    rho1 = dcb * Ia / (dca * Ib)
+    rho2 = dca * Ib / (dcb * Ia)
+    rho3 = dba * Ic / (Ib * dca)
+    # unit amplitudes: sums of squares (hypot: no underflow), independent of the signs
+    Aa = X.hypot(n[a], n[b] * X.sqrt(rho1))
+    Ab = X.hypot(n[b], n[a] * X.sqrt(rho2))
+    Ac = X.hypot(n[c], n[b] * X.sqrt(rho3))
+    if symmetric:
+        m_par, mc = 0 * Aa, 1 + 0 * Aa
+    elif ax.sep:
+        m_par, mc = 1 + 0 * Aa, 0 * Aa
+    else:
+        m_dir = rho3 * (Ab / Ac) ** 2
+        if m_dir < 0.5:
+            m_par, mc = m_dir, 1 - m_dir
+        else:
+            # mc = (n_c^2 - rho n_a^2) / A_c^2, formed from ratios
+            rho = ax.rho4 if c == ax.hi else 1 / ax.rho4
+            mc = (n[c] / Ac) ** 2 - rho * (n[a] / Ac) ** 2
+            if not mc > X.tiny or (X.exact_m and 1 - mc == 1):
+                # closer to the separatrix than this arithmetic resolves: more digits needed
+                raise _OutOfRange
+            m_par = 1 - mc
+    return _Amplitudes(Aa=Aa, Ab=Ab, Ac=Ac, m=m_par, mc=mc, dcb=dcb, dca=dca, sg=sg, symmetric=symmetric)
+
+
+def _working_frame(n, ax: _Axes):
+    """The right-handed working frame (a signed permutation of the principal axes) with
+    ``n_c >= 0`` (and ``n_a >= 0`` on the separatrix), and the unit momentum in it."""
+    a, b, c = ax.a, ax.b, ax.c
+    sc = -1 if n[c] < 0 else 1
+    sa = (-1 if n[a] < 0 else 1) if ax.sep else 1
+    P = np.zeros((3, 3))
+    P[a, 0] = P[b, 1] = P[c, 2] = 1.0
+    sb = sa * sc * int(round(np.linalg.det(P)))
+    W = P * np.array([sa, sb, sc], dtype=float)
+    return W, (sa * n[a], sb * n[b], sc * n[c])
+
+
+def _separatrix_consts(X, out: _Consts, G, am: _Amplitudes, nw, Ic, lam1, C1) -> _Consts:
+    """Phase, precession rate and the coefficient of the arctangent on the separatrix."""
+    na, nb, _ = nw
+    Aa, Ab, Ac = am.Aa, am.Ab, am.Ac
+    out.u0 = X.asinh((nb / Ab) / (na / Aa))
+    out.nu = G * (1 / Ic + C1)
+    out.kappa = C1 * 2 * Ac / (lam1 * Aa)
+    out.rho = Aa / (1 + Ac)
+    out.A = (Aa, 1 + 0 * Aa, Ac)  # A_b = 1 on the separatrix (m -> G e_b)
+    out.period = math.inf
+    return out
+
+
+def _elliptic_consts(X, out: _Consts, G, am: _Amplitudes, nw, Ic, lam1, C1) -> _Consts:
+    """K, the phase, the Gauss transformation's constants, the mean precession rate and the
+    period of a periodic orbit."""
+    na, nb, _ = nw
+    Aa, Ab, Ac, mc = am.Aa, am.Ab, am.Ac, am.mc
+    K = X.K(mc)
+    kp = X.sqrt(mc)
+    k1 = (1 - kp) / (1 + kp)
+    k1p2 = 4 * kp / ((1 + kp) * (1 + kp))
+    N = -k1 * Aa * Aa / ((1 + Ac) * (1 + Ac))  # -k1 (1 - A_c)/(1 + A_c), 1 - A_c^2 = A_a^2
+    Gam = (1 + k1) * 2 * Ac * k1 / (3 * (1 + Ac) * (1 + Ac))
+    RJc = X.RJ(0 * K, k1p2, 1, 1 - N) if k1 != 0 else 0 * K
+    Ibar1 = 1 / (1 + Ac) + Gam * RJc / K  # G times the mean of 1/(G + m_c)
+    s0, c0 = nb / Ab, na / Aa
+    r0 = X.hypot(s0, c0)
+    out.u0 = _F_sc(X, s0 / r0, c0 / r0, mc, K)
+    out.K, out.kp, out.k1p2, out.N, out.RJc = K, kp, k1p2, N, RJc
+    out.nu = G * (1 / Ic + C1 * Ibar1)
+    out.kappa = C1 * Gam / lam1
+    out.period = 4 * K / abs(out.lam)  # cn, sn have period 4K (dn alone 2K)
+    return out
+
+
 def _setup(Jp, mvec, X) -> _Consts:
     """Constants of the motion from principal second moments ``Jp`` and momentum ``mvec``.
 
@@ -206,93 +338,22 @@ def _setup(Jp, mvec, X) -> _Consts:
     if steady:
         return _Consts(kind="steady", G=G)
     n = [v / G for v in mv]
-    # order by the exact second moments (I ascending = J descending), not by rounded inertias
-    lo, mid, hi = sorted(range(3), key=lambda i: (-J[i], i))
-    sep = False
-    if dI(mid, lo) == 0:
-        c, a = hi, lo
-    elif dI(hi, mid) == 0:
-        c, a = lo, hi
-    else:
-        rho4 = dI(mid, lo) * Ip[hi] / (dI(hi, mid) * Ip[lo])
-        # sign of G^2 - 2T I_mid; scaled so that tiny components do not underflow to "0"
-        sc_ = max(abs(n[hi]), abs(n[lo]))
-        num = (n[hi] / sc_) ** 2 - rho4 * (n[lo] / sc_) ** 2 if sc_ > 0 else 0 * sc_
-        if num > 0:
-            c, a = hi, lo
-        elif num < 0:
-            c, a = lo, hi
-        else:
-            c, a, sep = hi, lo, True
-    b = mid
-    Ia, Ib, Ic = Ip[a], Ip[b], Ip[c]
-    dcb, dca, dba = abs(dI(c, b)), abs(dI(c, a)), abs(dI(b, a))
-    sg = 1 if c == hi else -1  # sign of I_c - I_b (from J, not from rounded inertias)
-    symmetric = dba == 0
-    rho1 = dcb * Ia / (dca * Ib)
-    rho2 = dca * Ib / (dcb * Ia)
-    rho3 = dba * Ic / (Ib * dca)
-    # unit amplitudes: sums of squares (hypot: no underflow), independent of the signs
-    Aa = X.hypot(n[a], n[b] * X.sqrt(rho1))
-    Ab = X.hypot(n[b], n[a] * X.sqrt(rho2))
-    Ac = X.hypot(n[c], n[b] * X.sqrt(rho3))
-    if symmetric:
-        m_par, mc = 0 * Aa, 1 + 0 * Aa
-    elif sep:
-        m_par, mc = 1 + 0 * Aa, 0 * Aa
-    else:
-        m_dir = rho3 * (Ab / Ac) ** 2
-        if m_dir < 0.5:
-            m_par, mc = m_dir, 1 - m_dir
-        else:
-            # mc = (n_c^2 - rho n_a^2) / A_c^2, formed from ratios
-            rho = rho4 if c == hi else 1 / rho4
-            mc = (n[c] / Ac) ** 2 - rho * (n[a] / Ac) ** 2
-            if not mc > X.tiny or (X.exact_m and 1 - mc == 1):
-                # closer to the separatrix than this arithmetic resolves: more digits needed
-                raise _OutOfRange
-            m_par = 1 - mc
-    # right-handed working frame with n_c >= 0 (and n_a >= 0 on the separatrix)
-    sc = -1 if n[c] < 0 else 1
-    sa = (-1 if n[a] < 0 else 1) if sep else 1
-    P = np.zeros((3, 3))
-    P[a, 0] = P[b, 1] = P[c, 2] = 1.0
-    sb = sa * sc * int(round(np.linalg.det(P)))
-    W = P * np.array([sa, sb, sc], dtype=float)
-    na, nb, nc = sa * n[a], sb * n[b], sc * n[c]
+    ax = _axes(J, Ip, n, dI)
+    Ia, Ib, Ic = Ip[ax.a], Ip[ax.b], Ip[ax.c]
+    am = _amplitudes(X, Ip, n, dI, ax)
+    W, nw = _working_frame(n, ax)
+    na, nb, _ = nw
     # rates per unit |m| (then scaled by G: no underflow of G^2 for tiny momenta)
-    lam1 = sg * Ac * X.sqrt(dcb * dca / (Ia * Ib)) / Ic
+    lam1 = am.sg * am.Ac * X.sqrt(am.dcb * am.dca / (Ia * Ib)) / Ic
     if lam1 == 0:  # underflow (a momentum within 1e-300 of an axis of a symmetric body)
         raise _OutOfRange
-    lam = G * lam1
     # C1 = (2T - G^2/I_c) / G^2 as a sum of terms of one sign
-    C1 = sg * (na * na * dca / (Ia * Ic) + nb * nb * dcb / (Ib * Ic))
-    out = _Consts(kind="separatrix" if sep else "elliptic", G=G, W=W, Iw=(Ia, Ib, Ic),
-                  A=(Aa, Ab, Ac), m=m_par, mc=mc, lam=lam, symmetric=symmetric)
-    if sep:
-        out.u0 = X.asinh((nb / Ab) / (na / Aa))
-        out.nu = G * (1 / Ic + C1)
-        out.kappa = C1 * 2 * Ac / (lam1 * Aa)
-        out.rho = Aa / (1 + Ac)
-        out.A = (Aa, 1 + 0 * Aa, Ac)  # A_b = 1 on the separatrix (m -> G e_b)
-        out.period = math.inf
-        return out
-    K = X.K(mc)
-    kp = X.sqrt(mc)
-    k1 = (1 - kp) / (1 + kp)
-    k1p2 = 4 * kp / ((1 + kp) * (1 + kp))
-    N = -k1 * Aa * Aa / ((1 + Ac) * (1 + Ac))  # -k1 (1 - A_c)/(1 + A_c), 1 - A_c^2 = A_a^2
-    Gam = (1 + k1) * 2 * Ac * k1 / (3 * (1 + Ac) * (1 + Ac))
-    RJc = X.RJ(0 * K, k1p2, 1, 1 - N) if k1 != 0 else 0 * K
-    Ibar1 = 1 / (1 + Ac) + Gam * RJc / K  # G times the mean of 1/(G + m_c)
-    s0, c0 = nb / Ab, na / Aa
-    r0 = X.hypot(s0, c0)
-    out.u0 = _F_sc(X, s0 / r0, c0 / r0, mc, K)
-    out.K, out.kp, out.k1p2, out.N, out.RJc = K, kp, k1p2, N, RJc
-    out.nu = G * (1 / Ic + C1 * Ibar1)
-    out.kappa = C1 * Gam / lam1
-    out.period = 4 * K / abs(lam)  # cn, sn have period 4K (dn alone 2K)
-    return out
+    C1 = am.sg * (na * na * am.dca / (Ia * Ic) + nb * nb * am.dcb / (Ib * Ic))
+    out = _Consts(kind="separatrix" if ax.sep else "elliptic", G=G, W=W, Iw=(Ia, Ib, Ic),
+                  A=(am.Aa, am.Ab, am.Ac), m=am.m, mc=am.mc, lam=G * lam1, symmetric=am.symmetric)
+    if ax.sep:
+        return _separatrix_consts(X, out, G, am, nw, Ic, lam1, C1)
+    return _elliptic_consts(X, out, G, am, nw, Ic, lam1, C1)
 
 
 # -- float64 evaluation ------------------------------------------------------------------------
@@ -501,9 +562,9 @@ def _solve_euler_top(Jm, am, Q0, omega0, dps=None) -> EulerTopSolution:
         return _solve_mp(Jm, am, Q0, omega0, 30, inv, float_output=True)
     method = _method(c)
     if c.kind in ("rest", "steady"):
-        inv.update(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0)
-        return EulerTopSolution(Jm, am, Q0, omega0, method, inv, None, _c=c)
-    inv.update(period=float(c.period), precession_rate=float(c.nu), m=float(c.m))
+        diag = dict(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0)
+        return EulerTopSolution(Jm, am, Q0, omega0, method, inv, None, diag, _c=c)
+    diag = dict(period=float(c.period), precession_rate=float(c.nu), m=float(c.m))
     P = R @ c.W
     Iw = np.array([float(v) for v in c.Iw])
     mw0, aux = _momentum_float(c, np.zeros(1))
@@ -512,7 +573,7 @@ def _solve_euler_top(Jm, am, Q0, omega0, dps=None) -> EulerTopSolution:
         c.P0 = float(_periodic(c, x0, sn, cn, dn)[0] * sgn[0])
     n0 = _unit(mw0)[0]
     S = Q0 @ P @ _minimal_rotation(n0).T
-    return EulerTopSolution(Jm, am, Q0, omega0, method, inv, None, _c=c, _P=P, _S=S, _Iw=Iw)
+    return EulerTopSolution(Jm, am, Q0, omega0, method, inv, None, diag, _c=c, _P=P, _S=S, _Iw=Iw)
 
 
 def _setup_mp(Jm, omega0, mp):
@@ -554,9 +615,9 @@ def _solve_mp(Jm, am, Q0, omega0, dps, inv, float_output=False):
         dps = None if float_output else dps
         method = _method(c)
         if c.kind in ("rest", "steady"):
-            inv.update(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0)
-            return EulerTopSolution(Jm, am, Q0, omega0, method, inv, dps, _c=c, _mp=store)
-        inv.update(period=float(c.period), precession_rate=float(c.nu), m=float(c.m))
+            diag = dict(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0)
+            return EulerTopSolution(Jm, am, Q0, omega0, method, inv, dps, diag, _c=c, _mp=store)
+        diag = dict(period=float(c.period), precession_rate=float(c.nu), m=float(c.m))
         Wm = mp.matrix(c.W.tolist())
         P = R * Wm
         mw0, aux = _momentum_mp(c, mp.mpf(0), mp)
@@ -565,4 +626,4 @@ def _solve_mp(Jm, am, Q0, omega0, dps, inv, float_output=False):
         B0 = _mp_minimal_rotation([v / G for v in mw0], mp)
         S = Q0m * P * B0.T
         store.update(P=P, S=S, Iw=list(c.Iw))
-        return EulerTopSolution(Jm, am, Q0, omega0, method, inv, dps, _c=c, _mp=store)
+        return EulerTopSolution(Jm, am, Q0, omega0, method, inv, dps, diag, _c=c, _mp=store)

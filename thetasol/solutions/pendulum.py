@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from thetasol.core.so3 import rotation_about
-from thetasol.special.elliptic import ellipf, ellipj, ellipk
+from thetasol.special.elliptic import ellipk
 from thetasol.special.pendulum import pendulum_angle as _pendulum_angle, pendulum_params as _pendulum_params
 from thetasol.mechanics.equations import invariants as _invariants
 from thetasol.solutions.rotation import RotationSolution
@@ -91,18 +91,17 @@ def _solve_pendulum(J, a, Q0, omega0, dps=None):
         c["kind"] = "uniform"
         method = "pendulum/uniform" if w0 != 0 else "rest"
         return PendulumRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=method, invariants=inv,
-                                axis_body=P[:, i], _c=c)
+                                diagnostics={}, axis_body=P[:, i], _c=c)
     # psi = 2 phi + delta - pi [kappa > 0] obeys psi'' = -nu^2 sin psi; phi(0) = 0
     psi0 = np.remainder(delta - (np.pi if kappa > 0 else 0.0) + np.pi, 2 * np.pi) - np.pi
     nu = np.sqrt(abs(kappa))
     params, m = _pendulum_params(psi0, 2.0 * w0, nu)
     c.update(params)
-    inv["pendulum_nu"] = float(nu)
-    inv["pendulum_m"] = float(m)
+    diag = {"pendulum_nu": float(nu), "pendulum_m": float(m)}
     if c["kind"] == "libration":
-        inv["period"] = float(4.0 * ellipk(c["m"], c["mc"]) / nu)
+        diag["period"] = float(4.0 * ellipk(c["m"], c["mc"]) / nu)
     elif c["kind"] == "circulation":
-        inv["period"] = float(2.0 * ellipk(c["m"], c["mc"]) / (c["k"] * nu))
+        diag["period"] = float(2.0 * ellipk(c["m"], c["mc"]) / (c["k"] * nu))
     method = "pendulum/" + c["kind"]
     return PendulumRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=method, invariants=inv,
-                            axis_body=P[:, i], _c=c)
+                            diagnostics=diag, axis_body=P[:, i], _c=c)
