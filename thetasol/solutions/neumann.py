@@ -56,15 +56,22 @@ PLANAR_TOL = 64 * _EPS
 #: Relative tolerance on q0 . v0 (the velocity must be tangent to the sphere).
 TANGENT_TOL = 1e-12
 #: The numerical reference named where no closed form is built.
+#: How a refusal inside the torus ends; the caller's context names its own reference instead.
+_INTEGRATE = "integrate numerically"
 _REFERENCE = "a numerical integration of qddot = -a q + lambda q, lambda = (q.aq - |qdot|^2) / |q|^2"
 
 
 @contextmanager
 def series_or_unavailable(reference: str):
-    """Turn a Fourier series that did not converge into :class:`ClosedFormUnavailable` naming
-    ``reference``, the numerical integrator to use instead."""
+    """Turn a Fourier series that did not converge, or a torus refused as nearly degenerate, into
+    :class:`ClosedFormUnavailable` naming ``reference``, the numerical integrator to use instead."""
     try:
         yield
+    except ClosedFormUnavailable as err:
+        msg = str(err)
+        if not msg.endswith(_INTEGRATE):
+            raise
+        raise ClosedFormUnavailable(msg[: -len(_INTEGRATE)] + f"use {reference}") from None
     except SeriesNotConverged as err:
         raise ClosedFormUnavailable(
             f"Neumann solution: {err}: the torus is too close to a separatrix or the trajectory too close "
