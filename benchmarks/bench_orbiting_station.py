@@ -72,9 +72,10 @@ def rotation_table():
         else:
             Q0, w0 = F0 @ rodrigues([0.4, 1.1, -0.3]), np.array([3.0, -7.0, 5.0]) * n
         ts = np.linspace(0, 20 * orb.period, 6)[1:]
-        t_h, (wr, Qr) = best_of(lambda: integrate_orbiting_rotation(J_SAT, orb, Q0, w0, ts, method="heyoka",
-                                                                    dtype="ldbl", rtol=1e-19), repeat=1, clock=CPU)
-        t_d, (w, Q) = best_of(lambda: integrate_orbiting_rotation(J_SAT, orb, Q0, w0, ts), repeat=1, clock=CPU)
+        args = (J_SAT, orb, Q0, w0, ts)
+        t_h, (wr, Qr) = best_of(lambda a=args: integrate_orbiting_rotation(*a, method="heyoka", dtype="ldbl",
+                                                                           rtol=1e-19), repeat=1, clock=CPU)
+        t_d, (w, Q) = best_of(lambda a=args: integrate_orbiting_rotation(*a), repeat=1, clock=CPU)
         err = max(np.abs(Q - Qr).max(), np.abs(w - wr).max() / np.abs(wr).max())
         print(f"| e = {e}, {kind} | DOP853 | {t_d:.2f} | {err:.1e} |")
         print(f"| e = {e}, {kind} | heyoka 80-bit (reference) | {t_h:.2f} | - |")
@@ -91,7 +92,7 @@ def rotation_table():
         w, Q = sol(ts)
         err = max(np.abs(Q - Qr).max(), np.abs(w - wr).max() / np.abs(wr).max())
         many = np.linspace(0, 1e6 * orb.period, 100000)
-        t_set, _ = best_of(lambda: solve_orbiting_rotation(J_SAT, orb, Q0, w0), clock=CPU)
+        t_set, _ = best_of(lambda a=(J_SAT, orb, Q0, w0): solve_orbiting_rotation(*a), clock=CPU)
         t_ev, _ = best_of(lambda s=sol, m=many: s(m), clock=CPU)
         print(f"| circular, {sol.method} | closed form: set-up {t_set * 1e3:.2f} ms, "
               f"{t_ev / many.size * 1e6:.1f} us per time (t up to 1e6 orbits) | - | {err:.1e} |")
