@@ -26,15 +26,20 @@ _group("thetasol.solutions.base", "Solution", "RotationSolution", "ClosedFormUna
 _group("thetasol.solutions.rotation", "solve_rotation")
 _group("thetasol.solutions.gyrostat", "solve_gyrostat")
 _group("thetasol.solutions.neumann", "solve_neumann", "NeumannSolution")
+_group("thetasol.solutions.kepler", "KeplerOrbit")
+_group("thetasol.solutions.orbiting_rotation", "solve_orbiting_rotation", "OrbitingRotation")
 _group("thetasol.solutions.mass_center", "MassCenterMotion", "mass_center")
 # mechanics: bodies, configurations, equations and first integrals
 _group("thetasol.mechanics.bodies", "Body")
 _group("thetasol.mechanics.configuration", "Configuration", "Joint")
 _group("thetasol.mechanics.trajectories", "Trajectories")
 _group("thetasol.mechanics.equations", "invariants", "spectral_coefficients", "torque")
+_group("thetasol.mechanics.gravity_gradient", "gravity_gradient_stability", "GravityGradientStability",
+       "gravity_gradient_torque", "orbit_frame")
 # numerical references
 _group("thetasol.integrators.rotation", "integrate_rotation")
 _group("thetasol.integrators.multibody", "integrate_multibody")
+_group("thetasol.integrators.orbiting_rotation", "integrate_orbiting_rotation")
 # scenes: the split pipeline of a whole configuration
 _group("thetasol.scenes.format", "Scene", "load_scene", "demo_scene_path")
 _group("thetasol.scenes.pipeline", "solve_configuration", "ConfigurationSolution")
@@ -65,17 +70,22 @@ if TYPE_CHECKING:
     from thetasol.curves.plane_curve import Place, PlaneCurve
     from thetasol.curves.spectral import SpectralCurve, spectral_curve
     from thetasol.integrators.multibody import integrate_multibody
+    from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
     from thetasol.integrators.rotation import integrate_rotation
     from thetasol.mechanics.bodies import Body
     from thetasol.mechanics.configuration import Configuration, Joint
     from thetasol.mechanics.equations import invariants, spectral_coefficients, torque
+    from thetasol.mechanics.gravity_gradient import (GravityGradientStability, gravity_gradient_stability,
+                                                     gravity_gradient_torque, orbit_frame)
     from thetasol.mechanics.trajectories import Trajectories
     from thetasol.scenes.format import Scene, demo_scene_path, load_scene
     from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
     from thetasol.scenes.report import run
     from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution, Solution
     from thetasol.solutions.gyrostat import solve_gyrostat
+    from thetasol.solutions.kepler import KeplerOrbit
     from thetasol.solutions.mass_center import MassCenterMotion, mass_center
     from thetasol.solutions.neumann import NeumannSolution, solve_neumann
+    from thetasol.solutions.orbiting_rotation import OrbitingRotation, solve_orbiting_rotation
     from thetasol.solutions.rotation import solve_rotation
     from thetasol.theta.riemann import RiemannTheta, riemann_theta, riemann_theta_separated, siegel_reduce
