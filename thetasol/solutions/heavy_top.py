@@ -21,13 +21,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from thetasol.core.attitude import uniform_rotation
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
 from thetasol.solutions.base import ClosedFormUnavailable
 from thetasol.solutions.heavy_top_base import HeavyTopSolution
 from thetasol.solutions.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame, lagrange_state
 from thetasol.solutions.rotation import solve_rotation
 
-__all__ = ["solve_heavy_top", "LagrangeTopSolution"]
+__all__ = ["solve_heavy_top", "LagrangeTopSolution", "SteadyRotationSolution"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -38,6 +39,14 @@ class LagrangeTopSolution(HeavyTopSolution):
 
     def _evaluate(self, t):
         return lagrange_state(self.constants, t)
+
+
+@dataclass(frozen=True, eq=False)
+class SteadyRotationSolution(HeavyTopSolution):
+    """Rotation about the vertical with the mass centre on it (a sleeping top, or rest)."""
+
+    def _evaluate(self, t):
+        return uniform_rotation(self.Q0, self.omega0, t)
 
 
 def _is_kovalevskaya(I, center, rtol=SYMMETRY_RTOL):
@@ -100,7 +109,12 @@ def solve_heavy_top(I, center, Q0, omega0, *, mass: float = 1.0, gravity=(0.0, 0
             else "not an integrable case (Euler, Lagrange, Kovalevskaya)"
         raise ClosedFormUnavailable(f"heavy top: {kind}; use thetasol.integrators.heavy_top.integrate_heavy_top")
     A, C, P = frame
-    inv = heavy_top_invariants(Im, c, mass, g, w0, Q0m)
-    consts, diag = build_lagrange_top(A, C, P, mass * gn * cn, -g / gn, Q0m, w0)
-    return LagrangeTopSolution(Im, c, mass, g, Q0m, w0, "lagrange/elliptic",
-                               {k: float(v) for k, v in inv.items()}, diag, consts)
+    inv = {k: float(v) for k, v in heavy_top_invariants(Im, c, mass, g, w0, Q0m).items()}
+    up = -g / gn
+    axis = Q0m @ (c / cn)
+    if abs(axis @ up) == 1.0 and np.all(np.cross(Q0m @ w0, up) == 0):
+        # axis exactly vertical, turning about it: no torque ever (the unstable upright one included)
+        return SteadyRotationSolution(Im, c, mass, g, Q0m, w0, "lagrange/steady-rotation", inv, {})
+    consts, diag = build_lagrange_top(A, C, P, mass * gn * cn, up, Q0m, w0)
+    method = "lagrange/separatrix" if diag["mc"] == 0 else "lagrange/elliptic"
+    return LagrangeTopSolution(Im, c, mass, g, Q0m, w0, method, inv, diag, consts)

@@ -188,7 +188,7 @@ def _phase_minus(s_minus, R: _Roots, K: float) -> _Phase:
     k1 = s_minus / (3.0 * R.d31)
     k2 = s_minus / math.sqrt(w1 * (w1 + D) * (1.0 + mu))
     p = math.sqrt((w1 + D) * (1.0 + mu) / w1)
-    full = k1 * float(sp.elliprj(0.0, R.mc, 1.0, 1.0 + mu)) + k2 * (0.5 * math.pi)
+    full = 0.0 if R.mc == 0 else k1 * float(sp.elliprj(0.0, R.mc, 1.0, 1.0 + mu)) + k2 * (0.5 * math.pi)
     return _Phase("minus", k1, k2, mu, p, full)
 
 
@@ -199,15 +199,19 @@ def _phase_plus(s_plus, R: _Roots, K: float) -> _Phase:
     v1 = R.v2 + R.D
     n = R.D / v1
     k1 = s_plus / v1
-    full = k1 * (K + n / 3.0 * float(sp.elliprj(0.0, R.mc, 1.0, R.v2 / v1)))
+    full = 0.0 if R.mc == 0 else k1 * (K + n / 3.0 * float(sp.elliprj(0.0, R.mc, 1.0, R.v2 / v1)))
     return _Phase("plus", k1, 0.0, n, v1, full)
 
 
-def _phase_G(ph: _Phase, s, c, d, R: _Roots):
-    """``G`` at the reduced argument (``s, c, d = sn, cn, dn``, ``|x| <= K``)."""
+def _phase_G(ph: _Phase, r, s, c, d, R: _Roots):
+    """``G`` at the reduced argument ``r`` (``s, c, d = sn, cn, dn``, ``|r| <= K``)."""
     if ph.kind == "none":
         return np.zeros_like(s)
     c2, d2 = c * c, d * d
+    if ph.kind == "minus" and R.mc == 0:
+        # separatrix (m = 1, sn = tanh): int dx/(w1 + D tanh^2) in elementary functions
+        k = math.sqrt(R.D / R.w1)
+        return R.s_minus / (R.w1 + R.D) * (r + k * np.arctan(k * s))
     if ph.kind == "minus":
         rj = sp.elliprj(c2, d2, 1.0, 1.0 + ph.mu * s * s)
         return ph.k1 * s ** 3 * rj + ph.k2 * np.arctan2(ph.p * s, c * d)
@@ -243,6 +247,8 @@ def _reduce(c: _Constants, t):
     """``x = lambda t + x0 = 2 K j + r`` with an exact product; returns (j, r)."""
     R = c.R
     p, e = two_prod(R.lam, t)
+    if math.isinf(c.K):  # on the separatrix (m = 1): no period
+        return np.zeros_like(t), (p + R.x0) + e
     j = np.rint((p + R.x0) / (2.0 * c.K))
     q, qe = two_prod(j, 2.0 * c.K)
     r = ((p - q) - qe) + (e + R.x0)
@@ -252,14 +258,17 @@ def _reduce(c: _Constants, t):
 def _phases(c: _Constants, j, r, s, cn, dn):
     """The Cayley-Klein phases chi+ and chi- (radians, reduced modulo 2 pi)."""
     lam, K = c.R.lam, c.K
-    Gm = _phase_G(c.minus, s, cn, dn, c.R)
-    Gp = _phase_G(c.plus, s, cn, dn, c.R)
-    rate_p = (c.kappa * K + c.minus.G_period) / lam
-    rate_m = (-c.kappa * K + c.plus.G_period) / lam
+    Gm = _phase_G(c.minus, r, s, cn, dn, c.R)
+    Gp = _phase_G(c.plus, r, s, cn, dn, c.R)
+    if math.isinf(K):
+        rate_p = rate_m = 0.0
+    else:
+        rate_p = (c.kappa * K + c.minus.G_period) / lam
+        rate_m = (-c.kappa * K + c.plus.G_period) / lam
     tau = r / lam
     chi_p = angle_mod_2pi(rate_p, j, c.delta_plus + 0.5 * (c.kappa * tau + Gm / lam))
     chi_m = angle_mod_2pi(rate_m, j, c.delta_minus + 0.5 * (-c.kappa * tau + Gp / lam))
-    return chi_p, chi_m
+    return np.remainder(chi_p, 2.0 * math.pi), np.remainder(chi_m, 2.0 * math.pi)
 
 
 def _state(c: _Constants, t):
@@ -346,7 +355,7 @@ def build_lagrange_top(A, C, P, mgl, up, Q0, omega0):
     g = Qp0[2]
     a = C * wp0[2] / A
     R = _turning_points(beta, g, wp0, a)
-    K = float(sp.ellipkm1(R.mc))
+    K = float(sp.ellipkm1(R.mc)) if R.mc > 0 else math.inf
     s_minus, s_plus = R.s_minus, R.s_plus
     limit_w = s_minus == 0 or R.w1 == 0
     limit_v = s_plus == 0 and R.v2 == 0
@@ -354,7 +363,7 @@ def build_lagrange_top(A, C, P, mgl, up, Q0, omega0):
                    _phase_minus(s_minus, R, K), _phase_plus(s_plus, R, K), limit_w, limit_v, 0.0, 0.0)
     dp, dm, resid = _fit_offsets(c, Qp0, wp0, beta)
     c = _Constants(**{**c.__dict__, "delta_plus": dp, "delta_minus": dm})
-    diag = {"period": 2.0 * K / R.lam, "K": K, "m": R.m, "mc": R.mc, "lambda": R.lam,
+    diag = {"period": 2.0 * K / R.lam if R.lam > 0 else math.inf, "K": K, "m": R.m, "mc": R.mc, "lambda": R.lam,
             "u1_plus_1": R.w1, "one_minus_u2": R.v2, "nutation_D": R.D, "fit_residual": resid,
             "passes_pole": {"hanging": limit_w, "upright": limit_v}}
     return c, diag
