@@ -100,6 +100,25 @@ def test_bruls_cardona_passes_next_to_hanging():
     assert err.max() < 5e-14, err.max()   # measured 1.6e-14
 
 
+def test_hanging_phase_against_mpmath():
+    # the hanging-side phase integral (b + a)/w1 Pi(-D/w1; am x | m) of the Bruls-Cardona top against 40-digit
+    # mpmath: measured 1.8e-15 (the Legendre-Carlson form F + (n/3) s^3 R_J: 1.1e-8)
+    import mpmath
+
+    from thetasol.solutions.lagrange_top import _phase_G
+    from thetasol.special.elliptic import ellipj
+
+    c = solve_heavy_top(*BRULS_CARDONA[:4], **BRULS_CARDONA[4]).constants
+    R = c.R
+    r = np.array([1e-9, 1e-7, 1e-5, 1e-3, 0.1, 1.0, 0.99 * R.x0, -0.5])
+    s, cn, dn, _ = ellipj(r, R.m, R.mc)
+    G = _phase_G(c.minus, r, s, cn, dn, R)
+    with mpmath.workdps(40):
+        n = -mpmath.mpf(R.D) / mpmath.mpf(R.w1)
+        ref = [float(mpmath.mpf(R.s_minus) / mpmath.mpf(R.w1) * mpmath.ellippi(n, mpmath.asin(x), R.m)) for x in s]
+    assert np.max(np.abs(G - ref)) < 1e-14, np.max(np.abs(G - ref))
+
+
 def test_closer_than_bruls_cardona_to_hanging():
     # Lz + M3 = 1e-9 M3: the axis passes 9.5e-10 rad (w1 = 4.6e-19) from hanging; measured 1.4e-15 .. 2.1e-14
     # (cond 3.6e-15 .. 7.5e-14) at t = 0.5 .. 10
