@@ -5,7 +5,8 @@ The reference is heyoka's Taylor integrator in 80-bit extended precision at tole
 (``integrate_heavy_top(..., method="heyoka", dtype="ldbl")``).  Errors are max-norm errors in
 ``omega`` (relative to ``max(1, |omega|)``) and in the entries of ``Q``; the conditioning ``cond``
 is the largest change of the closed form under four random relative perturbations of 2.2e-16 of
-``omega0`` and of ``Q0`` (what float64 data cannot resolve).
+``omega0``, ``Q0``, ``center`` and ``I`` (what float64 data cannot resolve: a tensor rotated in
+float64 is symmetric only to that level, and 80-bit heyoka integrates that body).
 """
 from __future__ import annotations
 
@@ -43,10 +44,14 @@ def _conditioning(case, t, sol):
     w, Q = sol(t)
     rng = np.random.default_rng(0)
     out = np.zeros(t.size)
+    I = np.diag(I) if np.ndim(I) == 1 else np.asarray(I, float)
     for _ in range(4):
         w1 = np.asarray(w0, float) * (1 + 2.2e-16 * rng.normal(size=3))
         Q1 = Q0 @ rodrigues(2.2e-16 * rng.normal(size=3))
-        ww, QQ = solve_heavy_top(I, c, Q1, w1, **kw)(t)
+        E = rng.normal(size=(3, 3))
+        I1 = I + 1.1e-16 * np.abs(I).max() * (E + E.T)
+        c1 = np.asarray(c, float) * (1 + 2.2e-16 * rng.normal())
+        ww, QQ = solve_heavy_top(I1, c1, Q1, w1, **kw)(t)
         out = np.maximum(out, _errors(ww, QQ, w, Q))
     return out
 
@@ -78,11 +83,12 @@ def test_simo_wong_energy_is_the_published_one():
 
 @pytest.mark.parametrize("name", ["simo_wong", "bruls_cardona"])
 def test_benchmarks_against_heyoka(name):
-    # measured: Simo-Wong 7.2e-15 .. 5.9e-12 (cond 5.3e-15 .. 7.5e-12), Bruls-Cardona 2.8e-15 .. 1.5e-11
-    # (cond 3.4e-14 .. 4.3e-11) at t = 0.5 .. 1000
+    # measured at t = 0.5 .. 1000: Simo-Wong 2.5e-16 .. 3.7e-15, Bruls-Cardona 2.2e-15 .. 7.8e-15: flat in t
+    # (the frequencies carry two words), while the data's conditioning grows to 1.2e-11 and 4.3e-11 at t = 1000
     case = SIMO_WONG if name == "simo_wong" else BRULS_CARDONA
     sol, err, cond = _against_heyoka(case, TS)
-    assert np.all(err <= 5 * cond + 1e-14), (err, cond)
+    assert np.all(err <= 2e-14), (err, cond)
+    assert cond[-1] > 1e-12
 
 
 def test_bruls_cardona_passes_next_to_hanging():
@@ -186,8 +192,9 @@ def _perp(a):
     return p / np.linalg.norm(p)
 
 
-# measured at t = 0.5 .. 1000 (seeds 0-2): errors 3.4e-16 .. 1.3e-11, at most 2.4 times the conditioning
-# (hanging, seed 2, t = 1000; 1.2 for fast seed 0); w1 ~ 1e-15 for "hanging", 1 - u2 ~ 1e-7 for "upright"
+# measured at t = 0.5 .. 1000 (seeds 0-2): errors 3.4e-16 .. 2.6e-12, at most 2.4 times the conditioning
+# (hanging, seed 2, t >= 100; <= 1.0 for the others); w1 ~ 1e-15 for "hanging", 1 - u2 ~ 1e-7 for "upright".
+# The growth is the float64 tensor's own asymmetry: a diag(A, A, C) rotated in float64 is another body at 1e-16
 @pytest.mark.parametrize("kind", ["slow", "fast", "upright", "hanging"])
 @pytest.mark.parametrize("seed", [0, 1, 2])
 def test_random_lagrange_tops_against_heyoka(kind, seed):
@@ -234,15 +241,17 @@ EDGE_CASES = {
 
 @pytest.mark.parametrize("name", sorted(EDGE_CASES))
 def test_edge_cases_against_heyoka(name):
-    # measured: <= 2.6e-15 at t <= 10 except the fast ones (starts_upright_fast 5.6e-14, gyroscopic 8.3e-13,
-    # both at their conditioning) and the separatrix (exponentially ill-conditioned: 3.7e-14 at t = 10)
+    # measured: <= 3.4e-15 at t <= 10, except on the separatrix, exponentially ill-conditioned (3.7e-14 at
+    # t = 10, conditioning 9.6e-11).  The conditioning of some of these is huge (starts_upright_slow passes
+    # through the unstable upright position every nutation: 1.2 at t = 10), the closed form's error is not.
     I, c, Q0, w0, kw, method, hang, upright = EDGE_CASES[name]
     t = np.array([0.5, 1.0, 2.0, 5.0, 10.0])
     sol, err, cond = _against_heyoka((I, c, Q0, w0, kw), t)
     assert sol.method == method
     if hang is not None:
         assert sol.diagnostics["passes_pole"] == {"hanging": hang, "upright": upright}
-    assert np.all(err <= 5 * cond + 1e-14), (err, cond)
+    bound = 5 * cond + 1e-14 if method == "lagrange/separatrix" else 1e-14
+    assert np.all(err <= bound), (err, cond)
 
 
 def test_planar_pendulum_period():

@@ -108,13 +108,12 @@ def solve_heavy_top(I, center, Q0, omega0, *, mass: float = 1.0, gravity=(0.0, 0
         kind = "a Kovalevskaya top (its genus-2 closed form is not implemented)" if _is_kovalevskaya(Im, c) \
             else "not an integrable case (Euler, Lagrange, Kovalevskaya)"
         raise ClosedFormUnavailable(f"heavy top: {kind}; use thetasol.integrators.heavy_top.integrate_heavy_top")
-    A, C, P = frame
     inv = {k: float(v) for k, v in heavy_top_invariants(Im, c, mass, g, w0, Q0m).items()}
     up = -g / gn
     axis = Q0m @ (c / cn)
     if abs(axis @ up) == 1.0 and np.all(np.cross(Q0m @ w0, up) == 0):
         # axis exactly vertical, turning about it: no torque ever (the unstable upright one included)
         return SteadyRotationSolution(Im, c, mass, g, Q0m, w0, "lagrange/steady-rotation", inv, {})
-    consts, diag = build_lagrange_top(A, C, P, mass * gn * cn, up, Q0m, w0)
+    consts, diag = build_lagrange_top(Im, c, Q0m, w0, mass * gn * cn, up)
     method = "lagrange/separatrix" if diag["mc"] == 0 else "lagrange/elliptic"
     return LagrangeTopSolution(Im, c, mass, g, Q0m, w0, method, inv, diag, consts)

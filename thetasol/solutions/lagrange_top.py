@@ -102,7 +102,8 @@ def lagrange_frame(I: np.ndarray, center: np.ndarray, rtol: float = SYMMETRY_RTO
 
 @dataclass(frozen=True)
 class _Roots:
-    """Turning points and elliptic parameters (float64, each formed without cancellation)."""
+    """Turning points, elliptic parameters and rates (float64, each rounded once from 60 digits;
+    the quantities that multiply t carry a second word ``*_lo``)."""
 
     w1: float      # 1 + u1
     v2: float      # 1 - u2
@@ -114,6 +115,20 @@ class _Roots:
     x0: float      # lambda (0 - t1), the initial argument
     s_minus: float  # b + a = (Mz + M3)/A
     s_plus: float   # b - a = (Mz - M3)/A
+    a: float        # M3 / A
+    omega3: float   # M3 / C
+    kappa: float    # a (A/C - 1)
+    K: float
+    lam_lo: float
+    x0_lo: float
+    K2: tuple       # 2K as (hi, lo)
+    rate_plus: tuple   # chi+ per period of x, (hi, lo)
+    rate_minus: tuple  # chi- per period of x, (hi, lo)
+
+
+def _hilo(x):
+    hi = float(x)
+    return hi, float(x - mpmath.mpf(hi))
 
 
 def _bisect(p, lo, hi):
@@ -151,37 +166,101 @@ def _mp_roots(beta, c2, c1, c0, w0, v0, s_minus, s_plus):
     return sorted([known, ra, rb])
 
 
-def _turning_points(beta, g, w, a) -> _Roots:
-    """Roots of f about ``u0`` from the float data: ``g`` = gamma, ``w`` = omega (principal frame)."""
-    with mpmath.workdps(_DPS):
-        mf = mpmath.mpf
-        g1, g2, g3 = (mf(float(x)) for x in g)
-        nrm = mpmath.sqrt(g1 * g1 + g2 * g2 + g3 * g3)
-        g1, g2, g3 = g1 / nrm, g2 / nrm, g3 / nrm
-        w1_, w2_ = mf(float(w[0])), mf(float(w[1]))
-        B, am = mf(float(beta)), mf(float(a))
-        wp2 = w1_ ** 2 + w2_ ** 2
-        h = w1_ * g1 + w2_ * g2
-        u0, w0, v0 = g3, 1 + g3, 1 - g3
-        udot0 = g1 * w2_ - g2 * w1_
-        s_minus, s_plus = h + am * w0, h - am * v0
-        # f(u0 + xi) = udot0^2 + c1 xi + c2 xi^2 + beta xi^3
-        c1 = -2 * u0 * wp2 - B * (g1 ** 2 + g2 ** 2) + 2 * am * h
-        c2 = -wp2 + 2 * B * u0 - am ** 2
-        xi1, xi2, xi3 = _mp_roots(B, c2, c1, udot0 ** 2, w0, v0, s_minus, s_plus)
-        xi1, xi2 = min(xi1, mf(0)), max(xi2, mf(0))
-        w1 = mf(0) if s_minus == 0 else max(w0 + xi1, mf(0))
-        v2 = mf(0) if (s_plus == 0 and wp2 - B * v0 > 0) else max(v0 - xi2, mf(0))
-        D, d31, d32 = xi2 - xi1, xi3 - xi1, xi3 - xi2
-        m = D / d31
-        lam = mpmath.sqrt(B * d31) / 2
-        if D > 0:
-            phi0 = mpmath.atan2(mpmath.sqrt(-xi1), mpmath.sqrt(xi2))
-            x0 = mpmath.ellipf(phi0, m) * (1 if udot0 >= 0 else -1)
-        else:
-            x0 = mf(0)
-        return _Roots(float(w1), float(v2), float(D), float(d31), float(m), float(d32 / d31),
-                      float(lam), float(x0), float(s_minus), float(s_plus))
+def _mp_frame(e3):
+    """Orthonormal right-handed frame (list of 3 mp column vectors) with third column ``e3`` (mp, unit)."""
+    k = min(range(3), key=lambda i: abs(e3[i]))
+    t = [mpmath.mpf(int(i == k)) for i in range(3)]
+    d = sum(t[i] * e3[i] for i in range(3))
+    e1 = [t[i] - d * e3[i] for i in range(3)]
+    n1 = mpmath.sqrt(sum(x * x for x in e1))
+    e1 = [x / n1 for x in e1]
+    e2 = [e3[1] * e1[2] - e3[2] * e1[1], e3[2] * e1[0] - e3[0] * e1[2], e3[0] * e1[1] - e3[1] * e1[0]]
+    return [e1, e2, e3]
+
+
+def _unit_mp(v):
+    v = [mpmath.mpf(float(x)) for x in v]
+    n = mpmath.sqrt(sum(x * x for x in v))
+    return [x / n for x in v]
+
+
+def _mp_data(I, center, Q0, omega0, mgl):
+    """The principal-frame data in 60 digits from the float64 data taken as exact.
+
+    Returns ``(P, S, A, C, beta, gamma, omega)``: frames as mp columns, ``gamma`` the unit upward
+    vertical and ``omega`` the angular velocity in the principal frame.  ``Q0`` is orthogonal to a
+    few ulps only; ``|Q0^T up|`` is kept as a factor of ``beta`` (the float64 equations of
+    motion see ``Q^T gravity`` with that length).
+    """
+    mf = mpmath.mpf
+    P = _mp_frame(_unit_mp(center))
+    Im = [[mf(float(x)) for x in row] for row in I]
+    quad = lambda u, v: sum(u[i] * Im[i][k] * v[k] for i in range(3) for k in range(3))  # noqa: E731
+    A = (quad(P[0], P[0]) + quad(P[1], P[1])) / 2
+    C = quad(P[2], P[2])
+    Qm = [[mf(float(x)) for x in row] for row in Q0]
+    up = mgl[1]
+    g_body = [sum(Qm[k][i] * up[k] for k in range(3)) for i in range(3)]   # Q0^T up
+    gamma = [sum(P[j][i] * g_body[i] for i in range(3)) for j in range(3)]
+    nrm = mpmath.sqrt(sum(x * x for x in gamma))
+    gamma = [x / nrm for x in gamma]
+    w = [mf(float(x)) for x in omega0]
+    omega = [sum(P[j][i] * w[i] for i in range(3)) for j in range(3)]
+    beta = 2 * mgl[0] * nrm / A
+    S = _mp_frame(up)
+    return P, S, A, C, beta, gamma, omega
+
+
+def _turning_points(A, C, B, g, w) -> _Roots:
+    """Roots of f about ``u0``, the elliptic parameters and the rates, all from the mp data."""
+    mf = mpmath.mpf
+    g1, g2, g3 = g
+    w1_, w2_, w3_ = w
+    am = C * w3_ / A
+    wp2 = w1_ ** 2 + w2_ ** 2
+    h = w1_ * g1 + w2_ * g2
+    gp2 = g1 ** 2 + g2 ** 2
+    u0 = g3
+    w0 = 1 + g3 if g3 >= 0 else gp2 / (1 - g3)
+    v0 = 1 - g3 if g3 <= 0 else gp2 / (1 + g3)
+    udot0 = g1 * w2_ - g2 * w1_
+    s_minus, s_plus = h + am * w0, h - am * v0
+    # f(u0 + xi) = udot0^2 + c1 xi + c2 xi^2 + beta xi^3
+    c1 = -2 * u0 * wp2 - B * gp2 + 2 * am * h
+    c2 = -wp2 + 2 * B * u0 - am ** 2
+    xi1, xi2, xi3 = _mp_roots(B, c2, c1, udot0 ** 2, w0, v0, s_minus, s_plus)
+    xi1, xi2 = min(xi1, mf(0)), max(xi2, mf(0))
+    w1 = mf(0) if s_minus == 0 else max(w0 + xi1, mf(0))
+    v2 = mf(0) if (s_plus == 0 and wp2 - B * v0 > 0) else max(v0 - xi2, mf(0))
+    D, d31, d32 = xi2 - xi1, xi3 - xi1, xi3 - xi2
+    m, mc = D / d31, d32 / d31
+    lam = mpmath.sqrt(B * d31) / 2
+    x0 = mf(0)
+    if D > 0:
+        phi0 = mpmath.atan2(mpmath.sqrt(-xi1), mpmath.sqrt(xi2))
+        x0 = mpmath.ellipf(phi0, m) * (1 if udot0 >= 0 else -1)
+    kappa = am * (A / C - 1)
+    K = mpmath.ellipk(m) if mc > 0 else mpmath.inf
+    rp, rm = _mp_rates(kappa, K, lam, s_minus, s_plus, w1, v2, D, d31, mc)
+    return _Roots(float(w1), float(v2), float(D), float(d31), float(m), float(mc), float(lam), float(x0),
+                  float(s_minus), float(s_plus), float(am), float(w3_), float(kappa), float(K),
+                  _hilo(lam)[1], _hilo(x0)[1], _hilo(2 * K) if mc > 0 else (math.inf, 0.0), rp, rm)
+
+
+def _mp_rates(kappa, K, lam, s_minus, s_plus, w1, v2, D, d31, mc):
+    """Increments of chi+ and chi- over one period ``2K`` of x (60 digits, as (hi, lo) pairs)."""
+    if mc == 0:
+        return (0.0, 0.0), (0.0, 0.0)
+    Gm = mpmath.mpf(0)
+    if s_minus != 0 and w1 > 0:   # (b + a)/w1 Pi(-D/w1 | m), the cancellation-free form
+        mu = w1 / d31
+        Gm = s_minus / (3 * d31) * mpmath.elliprj(0, mc, 1, 1 + mu) \
+            + s_minus / mpmath.sqrt(w1 * (w1 + D) * (1 + mu)) * mpmath.pi / 2
+    Gp = mpmath.mpf(0)
+    if s_plus != 0:               # (b - a)/v1 Pi(D/v1 | m)
+        v1 = v2 + D
+        Gp = s_plus / v1 * (K + D / v1 / 3 * mpmath.elliprj(0, mc, 1, v2 / v1))
+    return _hilo((kappa * K + Gm) / lam), _hilo((-kappa * K + Gp) / lam)
 
 
 # -- the third-kind integrals --------------------------------------------------------------------
@@ -195,31 +274,27 @@ class _Phase:
     k2: float
     mu: float      # "minus": m/N;  "plus": the characteristic n+
     p: float       # "minus": sqrt((1+N)(1+mu));  "plus": v1
-    G_period: float  # G over one half-period of x (x -> x + 2K adds 2 G_period)
 
 
-def _phase_minus(s_minus, R: _Roots, K: float) -> _Phase:
+def _phase_minus(R: _Roots) -> _Phase:
     """``G(x) = s- int_0^x dx / (w1 + D sn^2)``: the hanging side, the cancellation-free form."""
+    s_minus = R.s_minus
     if s_minus == 0 or R.w1 == 0:
-        return _Phase("none", 0.0, 0.0, 0.0, 0.0, 0.0)
+        return _Phase("none", 0.0, 0.0, 0.0, 0.0)
     w1, D = R.w1, R.D
     mu = w1 / R.d31
     k1 = s_minus / (3.0 * R.d31)
     k2 = s_minus / math.sqrt(w1 * (w1 + D) * (1.0 + mu))
     p = math.sqrt((w1 + D) * (1.0 + mu) / w1)
-    full = 0.0 if R.mc == 0 else k1 * float(sp.elliprj(0.0, R.mc, 1.0, 1.0 + mu)) + k2 * (0.5 * math.pi)
-    return _Phase("minus", k1, k2, mu, p, full)
+    return _Phase("minus", k1, k2, mu, p)
 
 
-def _phase_plus(s_plus, R: _Roots, K: float) -> _Phase:
+def _phase_plus(R: _Roots) -> _Phase:
     """``G(x) = s+ int_0^x dx / (v2 + D cn^2)``: the upright side, Carlson's form (no cancellation)."""
-    if s_plus == 0:
-        return _Phase("none", 0.0, 0.0, 0.0, 0.0, 0.0)
+    if R.s_plus == 0:
+        return _Phase("none", 0.0, 0.0, 0.0, 0.0)
     v1 = R.v2 + R.D
-    n = R.D / v1
-    k1 = s_plus / v1
-    full = 0.0 if R.mc == 0 else k1 * (K + n / 3.0 * float(sp.elliprj(0.0, R.mc, 1.0, R.v2 / v1)))
-    return _Phase("plus", k1, 0.0, n, v1, full)
+    return _Phase("plus", R.s_plus / v1, 0.0, R.D / v1, v1)
 
 
 def _phase_G(ph: _Phase, r, s, c, d, R: _Roots):
@@ -248,12 +323,6 @@ class _Constants:
     P: np.ndarray
     S: np.ndarray
     R: _Roots
-    K: float
-    a: float          # M3 / A
-    omega3: float     # M3 / C
-    kappa: float      # a (A/C - 1)
-    s_minus: float    # b + a
-    s_plus: float     # b - a
     minus: _Phase
     plus: _Phase
     limit_w: bool     # the axis passes exactly through the hanging position: signed sn amplitude
@@ -263,30 +332,29 @@ class _Constants:
 
 
 def _reduce(c: _Constants, t):
-    """``x = lambda t + x0 = 2 K j + r`` with an exact product; returns (j, r)."""
+    """``x = lambda t + x0 = 2 K j + r`` with exact products and the second words of ``lambda``,
+    ``x0`` and ``2K``; returns (j, r)."""
     R = c.R
     p, e = two_prod(R.lam, t)
-    if math.isinf(c.K):  # on the separatrix (m = 1): no period
+    e = e + (R.lam_lo * t + R.x0_lo)
+    if math.isinf(R.K):  # on the separatrix (m = 1): no period
         return np.zeros_like(t), (p + R.x0) + e
-    j = np.rint((p + R.x0) / (2.0 * c.K))
-    q, qe = two_prod(j, 2.0 * c.K)
-    r = ((p - q) - qe) + (e + R.x0)
+    K2, K2_lo = R.K2
+    j = np.rint((p + R.x0) / K2)
+    q, qe = two_prod(j, K2)
+    r = ((p - q) - qe) + ((e - j * K2_lo) + R.x0)
     return j, r
 
 
 def _phases(c: _Constants, j, r, s, cn, dn):
     """The Cayley-Klein phases chi+ and chi- (radians, reduced modulo 2 pi)."""
-    lam, K = c.R.lam, c.K
-    Gm = _phase_G(c.minus, r, s, cn, dn, c.R)
-    Gp = _phase_G(c.plus, r, s, cn, dn, c.R)
-    if math.isinf(K):
-        rate_p = rate_m = 0.0
-    else:
-        rate_p = (c.kappa * K + c.minus.G_period) / lam
-        rate_m = (-c.kappa * K + c.plus.G_period) / lam
-    tau = r / lam
-    chi_p = angle_mod_2pi(rate_p, j, c.delta_plus + 0.5 * (c.kappa * tau + Gm / lam))
-    chi_m = angle_mod_2pi(rate_m, j, c.delta_minus + 0.5 * (-c.kappa * tau + Gp / lam))
+    R = c.R
+    Gm = _phase_G(c.minus, r, s, cn, dn, R)
+    Gp = _phase_G(c.plus, r, s, cn, dn, R)
+    tau = r / R.lam
+    (rp, rp_lo), (rm, rm_lo) = R.rate_plus, R.rate_minus
+    chi_p = angle_mod_2pi(rp, j, rp_lo * j + c.delta_plus + 0.5 * (R.kappa * tau + Gm / R.lam))
+    chi_m = angle_mod_2pi(rm, j, rm_lo * j + c.delta_minus + 0.5 * (-R.kappa * tau + Gp / R.lam))
     return np.remainder(chi_p, 2.0 * math.pi), np.remainder(chi_m, 2.0 * math.pi)
 
 
@@ -309,11 +377,11 @@ def _state(c: _Constants, t):
     if c.limit_w and c.limit_v:
         f_p, f_m, n1, n2 = half, half, 0.0 * s, udot_red
     elif c.limit_w:
-        f_p, n1, n2 = half, -c.a * R.D * sign * s, udot_red * sign * cn
+        f_p, n1, n2 = half, -R.a * R.D * sign * s, udot_red * sign * cn
     elif c.limit_v:
-        f_m, n1, n2 = half, c.a * R.D * sign * cn, udot_red * sign * s
+        f_m, n1, n2 = half, R.a * R.D * sign * cn, udot_red * sign * s
     else:
-        n1 = np.where(w <= v, c.s_minus - c.a * w, c.s_plus + c.a * v)
+        n1 = np.where(w <= v, R.s_minus - R.a * w, R.s_plus + R.a * v)
         n2 = udot_red * s * cn
     den = 2.0 * f_p * f_m
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -321,7 +389,7 @@ def _state(c: _Constants, t):
         c2 = np.where(den > 0, n2 / den, 0.0)
     phi = chi_p - chi_m
     sp_, cp_ = np.sin(phi), np.cos(phi)
-    omega = np.stack([c1 * sp_ - c2 * cp_, c1 * cp_ + c2 * sp_, np.full_like(s, c.omega3)], axis=-1)
+    omega = np.stack([c1 * sp_ - c2 * cp_, c1 * cp_ + c2 * sp_, np.full_like(s, R.omega3)], axis=-1)
     q = np.stack([amp_p * np.cos(chi_p), amp_m * np.cos(chi_m), amp_m * np.sin(chi_m),
                   amp_p * np.sin(chi_p)], axis=-1)
     return omega, _quat_to_matrix(q)
@@ -361,32 +429,32 @@ def _fit_offsets(c: _Constants, Qp0, wp0, beta):
     return 0.5 * (dpsi + dphi), 0.5 * (dpsi - dphi), resid
 
 
-def build_lagrange_top(A, C, P, mgl, up, Q0, omega0):
-    """The constants of the closed form (see the module docstring) for ``I = P diag(A, A, C) P^T``,
-    mass centre ``l P e3``, ``mgl = mass |g| l > 0``, ``up`` the upward unit vertical in space.
+def build_lagrange_top(I, center, Q0, omega0, mgl, up):
+    """The constants of the closed form (see the module docstring) for the inertia ``I`` symmetric
+    about the axis of ``center`` (:func:`lagrange_frame`), ``mgl = mass |g| |center| > 0`` and ``up`` the
+    upward vertical in space; the frames, moments, integrals, turning points and rates are formed in
+    60-digit mpmath from the float64 data.
 
     Returns ``(constants, diagnostics)``; evaluate with :func:`lagrange_state`.
     """
-    S = _complete_frame(up)
+    with mpmath.workdps(_DPS):
+        Pm, Sm, A, C, B, g, w = _mp_data(I, center, Q0, omega0, (mpmath.mpf(float(mgl)), _unit_mp(up)))
+        R = _turning_points(A, C, B, g, w)
+        P = np.array([[float(Pm[j][i]) for j in range(3)] for i in range(3)])
+        S = np.array([[float(Sm[j][i]) for j in range(3)] for i in range(3)])
+        wp0 = np.array([float(x) for x in w])
+        beta = float(B)
     Qp0 = S.T @ Q0 @ P
-    wp0 = P.T @ omega0
-    beta = 2.0 * mgl / A
-    g = Qp0[2]
-    a = C * wp0[2] / A
-    R = _turning_points(beta, g, wp0, a)
-    K = float(sp.ellipkm1(R.mc)) if R.mc > 0 else math.inf
-    s_minus, s_plus = R.s_minus, R.s_plus
-    limit_w = s_minus == 0 or R.w1 == 0
-    limit_v = s_plus == 0 and R.v2 == 0
-    c = _Constants(P, S, R, K, a, wp0[2], a * (A / C - 1.0), s_minus, s_plus,
-                   _phase_minus(s_minus, R, K), _phase_plus(s_plus, R, K), limit_w, limit_v, 0.0, 0.0)
+    limit_w = R.s_minus == 0 or R.w1 == 0
+    limit_v = R.s_plus == 0 and R.v2 == 0
+    c = _Constants(P, S, R, _phase_minus(R), _phase_plus(R), limit_w, limit_v, 0.0, 0.0)
     dp, dm, resid = _fit_offsets(c, Qp0, wp0, beta)
     if not resid < FIT_WARN:
         warnings.warn(f"Lagrange top: the closed form misses the initial state by {resid:.2g} "
                       "(expected a few ulps); errors of that size are to be expected", RuntimeWarning, stacklevel=3)
     c = _Constants(**{**c.__dict__, "delta_plus": dp, "delta_minus": dm})
-    diag = {"period": 2.0 * K / R.lam if R.lam > 0 else math.inf, "K": K, "m": R.m, "mc": R.mc, "lambda": R.lam,
-            "u1_plus_1": R.w1, "one_minus_u2": R.v2, "nutation_D": R.D, "fit_residual": resid,
+    diag = {"period": 2.0 * R.K / R.lam if R.lam > 0 else math.inf, "K": R.K, "m": R.m, "mc": R.mc,
+            "lambda": R.lam, "u1_plus_1": R.w1, "one_minus_u2": R.v2, "nutation_D": R.D, "fit_residual": resid,
             "passes_pole": {"hanging": limit_w, "upright": limit_v}}
     return c, diag
 
