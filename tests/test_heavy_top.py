@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from thetasol.integrators.heavy_top import integrate_heavy_top
-from thetasol.mechanics.heavy_top import heavy_top_invariants
+from thetasol.mechanics.heavy_top import heavy_top_invariants, kovalevskaya_integral
 from thetasol.solutions.base import ClosedFormUnavailable
 from thetasol.solutions.heavy_top import solve_heavy_top
 from thetasol.core.so3 import rodrigues
@@ -370,3 +370,23 @@ def test_dop853_reference_accuracy():
         wr, Qr = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **kw)
         worst = max(worst, np.max(_errors(w, Q, wr, Qr)))
     assert worst < 1e-10, worst
+
+
+@pytest.mark.parametrize("ratio, conserved", [(2.0, True), (1.7, False)])
+def test_kovalevskaya_integral_along_the_reference(ratio, conserved):
+    # Kowalevski's k^2 (gravity-along gamma, memoir normalization) along 80-bit heyoka, in a rotated body
+    # frame: constant to 1.5e-15 relative for I1 = I2 = 2 I3 (the convention check for the genus-2 closed
+    # form), varying by 0.075 relative for I1 = I2 = 1.7 I3
+    rng = np.random.default_rng(3)
+    R = _random_rotation(rng)
+    I = R @ np.diag([ratio, ratio, 1.0]) @ R.T * 0.8
+    c = R @ [0.6, 0.8, 0.0] * 0.5
+    Q0, w0 = _random_rotation(rng), rng.normal(size=3)
+    if conserved:
+        with pytest.raises(ClosedFormUnavailable, match="Kovalevskaya"):
+            solve_heavy_top(I, c, Q0, w0, **G)
+    t = np.linspace(0, 20, 41)
+    w, Q = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **G)
+    k2 = kovalevskaya_integral(I, c, 1.0, G["gravity"], w, Q)
+    drift = np.max(np.abs(k2 - k2[0])) / k2[0]
+    assert (drift < 1e-14) if conserved else (drift > 1e-2), drift

@@ -16,7 +16,7 @@ import numpy as np
 
 from thetasol.core import validate as V
 
-__all__ = ["heavy_top_data", "heavy_top_invariants"]
+__all__ = ["heavy_top_data", "heavy_top_invariants", "kovalevskaya_integral"]
 
 
 def heavy_top_data(I, center, Q0, omega0, mass=1.0, gravity=(0.0, 0.0, -9.81)):
@@ -58,3 +58,26 @@ def heavy_top_invariants(I, center, mass, gravity, omega, Q) -> dict:
     cn = np.linalg.norm(c)
     axial = M @ (c / cn) if cn > 0 else np.zeros(M.shape[:-1])
     return {"energy": energy, "vertical_momentum": vert, "axial_momentum": axial}
+
+
+def kovalevskaya_integral(I, center, mass, gravity, omega, Q):
+    """Kovalevskaya's integral ``k^2 = |(p + i q)^2 + c0 (g1 + i g2)|^2`` (leading axes broadcast).
+
+    For ``I = diag(2, 2, 1) I3`` in a principal frame ``(e1, e2, e3)`` with the mass centre
+    ``x0 e1``: ``p, q`` the components of ``omega`` along ``e1, e2``, ``c0 = mass |g| x0 / I3`` and
+    ``g = Q^T gravity / |gravity|`` the DOWNWARD vertical in the body frame (Kowalevski's memoir,
+    Acta Math. 12 (1889): ``2 pdot = q r``, ``2 qdot = -p r - c0 g3``, ``rdot = c0 g2``).  A first
+    integral only for those bodies; ``e3`` is the eigenvector of the smallest moment.
+    """
+    I = np.asarray(I, float)
+    c = np.asarray(center, float)
+    g = np.asarray(gravity, float)
+    ev, vec = np.linalg.eigh(I)
+    e3 = vec[:, 0]
+    x0 = np.linalg.norm(c)
+    e1 = c / x0
+    e2 = np.cross(e3, e1)
+    c0 = mass * np.linalg.norm(g) * x0 / ev[0]
+    gd = np.swapaxes(Q, -1, -2) @ (g / np.linalg.norm(g))
+    z = (omega @ e1 + 1j * (omega @ e2)) ** 2 + c0 * (gd @ e1 + 1j * (gd @ e2))
+    return np.abs(z) ** 2
