@@ -251,6 +251,11 @@ def _mp_rates(kappa, K, lam, s_minus, s_plus, w1, v2, D, d31, mc):
     """Increments of chi+ and chi- over one period ``2K`` of x (60 digits, as (hi, lo) pairs)."""
     if mc == 0:
         return (0.0, 0.0), (0.0, 0.0)
+    with mpmath.workdps(36):   # two float64 words need 32 digits; R_J's cost grows with them
+        return _mp_rates_at(kappa, K, lam, s_minus, s_plus, w1, v2, D, d31, mc)
+
+
+def _mp_rates_at(kappa, K, lam, s_minus, s_plus, w1, v2, D, d31, mc):
     Gm = mpmath.mpf(0)
     if s_minus != 0 and w1 > 0:   # (b + a)/w1 Pi(-D/w1 | m), the cancellation-free form
         mu = w1 / d31
