@@ -1,0 +1,103 @@
+"""Error against cost for the heavy top: the Lagrange top in closed form against DOP853 and heyoka.
+
+Run:  python benchmarks/bench_heavy_top.py [--quick]
+
+Prints, for Simo-Wong's fast top, the Bruls-Cardona top (its axis passes 7.2e-7 rad from hanging
+straight down) and a random slow top:
+
+1. dense output over [0, T] (T = 100, 10 with --quick): wall time and max error in omega and Q of
+   the closed form (set-up included), of integrate_heavy_top with DOP853 at two tolerances and of
+   heyoka in float64; the reference is heyoka in 80-bit extended precision at tolerance 1e-19;
+2. the closed form's set-up cost and its cost per time point in batches of 1, 100 and 1e5 points;
+3. one far-time query t = 1, 1e3, 1e6: the cost is the same (arguments reduced modulo the periods).
+
+Errors are max over the output times of max |omega - omega_ref| / max(1, |omega_ref|) and
+max |Q - Q_ref|.
+"""
+from __future__ import annotations
+
+import argparse
+import time
+
+import numpy as np
+
+from thetasol.core.so3 import rodrigues
+from thetasol.integrators.heavy_top import integrate_heavy_top
+from thetasol.solutions.heavy_top import solve_heavy_top
+
+from _common import best_of, machine_info
+
+
+def problems():
+    rng = np.random.default_rng(11)
+    slow_Q0 = rodrigues(rng.normal(size=3))
+    return {
+        "Simo-Wong (I = diag(5, 5, 1), Mgl = 20, W0 = (0, 0, 50))":
+            ([5.0, 5.0, 1.0], [0, 0, 1.0], rodrigues(np.array([0.05, 0, 0])), [0, 0, 50.0],
+             {"mass": 20.0, "gravity": [0, 0, -1.0]}),
+        "Bruls-Cardona (m = 15, symmetry axis 2, Omega0 = (0, 150, -4.61538))":
+            (np.diag([15.234375, 0.46875, 15.234375]), [0, 1.0, 0], np.eye(3), [0, 150.0, -4.61538],
+             {"mass": 15.0, "gravity": [0, 0, -9.81]}),
+        "slow top (I = (2, 2, 1), l = 0.5, |omega0| ~ 3)":
+            ([2.0, 2.0, 1.0], [0, 0, 0.5], slow_Q0, rng.normal(size=3) * 2, {"mass": 1.0, "gravity": [0, 0, -9.81]}),
+    }
+
+
+def err(a, b):
+    (w, Q), (wr, Qr) = a, b
+    ew = np.max(np.abs(w - wr) / np.maximum(1.0, np.abs(wr).max(-1, keepdims=True)))
+    return max(ew, np.max(np.abs(Q - Qr)))
+
+
+def dense(name, case, T, quick):
+    I, c, Q0, w0, kw = case
+    t = np.linspace(0.0, T, 1001)
+    t0 = time.perf_counter()
+    ref = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **kw)
+    tref = time.perf_counter() - t0
+    print(f"\n## {name}: 1001 points on [0, {T:g}]  (reference: heyoka 80-bit, tol 1e-19, {tref:.2f} s "
+          "including compilation)")
+    rows = []
+    cost, out = best_of(lambda: solve_heavy_top(I, c, Q0, w0, **kw)(t), repeat=5)
+    rows.append(("thetasol closed form (set-up + evaluation)", cost, err(out, ref)))
+    for rtol in ([1e-9] if quick else [1e-9, 1e-12]):
+        cost, out = best_of(lambda rtol=rtol: integrate_heavy_top(I, c, Q0, w0, t, rtol=rtol, **kw), repeat=1)
+        rows.append((f"DOP853 rtol={rtol:g}", cost, err(out, ref)))
+    integrate_heavy_top(I, c, Q0, w0, t[:3], method="heyoka", rtol=1e-16, **kw)
+    cost, out = best_of(lambda: integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", rtol=1e-16, **kw), repeat=1)
+    rows.append(("heyoka float64 tol=1e-16 (2nd call, compiled code cached)", cost, err(out, ref)))
+    print("| method | wall time [s] | max error (omega, Q) |\n|---|---|---|")
+    for r in rows:
+        print(f"| {r[0]} | {r[1]:.3g} | {r[2]:.2e} |")
+
+
+def costs(name, case):
+    I, c, Q0, w0, kw = case
+    setup, sol = best_of(lambda: solve_heavy_top(I, c, Q0, w0, **kw), repeat=7)
+    line = [f"set-up {setup * 1e3:.2f} ms"]
+    for n in (1, 100, 100000):
+        t = np.linspace(0.0, 1e3, n)
+        cost, _ = best_of(lambda t=t: sol(t), repeat=5, number=max(1, 2000 // n))
+        line.append(f"{n} pts: {cost / n * 1e6:.2f} us/pt")
+    far = []
+    for T in (1.0, 1e3, 1e6):
+        cost, _ = best_of(lambda T=T: sol(np.array([T])), repeat=5, number=200)
+        far.append(f"t = {T:g}: {cost * 1e6:.0f} us")
+    print(f"- {name}: " + "; ".join(line) + "; one far query " + ", ".join(far))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true")
+    args = ap.parse_args()
+    print(machine_info("heyoka"))
+    T = 10.0 if args.quick else 100.0
+    for name, case in problems().items():
+        dense(name, case, T, args.quick)
+    print("\n## closed form: set-up, cost per time point, far-time queries")
+    for name, case in problems().items():
+        costs(name.split(" (")[0], case)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,119 @@
+"""Heavy tops (Section 5): a rigid body turning about a fixed point in uniform gravity, in closed form.
+
+:func:`solve_heavy_top` recognizes the integrable cases in any body frame and returns a
+:class:`~thetasol.solutions.heavy_top_base.HeavyTopSolution` (``sol(t) -> (omega, Q)``):
+
+* mass centre at the fixed point, or no gravity: the Euler top, through
+  :func:`thetasol.solutions.rotation.solve_rotation` with ``a = 0`` (second moments
+  ``J = tr(I)/2 1 - I``); its ``method`` starts with ``"euler-top"``;
+* Lagrange's top, ``I`` symmetric about the axis through the mass centre: the closed form of
+  :mod:`thetasol.solutions.lagrange_top` (``method = "lagrange/elliptic"``);
+* anything else, including Kovalevskaya's top (``I1 = I2 = 2 I3``, centre in the equatorial plane,
+  not implemented yet): :class:`~thetasol.solutions.base.ClosedFormUnavailable` naming
+  :func:`thetasol.integrators.heavy_top.integrate_heavy_top`.
+
+Conventions (:mod:`thetasol.mechanics.heavy_top`): ``I`` the inertia about the fixed point, ``center`` the
+mass centre from the fixed point, both in the body frame; ``V = -mass gravity . (Q center)``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from thetasol.core.attitude import uniform_rotation
+from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
+from thetasol.solutions.base import ClosedFormUnavailable
+from thetasol.solutions.heavy_top_base import HeavyTopSolution
+from thetasol.solutions.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame, lagrange_state
+from thetasol.solutions.rotation import solve_rotation
+
+__all__ = ["solve_heavy_top", "LagrangeTopSolution", "SteadyRotationSolution"]
+
+
+@dataclass(frozen=True, eq=False)
+class LagrangeTopSolution(HeavyTopSolution):
+    """Lagrange's top in closed form (:mod:`thetasol.solutions.lagrange_top`)."""
+
+    constants: object = field(default=None, repr=False)
+
+    def _evaluate(self, t):
+        return lagrange_state(self.constants, t)
+
+
+@dataclass(frozen=True, eq=False)
+class SteadyRotationSolution(HeavyTopSolution):
+    """Rotation about the vertical with the mass centre on it (a sleeping top, or rest)."""
+
+    def _evaluate(self, t):
+        return uniform_rotation(self.Q0, self.omega0, t)
+
+
+def _is_kovalevskaya(I, center, rtol=SYMMETRY_RTOL):
+    ev = np.linalg.eigvalsh(I)
+    scale = ev[-1]
+    for k3, (i, j) in ((0, (1, 2)), (2, (0, 1))):
+        if abs(ev[i] - ev[j]) <= rtol * scale and abs(ev[i] - 2 * ev[k3]) <= rtol * scale:
+            axis = np.linalg.eigh(I)[1][:, k3]
+            return abs(axis @ center) <= rtol * np.linalg.norm(center)
+    return False
+
+
+def solve_heavy_top(I, center, Q0, omega0, *, mass: float = 1.0, gravity=(0.0, 0.0, -9.81)):
+    """Exact motion of a heavy top (Section 5) when a closed form is known.
+
+    Parameters
+    ----------
+    I : array_like, shape (3,) or (3, 3)
+        Inertia about the fixed point in the body frame (principal values or a symmetric tensor).
+    center : array_like, shape (3,)
+        Mass centre seen from the fixed point, body frame.
+    Q0 : array_like, shape (3, 3)
+        Initial attitude, body to space.
+    omega0 : array_like, shape (3,)
+        Initial body angular velocity.
+    mass : float
+    gravity : array_like, shape (3,)
+        Gravity vector in space.
+
+    Returns
+    -------
+    HeavyTopSolution or RotationSolution
+        ``sol(t) -> (omega, Q)`` with shapes ``t.shape + (3,)`` and ``t.shape + (3, 3)``.
+
+    Raises
+    ------
+    ValueError
+        Non-finite or wrongly shaped data, an inertia violating the triangle inequalities or not
+        positive definite, a non-orthogonal ``Q0``, a negative mass.
+    ClosedFormUnavailable
+        No integrable case (the message names ``integrate_heavy_top``).
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> sol = solve_heavy_top([5.0, 5.0, 1.0], [0, 0, 1.0], np.eye(3), [0.3, 0, 50.0], mass=20, gravity=[0, 0, -1])
+    >>> sol.method
+    'lagrange/elliptic'
+    >>> sol(np.array([0.0, 1e6]))[1].shape
+    (2, 3, 3)
+    """
+    Im, c, Q0m, w0, mass, g = heavy_top_data(I, center, Q0, omega0, mass, gravity)
+    cn, gn = np.linalg.norm(c), np.linalg.norm(g)
+    if cn == 0 or gn == 0 or mass == 0:
+        J = 0.5 * np.trace(Im) * np.eye(3) - Im
+        return solve_rotation(J, np.zeros((3, 3)), Q0m, w0)
+    frame = lagrange_frame(Im, c)
+    if frame is None:
+        kind = "a Kovalevskaya top (its genus-2 closed form is not implemented)" if _is_kovalevskaya(Im, c) \
+            else "not an integrable case (Euler, Lagrange, Kovalevskaya)"
+        raise ClosedFormUnavailable(f"heavy top: {kind}; use thetasol.integrators.heavy_top.integrate_heavy_top")
+    inv = {k: float(v) for k, v in heavy_top_invariants(Im, c, mass, g, w0, Q0m).items()}
+    up = -g / gn
+    axis = Q0m @ (c / cn)
+    if abs(axis @ up) == 1.0 and np.all(np.cross(Q0m @ w0, up) == 0):
+        # axis exactly vertical, turning about it: no torque ever (the unstable upright one included)
+        return SteadyRotationSolution(Im, c, mass, g, Q0m, w0, "lagrange/steady-rotation", inv, {})
+    consts, diag = build_lagrange_top(Im, c, Q0m, w0, mass * gn * cn, up)
+    method = "lagrange/separatrix" if diag["mc"] == 0 else "lagrange/elliptic"
+    return LagrangeTopSolution(Im, c, mass, g, Q0m, w0, method, inv, diag, consts)

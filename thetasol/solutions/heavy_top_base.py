@@ -1,0 +1,66 @@
+"""The result protocol of the heavy-top closed forms: ``sol(t) -> (omega, Q)``.
+
+A :class:`HeavyTopSolution` follows :class:`~thetasol.solutions.base.Solution` with the state of
+:func:`thetasol.integrators.heavy_top.integrate_heavy_top`: the body angular velocity ``omega``
+(shape ``t.shape + (3,)``) and the attitude ``Q`` (body to space, ``t.shape + (3, 3)``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from thetasol.solutions.base import Solution
+
+__all__ = ["HeavyTopSolution"]
+
+
+@dataclass(frozen=True, eq=False)
+class HeavyTopSolution(Solution):
+    """The motion of a heavy top, ``t -> (omega(t), Q(t))``.
+
+    Attributes
+    ----------
+    I : ndarray, shape (3, 3)
+        Inertia about the fixed point, body frame.
+    center : ndarray, shape (3,)
+        Mass centre seen from the fixed point, body frame.
+    mass : float
+    gravity : ndarray, shape (3,)
+        Gravity vector in space; potential ``V = -mass gravity . (Q center)``.
+    Q0, omega0 : ndarray
+        Initial attitude (body to space) and body angular velocity.
+    method : str
+        ``"lagrange/..."``, ``"kovalevskaya/..."`` (the Euler top is returned by
+        :func:`thetasol.solutions.rotation.solve_rotation` itself).
+    invariants : dict
+        ``energy``, ``vertical_momentum``, ``axial_momentum`` (see
+        :func:`thetasol.mechanics.heavy_top.heavy_top_invariants`).
+    diagnostics : dict
+        Periods, the elliptic parameters, the turning points and the fit residual at ``t = 0``.
+    """
+
+    I: np.ndarray
+    center: np.ndarray
+    mass: float
+    gravity: np.ndarray
+    Q0: np.ndarray
+    omega0: np.ndarray
+    method: str
+    invariants: dict = field(repr=False)
+    diagnostics: dict = field(default_factory=dict, repr=False)
+
+    def _evaluate(self, t: np.ndarray):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def omega(self, t):
+        """Body angular velocity, shape ``t.shape + (3,)``."""
+        return self(t)[0]
+
+    def Q(self, t):
+        """Attitude (body to space), shape ``t.shape + (3, 3)``."""
+        return self(t)[1]
+
+    def m(self, t):
+        """Body angular momentum about the fixed point ``I omega``, shape ``t.shape + (3,)``."""
+        return self.omega(t) @ self.I.T
