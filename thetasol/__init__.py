@@ -26,6 +26,8 @@ _group("thetasol.solutions.base", "Solution", "RotationSolution", "ClosedFormUna
 _group("thetasol.solutions.rotation", "solve_rotation")
 _group("thetasol.solutions.gyrostat", "solve_gyrostat")
 _group("thetasol.solutions.neumann", "solve_neumann", "NeumannSolution")
+_group("thetasol.solutions.heavy_top", "solve_heavy_top")
+_group("thetasol.solutions.heavy_top_base", "HeavyTopSolution")
 _group("thetasol.solutions.kepler", "KeplerOrbit")
 _group("thetasol.solutions.orbiting_rotation", "solve_orbiting_rotation", "OrbitingRotation")
 _group("thetasol.solutions.mass_center", "MassCenterMotion", "mass_center")
@@ -34,12 +36,14 @@ _group("thetasol.mechanics.bodies", "Body")
 _group("thetasol.mechanics.configuration", "Configuration", "Joint")
 _group("thetasol.mechanics.trajectories", "Trajectories")
 _group("thetasol.mechanics.equations", "invariants", "spectral_coefficients", "torque")
+_group("thetasol.mechanics.heavy_top", "heavy_top_invariants", "kovalevskaya_integral")
 _group("thetasol.mechanics.gravity_gradient", "gravity_gradient_stability", "GravityGradientStability",
        "gravity_gradient_torque", "orbit_frame")
 # numerical references
 _group("thetasol.integrators.rotation", "integrate_rotation")
 _group("thetasol.integrators.multibody", "integrate_multibody")
 _group("thetasol.integrators.orbiting_rotation", "integrate_orbiting_rotation")
+_group("thetasol.integrators.heavy_top", "integrate_heavy_top")
 # scenes: the split pipeline of a whole configuration
 _group("thetasol.scenes.format", "Scene", "load_scene", "demo_scene_path")
 _group("thetasol.scenes.pipeline", "solve_configuration", "ConfigurationSolution")
@@ -69,6 +73,7 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:
     from thetasol.curves.plane_curve import Place, PlaneCurve
     from thetasol.curves.spectral import SpectralCurve, spectral_curve
+    from thetasol.integrators.heavy_top import integrate_heavy_top
     from thetasol.integrators.multibody import integrate_multibody
     from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
     from thetasol.integrators.rotation import integrate_rotation
@@ -77,12 +82,15 @@ if TYPE_CHECKING:
     from thetasol.mechanics.equations import invariants, spectral_coefficients, torque
     from thetasol.mechanics.gravity_gradient import (GravityGradientStability, gravity_gradient_stability,
                                                      gravity_gradient_torque, orbit_frame)
+    from thetasol.mechanics.heavy_top import heavy_top_invariants, kovalevskaya_integral
     from thetasol.mechanics.trajectories import Trajectories
     from thetasol.scenes.format import Scene, demo_scene_path, load_scene
     from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
     from thetasol.scenes.report import run
     from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution, Solution
     from thetasol.solutions.gyrostat import solve_gyrostat
+    from thetasol.solutions.heavy_top import solve_heavy_top
+    from thetasol.solutions.heavy_top_base import HeavyTopSolution
     from thetasol.solutions.kepler import KeplerOrbit
     from thetasol.solutions.mass_center import MassCenterMotion, mass_center
     from thetasol.solutions.neumann import NeumannSolution, solve_neumann
