@@ -5,7 +5,7 @@ says what is wrong; none of them silently repairs data beyond round-off.
 """
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 

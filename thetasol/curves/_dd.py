@@ -16,15 +16,28 @@ double-double arithmetic.  The primitives are those of :mod:`thetasol.core.dd`.
 """
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import mpmath
 import numpy as np
 
+from thetasol.core.dd import (
+    DD,
+    cdd,
+    cdd_add,
+    cdd_div,
+    cdd_mul,
+    cdd_scale,
+    cdd_sub,
+    cdd_value,
+    dd_add,
+    dd_div,
+    dd_mul,
+    dd_split_mp,
+    dd_sum,
+)
 from thetasol.curves._mp import gauss_legendre_mp
 from thetasol.curves._poly import split_exact
-from thetasol.core.dd import cdd, cdd_add, cdd_div, cdd_mul, cdd_scale, cdd_sub, cdd_value, dd_add, dd_div, \
-    dd_mul, dd_split_mp, dd_sum, DD
 
 _NEWTON_MAX = 12
 _REL_DONE = 2.0 ** -104   # a Newton step this small (relative) changes nothing in double-double
@@ -52,7 +65,7 @@ def numerators_to_cdd(numer_exact):
     return tuple(np.stack([p[c] for p in parts]) for c in range(4))
 
 
-@lru_cache(maxsize=None)
+@cache
 def gauss_legendre_dd(N: int):
     """Gauss-Legendre nodes and weights on [-1, 1] as double-double pairs (t_hi, t_lo, w_hi, w_lo)."""
     ts, ws = gauss_legendre_mp(N, 24)
@@ -129,7 +142,7 @@ def intervals_dd(pieces, crit, seeds, curve_cdd, numer_cdd, rounded=True):
     # ---- nodes (per interval, shared by its tracks), grouped by parametrization
     node_tau_h, node_tau_l, node_w_h, node_w_l = [], [], [], []
     node_int, node_q = [], []
-    for c, (p, k, (lo, hi, N)) in enumerate(crit):
+    for c, (_, _, (lo, hi, N)) in enumerate(crit):
         th_, tl_, wh_, wl_ = gauss_legendre_dd(N)
         mh, ml = dd_add(lo, 0.0, hi, 0.0)
         hh, hl = dd_add(hi, 0.0, -lo, 0.0)
@@ -170,7 +183,7 @@ def intervals_dd(pieces, crit, seeds, curve_cdd, numer_cdd, rounded=True):
     pair_node, pair_seed, pair_group, pair_q = [], [], [], []
     base = np.cumsum([0] + [N for _, _, (_, _, N) in crit])
     gstart = np.cumsum([0] + [s.shape[0] for s in seeds])
-    for c, (p, k, (lo, hi, N)) in enumerate(crit):
+    for c, (_, _, (_, _, N)) in enumerate(crit):
         m = seeds[c].shape[0]
         pair_node.append(np.tile(base[c] + np.arange(N), m))
         pair_q.append(np.tile(np.arange(N), m))

@@ -167,7 +167,7 @@ class CellGraph:
         cells = []
         cell_vertices = []
         box_directed = {}
-        for k, ((poly, labels), vids) in enumerate(zip(cells_poly, cell_vids)):
+        for (_, labels), vids in zip(cells_poly, cell_vids):
             seq = []
             verts = []
             N = len(vids)

@@ -116,12 +116,12 @@ def local_data(curve):
     meta.append(("infinity", -1, 0j, G.base, x1, M_INF, -1))
     tr1 = curve._tracker.track(pieces1)
     pieces2 = []
-    for (kind, k, b, ref, x1, M, d), y1 in zip(meta, tr1.ends):
+    for (_, _, b, _, x1, M, d), y1 in zip(meta, tr1.ends):
         taus = np.arange(M + 1) / M
         pieces2.append(Piece("circle", x1, b, y1, e=d, taus=taus))
     tr2 = curve._tracker.track(pieces2)
     out = []
-    for p, ((kind, k, b, ref, x1, M, d), y1) in enumerate(zip(meta, tr1.ends)):
+    for p, ((kind, k, b, ref, x1, M, _), y1) in enumerate(zip(meta, tr1.ends)):
         xs, ys = tr2.values(p)
         end = ys[:, -1]
         dd = np.abs(end[:, None] - y1[None, :])

@@ -23,12 +23,22 @@ from __future__ import annotations
 import numpy as np
 import sympy as sp
 
-from thetasol.curves._places import (adjoint_subspace, expansion, laurent, local_data, local_of, noise_level, perm_cycles,
-                            place_series, series_eval, series_integral)
-from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections
-from thetasol.curves._quad import Piece, Tracker
 from thetasol.curves._homology import LiftedGraph, symplectic_basis
 from thetasol.curves._paths import CellGraph
+from thetasol.curves._places import (
+    adjoint_subspace,
+    expansion,
+    laurent,
+    local_data,
+    local_of,
+    noise_level,
+    perm_cycles,
+    place_series,
+    series_eval,
+    series_integral,
+)
+from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections
+from thetasol.curves._quad import Piece, Tracker
 
 __all__ = ["PlaneCurve", "Place"]
 
@@ -169,7 +179,6 @@ class PlaneCurve:
     # ------------------------------------------------------------------ topology
     def _setup_sheets(self):
         G = self._graph
-        poly = self._poly
         R = self._tracker._eval_nodes(G.V, np.zeros(len(G.V), complex))[0]
         order = np.lexsort((R.imag, R.real), axis=1) if R.shape[1] > 1 else np.zeros(R.shape, int)
         self._vroots = np.take_along_axis(R, order, axis=1)
@@ -178,7 +187,7 @@ class PlaneCurve:
         self._edge_tracks = tr
         n = self.n
         perms = np.zeros((len(G.edges), n), dtype=int)
-        for e, (a, b) in enumerate(G.edges):
+        for e, (_, b) in enumerate(G.edges):
             d = np.abs(tr.ends[e][:, None] - self._vroots[b][None, :])
             p = np.argmin(d, axis=1)
             if len(set(p.tolist())) != n:
@@ -251,7 +260,6 @@ class PlaneCurve:
         """Map base sheet -> label at vertex v along the plane spanning tree path (BFS)."""
         if "tree" not in self._cache:
             G = self._graph
-            nv = len(G.V)
             parent = {G.base: None}
             order = [G.base]
             for u in order:
@@ -355,6 +363,7 @@ class PlaneCurve:
 
     def _period_matrix_mp(self, diffs, dps):
         import mpmath
+
         from thetasol.curves._mp import integrate_mp
         key = ("pm_mp", tuple(map(str, diffs)), dps)
         if key in self._cache:
@@ -363,7 +372,7 @@ class PlaneCurve:
         tr_mp = Tracker(self._poly, G.allsites, tol=10.0 ** (-(dps + 3)), mp_fallback=self._exact.fallback)
         pieces = [Piece("line", G.V[a], G.V[b], self._vroots[a]) for a, b in G.edges]
         tr = tr_mp.track(pieces)
-        for e, (a, b) in enumerate(G.edges):
+        for e, (_, b) in enumerate(G.edges):
             p = np.argmin(np.abs(tr.ends[e][:, None] - self._vroots[b][None, :]), axis=1)
             if not np.array_equal(p, self._perms[e]):
                 raise RuntimeError("the dps path found a different sheet permutation (internal error)")
@@ -700,7 +709,6 @@ class PlaneCurve:
         Values are path integrals along the documented paths (docs/curves.md); they are defined modulo
         the lattice: another path adds a lattice vector.
         """
-        g = self.genus
         targets, weights, shape = self._parse_targets(points)
         P = self._holo_arrays()
         raw = self._abel_raw(targets, P, "holo")

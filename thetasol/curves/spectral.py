@@ -108,7 +108,7 @@ def _exact_coefficients(J, M, u) -> list:
     return C
 
 
-def spectral_curve(J, M, u, *, tol: float = 1e-9) -> "SpectralCurve":
+def spectral_curve(J, M, u, *, tol: float = 1e-9) -> SpectralCurve:
     """The spectral curve (4.12) ``det(J^2 E^2 + M E + u - w 1) = 0`` as a :class:`SpectralCurve`.
 
     Parameters
@@ -310,7 +310,6 @@ class SpectralCurve(PlaneCurve):
         For a symmetric body fewer than three places may exist; they are ordered by their limit.
         """
         if "inf_sorted" not in self._cache:
-            from thetasol.curves._places import series_eval
             pl = super().places_at_infinity()
             lims = []
             for P in pl:

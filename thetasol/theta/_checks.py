@@ -8,7 +8,6 @@ import numpy as np
 from thetasol.core.validate import finite_array
 from thetasol.theta._lattice import MAX_GENUS
 
-
 #: Relative tolerance on the symmetry of tau (issue 3).
 TAU_SYM_RTOL = 1e-12
 

@@ -29,7 +29,6 @@ import math
 from functools import lru_cache
 
 import numpy as np
-
 from scipy.linalg import solve_triangular
 
 from thetasol.core.dd import DD, dd_sum, two_prod

@@ -26,7 +26,6 @@ MAX_GENUS = 8
 # ----------------------------------------------------------------------------------------
 def _ldl(H: np.ndarray):
     """``H = L diag(d) L^T`` with ``L`` unit lower triangular (small dense H)."""
-    g = H.shape[0]
     C = np.linalg.cholesky(H)
     d = np.diag(C) ** 2
     L = C / np.diag(C)[None, :]
