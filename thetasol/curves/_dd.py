@@ -18,7 +18,6 @@ from __future__ import annotations
 
 from functools import cache
 
-import mpmath
 import numpy as np
 
 from thetasol.core.dd import (
@@ -68,6 +67,7 @@ def numerators_to_cdd(numer_exact):
 @cache
 def gauss_legendre_dd(N: int):
     """Gauss-Legendre nodes and weights on [-1, 1] as double-double pairs (t_hi, t_lo, w_hi, w_lo)."""
+    import mpmath
     ts, ws = gauss_legendre_mp(N, 24)
     with mpmath.workdps(40):
         return (*dd_split_mp(ts), *dd_split_mp(ws))

@@ -21,7 +21,6 @@ integrals into places are summed, below 1e-19 (64 left 2e-10 of the largest term
 from __future__ import annotations
 
 import numpy as np
-import sympy as sp
 
 from thetasol.curves._quad import Piece
 
@@ -322,6 +321,7 @@ def adjoint_subspace(curve, candidates):
 
 def _nice_basis(N, candidates, x, y):
     """Reduced row echelon form of the null space, cleaned to rationals where possible."""
+    import sympy as sp
     B = N.T.copy()  # (g, ncand)
     g, m = B.shape
     piv_row = 0

@@ -28,7 +28,6 @@ from __future__ import annotations
 
 from functools import cache
 
-import mpmath
 import numpy as np
 
 EPS = np.finfo(float).eps
@@ -746,6 +745,8 @@ class Tracked:
 
     def _add_mp(self, out, exact, crit):
         """mpmath (20 digits) version of :meth:`_add_dd`: the reference of tests and benchmarks."""
+        import mpmath
+
         from thetasol.curves._mp import interval_mp, numerators_mp
         ev = self.tracker.exact
         dps = 20

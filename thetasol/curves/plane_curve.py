@@ -21,7 +21,6 @@ degenerate curves.
 from __future__ import annotations
 
 import numpy as np
-import sympy as sp
 
 from thetasol.curves._homology import LiftedGraph, symplectic_basis
 from thetasol.curves._paths import CellGraph
@@ -283,6 +282,7 @@ class PlaneCurve:
 
     # ------------------------------------------------------------------ differentials
     def _numerators(self, exprs):
+        import sympy as sp
         x, y = self.x, self.y
         polys = []
         for g in exprs:
@@ -534,6 +534,8 @@ class PlaneCurve:
     def _parse_targets(self, points):
         """Normalize the input of abel_map: returns (targets, weights, shape) where shape is
         'single', 'list' or 'divisor'."""
+        import sympy as sp
+
         def is_scalar(v):
             return isinstance(v, (int, float, complex, np.number)) or (isinstance(v, sp.Basic) and v.is_number)
 

@@ -32,14 +32,11 @@ from fractions import Fraction
 from math import comb
 
 import numpy as np
-import sympy as sp
 
 from thetasol.core.validate import finite_array, second_moments
 from thetasol.curves.plane_curve import Place, PlaneCurve
 
 __all__ = ["spectral_curve", "SpectralCurve"]
-
-E_SYM, W_SYM = sp.symbols("E w")
 
 
 def _skew(M, name="M"):
@@ -169,6 +166,7 @@ class SpectralCurve(PlaneCurve):
     """
 
     def __init__(self, J, M, u, tol):
+        import sympy as sp
         J = np.asarray(J, float)
         evJ, VJ = np.linalg.eigh(J)
         degeneracy = []
@@ -241,7 +239,8 @@ class SpectralCurve(PlaneCurve):
                 for m in range(ll + 1):
                     term = cf * comb(ll, m) * (-shift) ** (ll - m)
                     coef[(kk, m)] = coef.get((kk, m), Fraction(0)) + term
-        expr = sum(sp.Rational(v.numerator, v.denominator) * E_SYM**kk * W_SYM**m
+        E, w = sp.symbols("E w")
+        expr = sum(sp.Rational(v.numerator, v.denominator) * E**kk * w**m
                    for (kk, m), v in coef.items() if v != 0)
         self.J2 = evJ**2
         self.J = J
@@ -252,7 +251,7 @@ class SpectralCurve(PlaneCurve):
         self.degeneracy = degeneracy
         self.coefficients = C
         try:
-            super().__init__(expr, E_SYM, W_SYM)
+            super().__init__(expr, E, w)
         except ValueError as exc:
             if "reducible" in str(exc):
                 raise ValueError(f"the spectral curve of these data is reducible ({exc}); for example "
@@ -297,9 +296,10 @@ class SpectralCurve(PlaneCurve):
         They span the differentials of the Prym variety, on which the flow of (4.8) is linear:
         {1, E^2, w} for generic data, {E^2, w - lam} for a rank-one potential (node at w = lam).
         """
+        import sympy as sp
         out = []
         for g in self.holomorphic_differentials():
-            if sp.expand(g.subs(E_SYM, -E_SYM) - g) == 0:
+            if sp.expand(g.subs(self.x, -self.x) - g) == 0:
                 out.append(g)
         return out
 
