@@ -63,7 +63,7 @@ from thetasol.core.attitude import (TWO_PI_HI as _TWO_PI_HI, TWO_PI_LO as _TWO_P
                                      norm3 as _norm, rotation_about_axis as _rot_about,
                                      principal_frame as _principal_frame, uniform_rotation as _uniform_rotation,
                                      unit_rows as _unit)
-from thetasol.solutions.rotation import RotationSolution
+from thetasol.solutions.base import RotationSolution
 
 __all__ = ["EulerTopSolution"]
 

@@ -49,7 +49,7 @@ import numpy as np
 
 from thetasol.mechanics.equations import invariants as _invariants
 from thetasol.special.pendulum import pendulum_angle as _pendulum_angle, pendulum_params as _pendulum_params
-from thetasol.solutions.rotation import ClosedFormUnavailable, RotationSolution
+from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame as _principal_frame, symmetry_axis as _symmetry_axis
 
 __all__ = ["NeumannRotation"]

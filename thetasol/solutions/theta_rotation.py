@@ -75,7 +75,7 @@ from thetasol.mechanics.lax import eigenvector_poles, lax_matrix, polish_eigenve
 from thetasol.theta.flow import FlowTheta
 from thetasol.core.so3 import hat, polar_orthonormalize, rotation_about, vee
 from thetasol.mechanics.equations import inertia_from_moments, invariants as _invariants
-from thetasol.solutions.rotation import ClosedFormUnavailable, RotationSolution
+from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.curves.spectral import spectral_curve
 from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame as _principal_frame, symmetry_axis as _symmetry_axis
 from thetasol.theta.riemann import RiemannTheta
