@@ -99,7 +99,7 @@ def _pow_dd(uh, ul, e):
 
 
 def piece_x_dd(kind, a, b, e, tau):
-    """x(tau) and dx/dtau of a path piece in complex double-double (see :class:`_curve_quad.Piece`).
+    """x(tau) and dx/dtau of a path piece in complex double-double (see :class:`thetasol.curves._quad.Piece`).
 
     a, b: complex arrays (per node), e: int, tau: real double-double (hi, lo) per node.
     """

@@ -235,9 +235,9 @@ def noise_level(ld):
     """Threshold for spurious negative Laurent coefficients at this circle (pole test of tails).
 
     1e-9, raised to 100 eps |b| / radius for circles tiny against |b|, where rounding of the
-    centre or of the sample positions (~eps |b|) would show up as ~eps |b| / radius.  Since the
-    charts are centred on the exact critical value with exactly shifted samples (:func:`local_data`)
-    that rounding no longer occurs, and the raise needs |b| / radius > 4.5e4 (8.5e3 at most on the
+    centre or of the sample positions (~eps |b|) would show up as ~eps |b| / radius.  The charts
+    are centred on the exact critical value with exactly shifted samples (:func:`local_data`), so
+    that rounding does not occur, and the raise needs |b| / radius > 4.5e4 (8.5e3 at most on the
     near-equilibrium curve of tests/test_abel_clusters.py, where it stays 1e-9)."""
     if ld.kind != "critical":
         return 1e-9
