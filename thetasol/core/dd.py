@@ -71,7 +71,7 @@ class DD:
         e = e + self.lo * b
         return DD(*two_sum(p, e))
 
-    def mul_dd(self, other: "DD"):
+    def mul_dd(self, other: DD):
         return DD(*dd_mul(self.hi, self.lo, other.hi, other.lo))
 
     def frac(self):
@@ -83,7 +83,7 @@ class DD:
         return self.hi + self.lo
 
 
-def dd_sum(x: "DD") -> "DD":
+def dd_sum(x: DD) -> DD:
     """Sum over axis 0 by a pairwise tree of double-double additions.
 
     Layout convention of this module: the point axis is the LAST one (contiguous), summed
@@ -103,7 +103,7 @@ def dd_sum(x: "DD") -> "DD":
     return DD(hi[0], lo[0])
 
 
-def dd_prod(a, b) -> "DD":
+def dd_prod(a, b) -> DD:
     """Exact product of two float arrays (broadcasting) as a DD."""
     return DD(*two_prod(np.asarray(a, float), np.asarray(b, float)))
 
@@ -115,7 +115,7 @@ def dd_split_mp(values) -> tuple[np.ndarray, np.ndarray]:
     return hi.astype(float), lo.astype(float)
 
 
-def dd_matvec(A_hi, A_lo, x: "DD") -> "DD":
+def dd_matvec(A_hi, A_lo, x: DD) -> DD:
     """``y_i = sum_j A_ij x_j`` for A = A_hi + A_lo (g, g) and x a DD of shape (g, P)."""
     xh = DD(x.hi[:, None, :], x.lo[:, None, :])  # [j, ., p]
     prod = xh.mul(A_hi.T[:, :, None]) + DD(x.hi[:, None, :] * A_lo.T[:, :, None])  # [j, i, p]

@@ -17,15 +17,27 @@ double-double arithmetic.  The primitives are those of :mod:`thetasol.core.dd`.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cache
 
-import mpmath
 import numpy as np
 
+from thetasol.core.dd import (
+    DD,
+    cdd,
+    cdd_add,
+    cdd_div,
+    cdd_mul,
+    cdd_scale,
+    cdd_sub,
+    cdd_value,
+    dd_add,
+    dd_div,
+    dd_mul,
+    dd_split_mp,
+    dd_sum,
+)
 from thetasol.curves._mp import gauss_legendre_mp
 from thetasol.curves._poly import split_exact
-from thetasol.core.dd import cdd, cdd_add, cdd_div, cdd_mul, cdd_scale, cdd_sub, cdd_value, dd_add, dd_div, \
-    dd_mul, dd_split_mp, dd_sum, DD
 
 _NEWTON_MAX = 12
 _REL_DONE = 2.0 ** -104   # a Newton step this small (relative) changes nothing in double-double
@@ -53,9 +65,10 @@ def numerators_to_cdd(numer_exact):
     return tuple(np.stack([p[c] for p in parts]) for c in range(4))
 
 
-@lru_cache(maxsize=None)
+@cache
 def gauss_legendre_dd(N: int):
     """Gauss-Legendre nodes and weights on [-1, 1] as double-double pairs (t_hi, t_lo, w_hi, w_lo)."""
+    import mpmath
     ts, ws = gauss_legendre_mp(N, 24)
     with mpmath.workdps(40):
         return (*dd_split_mp(ts), *dd_split_mp(ws))
@@ -87,7 +100,7 @@ def _pow_dd(uh, ul, e):
 
 
 def piece_x_dd(kind, a, b, e, tau):
-    """x(tau) and dx/dtau of a path piece in complex double-double (see :class:`_curve_quad.Piece`).
+    """x(tau) and dx/dtau of a path piece in complex double-double (see :class:`thetasol.curves._quad.Piece`).
 
     a, b: complex arrays (per node), e: int, tau: real double-double (hi, lo) per node.
     """

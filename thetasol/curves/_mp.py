@@ -11,7 +11,7 @@ done inside ``mpmath.workdps``.
 """
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import mpmath
 import numpy as np
@@ -69,7 +69,6 @@ class ExactEvaluator:
         float roots are accurate relative to the cluster size; every root is then polished by
         Newton's method in mpmath.  mpmath.polyroots is the last resort.
         """
-        n = self.poly.n
         with mpmath.workdps(dps):
             xm = mpmath.mpc(x)
             a, da = self.ycoeffs(xm, dps, deriv=True)
@@ -171,7 +170,7 @@ class ExactEvaluator:
         return R, FY, FX
 
 
-@lru_cache(maxsize=None)
+@cache
 def gauss_legendre_mp(N: int, dps: int):
     """Gauss-Legendre nodes and weights on [-1, 1] at dps digits (Newton on P_N from float seeds)."""
     t0, _ = np.polynomial.legendre.leggauss(N)

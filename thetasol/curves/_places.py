@@ -21,7 +21,6 @@ integrals into places are summed, below 1e-19 (64 left 2e-10 of the largest term
 from __future__ import annotations
 
 import numpy as np
-import sympy as sp
 
 from thetasol.curves._quad import Piece
 
@@ -116,12 +115,12 @@ def local_data(curve):
     meta.append(("infinity", -1, 0j, G.base, x1, M_INF, -1))
     tr1 = curve._tracker.track(pieces1)
     pieces2 = []
-    for (kind, k, b, ref, x1, M, d), y1 in zip(meta, tr1.ends):
+    for (_, _, b, _, x1, M, d), y1 in zip(meta, tr1.ends):
         taus = np.arange(M + 1) / M
         pieces2.append(Piece("circle", x1, b, y1, e=d, taus=taus))
     tr2 = curve._tracker.track(pieces2)
     out = []
-    for p, ((kind, k, b, ref, x1, M, d), y1) in enumerate(zip(meta, tr1.ends)):
+    for p, ((kind, k, b, ref, x1, M, _), y1) in enumerate(zip(meta, tr1.ends)):
         xs, ys = tr2.values(p)
         end = ys[:, -1]
         dd = np.abs(end[:, None] - y1[None, :])
@@ -236,9 +235,9 @@ def noise_level(ld):
     """Threshold for spurious negative Laurent coefficients at this circle (pole test of tails).
 
     1e-9, raised to 100 eps |b| / radius for circles tiny against |b|, where rounding of the
-    centre or of the sample positions (~eps |b|) would show up as ~eps |b| / radius.  Since the
-    charts are centred on the exact critical value with exactly shifted samples (:func:`local_data`)
-    that rounding no longer occurs, and the raise needs |b| / radius > 4.5e4 (8.5e3 at most on the
+    centre or of the sample positions (~eps |b|) would show up as ~eps |b| / radius.  The charts
+    are centred on the exact critical value with exactly shifted samples (:func:`local_data`), so
+    that rounding does not occur, and the raise needs |b| / radius > 4.5e4 (8.5e3 at most on the
     near-equilibrium curve of tests/test_abel_clusters.py, where it stays 1e-9)."""
     if ld.kind != "critical":
         return 1e-9
@@ -322,6 +321,7 @@ def adjoint_subspace(curve, candidates):
 
 def _nice_basis(N, candidates, x, y):
     """Reduced row echelon form of the null space, cleaned to rationals where possible."""
+    import sympy as sp
     B = N.T.copy()  # (g, ncand)
     g, m = B.shape
     piv_row = 0

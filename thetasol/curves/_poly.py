@@ -18,9 +18,7 @@ from __future__ import annotations
 from fractions import Fraction
 from math import comb
 
-import mpmath
 import numpy as np
-import sympy as sp
 
 from thetasol.core.dd import two_prod, two_sum
 
@@ -29,6 +27,7 @@ EPS = np.finfo(float).eps
 
 def _to_fraction_pair(c) -> tuple[Fraction, Fraction]:
     """Exact (real, imaginary) parts of a sympy number; floats are converted exactly."""
+    import sympy as sp
     c = sp.sympify(c)
     if c.has(sp.nan, sp.zoo, sp.oo, -sp.oo):
         raise ValueError(f"coefficient {c} is not finite (NaN or infinity)")
@@ -63,6 +62,7 @@ class CurvePoly:
     """
 
     def __init__(self, f, x, y):
+        import sympy as sp
         if not isinstance(x, sp.Symbol) or not isinstance(y, sp.Symbol):
             raise ValueError("x and y must be sympy Symbols")
         if x == y:
@@ -113,11 +113,13 @@ class CurvePoly:
 
     # ------------------------------------------------------------------ sympy / exact
     def sympy_expr(self):
+        import sympy as sp
         I = sp.I
         return sum((sp.Rational(re.numerator, re.denominator) + I * sp.Rational(im.numerator, im.denominator))
                    * self.x**i * self.y**j for (i, j), (re, im) in self.exact.items())
 
     def sympy_poly(self):
+        import sympy as sp
         if self._sympy is None:
             dom = "QQ" if self.is_real else "QQ_I"
             self._sympy = sp.Poly(self.sympy_expr(), self.x, self.y, domain=dom)
@@ -125,6 +127,7 @@ class CurvePoly:
 
     def coeffs_in_y(self):
         """Exact univariate polynomials a_j(x) (sympy Poly in x) with f = sum a_j(x) y^j."""
+        import sympy as sp
         P = self.sympy_poly()
         out = []
         for j in range(self.n + 1):
@@ -148,6 +151,7 @@ class CurvePoly:
         Returns (F, factors) with F the square-free part of disc_y(f) * lc_y(f) and factors the
         square-free decomposition [(poly, multiplicity)] of the discriminant (for diagnostics).
         """
+        import sympy as sp
         P = self.sympy_poly()
         lc = self.coeffs_in_y()[self.n]
         if self.n == 1:
@@ -486,6 +490,7 @@ def root_corrections(P, r) -> np.ndarray:
 
 
 def _mp_polyroots(coef, deg):
+    import mpmath
     dps = 40
     for _ in range(4):
         with mpmath.workdps(dps):

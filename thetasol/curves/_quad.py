@@ -26,9 +26,8 @@ allowed dependencies offers vectorized polynomial root tracking.
 """
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
-import mpmath
 import numpy as np
 
 EPS = np.finfo(float).eps
@@ -40,7 +39,7 @@ JITTER = 1e-13
 REL = 1e-11
 
 
-@lru_cache(maxsize=None)
+@cache
 def gauss_legendre(N: int):
     t, w = np.polynomial.legendre.leggauss(N)
     return t, w
@@ -174,7 +173,7 @@ class _Nodes:
         taus, wts = [], []
         self.offsets = [0]
         self.plans = []
-        for p, pc in enumerate(pieces):
+        for pc in pieces:
             if pc.taus is not None:
                 taus.append(np.asarray(pc.taus, dtype=float))
                 wts.append(np.zeros(len(pc.taus)))
@@ -703,7 +702,7 @@ class Tracked:
         if exact is not None and self.tracker.exact is not None:
             mass = np.abs(W).max(axis=(1, 2))
             crit = self.critical_intervals(mass, dd_all)
-            for p, k, (lo, hi, N) in crit:
+            for _, k, (_, _, N) in crit:
                 W[k:k + N] = 0.0
         lens = np.diff(nodes.offsets)
         start = nodes.offsets[:-1]
@@ -729,7 +728,7 @@ class Tracked:
             crit = [c for c in crit if c not in circ]
         parts = intervals_dd(self.pieces, crit, self.interval_seeds(crit), curve_to_cdd(self.tracker.poly),
                              numerators_to_cdd(exact))
-        for (p, k, _), part in zip(crit, parts):
+        for (p, _, _), part in zip(crit, parts):
             out[p] = out[p] + part
         return out
 
@@ -737,7 +736,7 @@ class Tracked:
         """Float roots at the nodes of each critical interval, one row per track: (m, N) arrays."""
         tstart = np.concatenate([[0], np.cumsum([len(pc.y0) for pc in self.pieces])])
         seeds = []
-        for p, k, (lo, hi, N) in crit:
+        for p, k, (_, _, N) in crit:
             m = len(self.pieces[p].y0)
             rows = np.arange(k, k + N)
             ch = self.choice[tstart[p]:tstart[p] + m, rows - self.nodes.offsets[p]]
@@ -753,7 +752,7 @@ class Tracked:
         dps = 20
         with mpmath.workdps(dps + 10):
             nums = numerators_mp(exact, dps + 10)
-            for (p, k, (lo, hi, N)), seeds in zip(crit, self.interval_seeds(crit)):
+            for (p, _, (lo, hi, N)), seeds in zip(crit, self.interval_seeds(crit)):
                 part = interval_mp(self.pieces[p], lo, hi, N, seeds, ev, nums, dps)
                 out[p] = out[p] + np.array([[complex(v) for v in row] for row in part])
         return out

@@ -26,7 +26,6 @@ __all__ = []
 
 def involution_matrix(P: np.ndarray, image: np.ndarray, what: str) -> np.ndarray:
     """Integer S with P S = image (both g x 2g complex), checked to be integral."""
-    g = P.shape[0]
     R = np.vstack([P.real, P.imag])
     Rimg = np.vstack([image.real, image.imag])
     S = np.linalg.solve(R, Rimg)

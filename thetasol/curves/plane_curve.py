@@ -21,14 +21,24 @@ degenerate curves.
 from __future__ import annotations
 
 import numpy as np
-import sympy as sp
 
-from thetasol.curves._places import (adjoint_subspace, expansion, laurent, local_data, local_of, noise_level, perm_cycles,
-                            place_series, regular_samples, series_eval, series_integral)
-from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections
-from thetasol.curves._quad import Piece, Tracker
 from thetasol.curves._homology import LiftedGraph, symplectic_basis
 from thetasol.curves._paths import CellGraph
+from thetasol.curves._places import (
+    adjoint_subspace,
+    expansion,
+    laurent,
+    local_data,
+    local_of,
+    noise_level,
+    perm_cycles,
+    place_series,
+    regular_samples,
+    series_eval,
+    series_integral,
+)
+from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections
+from thetasol.curves._quad import Piece, Tracker
 
 __all__ = ["PlaneCurve", "Place"]
 
@@ -186,7 +196,6 @@ class PlaneCurve:
     # ------------------------------------------------------------------ topology
     def _setup_sheets(self):
         G = self._graph
-        poly = self._poly
         R = self._tracker._eval_nodes(G.V, np.zeros(len(G.V), complex))[0]
         order = np.lexsort((R.imag, R.real), axis=1) if R.shape[1] > 1 else np.zeros(R.shape, int)
         self._vroots = np.take_along_axis(R, order, axis=1)
@@ -195,7 +204,7 @@ class PlaneCurve:
         self._edge_tracks = tr
         n = self.n
         perms = np.zeros((len(G.edges), n), dtype=int)
-        for e, (a, b) in enumerate(G.edges):
+        for e, (_, b) in enumerate(G.edges):
             d = np.abs(tr.ends[e][:, None] - self._vroots[b][None, :])
             p = np.argmin(d, axis=1)
             if len(set(p.tolist())) != n:
@@ -268,7 +277,6 @@ class PlaneCurve:
         """Map base sheet -> label at vertex v along the plane spanning tree path (BFS)."""
         if "tree" not in self._cache:
             G = self._graph
-            nv = len(G.V)
             parent = {G.base: None}
             order = [G.base]
             for u in order:
@@ -292,6 +300,7 @@ class PlaneCurve:
 
     # ------------------------------------------------------------------ differentials
     def _numerators(self, exprs):
+        import sympy as sp
         x, y = self.x, self.y
         polys = []
         for g in exprs:
@@ -407,6 +416,7 @@ class PlaneCurve:
 
     def _period_matrix_mp(self, diffs, dps):
         import mpmath
+
         from thetasol.curves._mp import integrate_mp
         key = ("pm_mp", tuple(map(str, diffs)), dps)
         if key in self._cache:
@@ -415,7 +425,7 @@ class PlaneCurve:
         tr_mp = Tracker(self._poly, G.allsites, tol=10.0 ** (-(dps + 3)), mp_fallback=self._exact.fallback)
         pieces = [Piece("line", G.V[a], G.V[b], self._vroots[a]) for a, b in G.edges]
         tr = tr_mp.track(pieces)
-        for e, (a, b) in enumerate(G.edges):
+        for e, (_, b) in enumerate(G.edges):
             p = np.argmin(np.abs(tr.ends[e][:, None] - self._vroots[b][None, :]), axis=1)
             if not np.array_equal(p, self._perms[e]):
                 raise RuntimeError("the dps path found a different sheet permutation (internal error)")
@@ -577,6 +587,8 @@ class PlaneCurve:
     def _parse_targets(self, points):
         """Normalize the input of abel_map: returns (targets, weights, shape) where shape is
         'single', 'list' or 'divisor'."""
+        import sympy as sp
+
         def is_scalar(v):
             return isinstance(v, (int, float, complex, np.number)) or (isinstance(v, sp.Basic) and v.is_number)
 
@@ -752,7 +764,6 @@ class PlaneCurve:
         Values are path integrals along the documented paths (docs/curves.md); they are defined modulo
         the lattice: another path adds a lattice vector.
         """
-        g = self.genus
         targets, weights, shape = self._parse_targets(points)
         P = self._holo_arrays()
         raw = self._abel_raw(targets, P, "holo")

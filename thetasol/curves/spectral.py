@@ -32,15 +32,12 @@ from fractions import Fraction
 from math import comb
 
 import numpy as np
-import sympy as sp
 
 from thetasol.core.validate import finite_array, second_moments
 from thetasol.curves._poly import CurvePoly
 from thetasol.curves.plane_curve import Place, PlaneCurve
 
 __all__ = ["spectral_curve", "SpectralCurve", "farthest_branch_point"]
-
-E_SYM, W_SYM = sp.symbols("E w")
 
 
 def _skew(M, name="M"):
@@ -131,15 +128,18 @@ def farthest_branch_point(J, M, u) -> float:
     float
         The largest modulus of the critical values (0.0 when there are none).
     """
+    import sympy as sp
+
+    E, w = sp.symbols("E w")
     C = _exact_coefficients(J, M, u)
     f = sp.Poly({(k, l): sp.Rational(c.numerator, c.denominator)
-                 for k, row in enumerate(C) for l, c in enumerate(row) if c}, E_SYM, W_SYM)
-    F = CurvePoly(f, E_SYM, W_SYM).critical_polynomial()[0]
+                 for k, row in enumerate(C) for l, c in enumerate(row) if c}, E, w)
+    F = CurvePoly(f, E, w).critical_polynomial()[0]
     cf = np.array([complex(c) for c in F.all_coeffs()])
     return float(np.abs(np.roots(cf)).max()) if len(cf) > 1 else 0.0
 
 
-def spectral_curve(J, M, u, *, tol: float = 1e-9) -> "SpectralCurve":
+def spectral_curve(J, M, u, *, tol: float = 1e-9) -> SpectralCurve:
     """The spectral curve (4.12) ``det(J^2 E^2 + M E + u - w 1) = 0`` as a :class:`SpectralCurve`.
 
     Parameters
@@ -200,6 +200,7 @@ class SpectralCurve(PlaneCurve):
     """
 
     def __init__(self, J, M, u, tol):
+        import sympy as sp
         J = np.asarray(J, float)
         evJ, VJ = np.linalg.eigh(J)
         degeneracy = []
@@ -272,7 +273,8 @@ class SpectralCurve(PlaneCurve):
                 for m in range(ll + 1):
                     term = cf * comb(ll, m) * (-shift) ** (ll - m)
                     coef[(kk, m)] = coef.get((kk, m), Fraction(0)) + term
-        expr = sum(sp.Rational(v.numerator, v.denominator) * E_SYM**kk * W_SYM**m
+        E, w = sp.symbols("E w")
+        expr = sum(sp.Rational(v.numerator, v.denominator) * E**kk * w**m
                    for (kk, m), v in coef.items() if v != 0)
         self.J2 = evJ**2
         self.J = J
@@ -283,7 +285,7 @@ class SpectralCurve(PlaneCurve):
         self.degeneracy = degeneracy
         self.coefficients = C
         try:
-            super().__init__(expr, E_SYM, W_SYM)
+            super().__init__(expr, E, w)
         except ValueError as exc:
             if "reducible" in str(exc):
                 raise ValueError(f"the spectral curve of these data is reducible ({exc}); for example "
@@ -328,9 +330,10 @@ class SpectralCurve(PlaneCurve):
         They span the differentials of the Prym variety, on which the flow of (4.8) is linear:
         {1, E^2, w} for generic data, {E^2, w - lam} for a rank-one potential (node at w = lam).
         """
+        import sympy as sp
         out = []
         for g in self.holomorphic_differentials():
-            if sp.expand(g.subs(E_SYM, -E_SYM) - g) == 0:
+            if sp.expand(g.subs(self.x, -self.x) - g) == 0:
                 out.append(g)
         return out
 
@@ -341,7 +344,6 @@ class SpectralCurve(PlaneCurve):
         For a symmetric body fewer than three places may exist; they are ordered by their limit.
         """
         if "inf_sorted" not in self._cache:
-            from thetasol.curves._places import series_eval
             pl = super().places_at_infinity()
             lims = []
             for P in pl:

@@ -61,7 +61,7 @@ from thetasol.core.attitude import (angle_mod_2pi as _angle_mod_2pi,
                                      attitude_from_precession as _attitude, minimal_rotation as _minimal_rotation,
                                      norm3 as _norm, principal_frame as _principal_frame, uniform_rotation as _uniform_rotation,
                                      unit_rows as _unit)
-from thetasol.solutions.rotation import RotationSolution
+from thetasol.solutions.base import RotationSolution
 
 __all__ = ["EulerTopSolution"]
 

@@ -24,7 +24,7 @@ from thetasol.core.so3 import rotation_about
 from thetasol.special.elliptic import ellipk
 from thetasol.special.pendulum import pendulum_angle as _pendulum_angle, pendulum_params as _pendulum_params
 from thetasol.mechanics.equations import invariants as _invariants
-from thetasol.solutions.rotation import RotationSolution
+from thetasol.solutions.base import RotationSolution
 
 __all__ = ["PendulumRotation"]
 

@@ -22,7 +22,7 @@ Method
     against mpmath on 900 points of [0, K], ``mc`` from 1e-300 to 1): absolute error at most
     1.5 eps, ``sn`` within 2 eps relative; the relative accuracy of ``cn`` and ``dn`` where they
     are small (next to ``u = K``) is limited by the rounding of ``K`` itself (``K - u`` is
-    formed from the float ``K``: 1.6e-13 relative was seen at ``K - u = 1.3e-3``).  On
+    formed from the float ``K``: 1.6e-13 relative at ``K - u = 1.3e-3``).  On
     ``[-6K, 6K]`` the error is within 4 eps ``(4 + |u|)``, the argument's own resolution.
 ``ellipk``, ``ellipe``, ``ellipf``, ``ellipeinc``, ``ellippi``, ``ellippiinc``:
     Carlson's symmetric forms (DLMF 19.25) evaluated with :func:`scipy.special.elliprf`,

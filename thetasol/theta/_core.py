@@ -29,7 +29,6 @@ import math
 from functools import lru_cache
 
 import numpy as np
-
 from scipy.linalg import solve_triangular
 
 from thetasol.core.dd import DD, dd_sum, two_prod
@@ -199,7 +198,7 @@ def group_jets(lat: ReducedLattice, lset: dict, u: np.ndarray, alpha: np.ndarray
     d = alpha[None, :] - k
     # Wr = u + tau d + beta, d = alpha - k, in double-double: |Y k| can be ~100 for elongated Y
     # while Im Wr = Y f is small, and the Gaussian weights need Im Wr to full relative accuracy
-    # double-double work in the (g, P) layout of _theta_dd (point axis last)
+    # double-double work in the (g, P) layout of riemann.py (point axis last)
     dT = d.T
     dX = dd_sum(DD(*two_prod(dT[:, None, :], X.T[:, :, None]))) + DD(lat.X_lo @ dT)  # [j, i, p]
     dY = dd_sum(DD(*two_prod(dT[:, None, :], Y.T[:, :, None]))) + DD(lat.Y_lo @ dT)

@@ -11,9 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import mpmath
 import numpy as np
-from scipy.integrate import quad
 
 __all__: list[str] = []
 
@@ -26,7 +24,6 @@ MAX_GENUS = 8
 # ----------------------------------------------------------------------------------------
 def _ldl(H: np.ndarray):
     """``H = L diag(d) L^T`` with ``L`` unit lower triangular (small dense H)."""
-    g = H.shape[0]
     C = np.linalg.cholesky(H)
     d = np.diag(C) ** 2
     L = C / np.diag(C)[None, :]
@@ -173,6 +170,7 @@ def _check_steps(steps: list, gamma: np.ndarray) -> None:
 
 def _replay(tau0: np.ndarray, steps: list, dps: int) -> Reduction:
     """Apply the elementary steps to tau and to the transformation data, in mpmath."""
+    import mpmath
     g = tau0.shape[0]
     ctx = mpmath.mp.clone()
     ctx.dps = dps
@@ -263,6 +261,7 @@ def tail_bound(R: float, rho: float, g: int, order: int = 0, a: float = 1.0) -> 
     a Stieltjes integration by parts then bounds the tail by
     ``int_R^inf (2t/rho + 1)^g (-h'(t)) dt`` for the decreasing weight h (Deconinck et al.).
     """
+    from scipy.integrate import quad
     def h_prime_neg(t):
         w = (1.0 + a * t)
         return (2 * math.pi * t * w - order * a) * w ** (order - 1) * math.exp(-math.pi * t * t) if order else \

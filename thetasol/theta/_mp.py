@@ -14,7 +14,12 @@ import math
 import mpmath
 import numpy as np
 
-from thetasol.theta._checks import check_char as _check_char, check_dirs as _check_dirs, check_tau as _check_tau, check_z as _check_z
+from thetasol.theta._checks import (
+    check_char as _check_char,
+    check_dirs as _check_dirs,
+    check_tau as _check_tau,
+    check_z as _check_z,
+)
 from thetasol.theta._lattice import babai, radius_for, shortest_vector, union_set
 
 #: Largest dps accepted (the float64 tail bound underflows beyond ~1e-300).

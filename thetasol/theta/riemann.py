@@ -49,16 +49,20 @@ Conventions
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 
 from thetasol.core.dd import DD, dd_matvec, dd_prod, dd_split_mp, dd_sum
+from thetasol.theta._checks import (
+    check_char as _check_char,
+    check_dirs as _check_dirs,
+    check_tau as _check_tau,
+    check_tol as _check_tol,
+    check_z as _check_z,
+)
 from thetasol.theta._core import TWO_PI_I, ReducedLattice, group_jets, jet_layout
-from thetasol.theta._lattice import MAX_GENUS, babai, siegel_reduction
-from thetasol.core.validate import finite_array
-from thetasol.theta._checks import (MAX_ORDER, TAU_SYM_RTOL, check_char as _check_char, check_dirs as _check_dirs,
-                                    check_tau as _check_tau, check_tol as _check_tol, check_z as _check_z)
+from thetasol.theta._lattice import babai, siegel_reduction
 
 __all__ = ["RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce"]
 
