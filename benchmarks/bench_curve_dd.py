@@ -24,11 +24,12 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, ROOT)
 
+from _common import best_of, machine_info  # noqa: E402
+
 from thetasol import solve_rotation
 from thetasol.curves import _quad as _curve_quad  # noqa: E402
 from thetasol.curves._dd import curve_to_cdd, intervals_dd, numerators_to_cdd  # noqa: E402
 from thetasol.curves._mp import interval_mp, numerators_mp  # noqa: E402
-from _common import best_of, machine_info  # noqa: E402
 
 REFS = json.load(open(os.path.join(ROOT, "tests", "data", "rotation", "refs.json")))
 

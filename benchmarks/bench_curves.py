@@ -24,10 +24,11 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, ROOT)
 
+from _common import best_of, machine_info  # noqa: E402
+
+from thetasol.core.so3 import hat  # noqa: E402
 from thetasol.curves.plane_curve import PlaneCurve  # noqa: E402
 from thetasol.curves.spectral import spectral_curve  # noqa: E402
-from thetasol.core.so3 import hat  # noqa: E402
-from _common import best_of, machine_info  # noqa: E402
 
 SAGE = "/work/sagevenv/bin/python"
 DATA = os.path.join(ROOT, "tests", "data", "curves")

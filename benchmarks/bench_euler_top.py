@@ -22,10 +22,9 @@ import argparse
 import time
 
 import numpy as np
+from _common import best_of, machine_info
 
 from thetasol import integrate_rotation, solve_rotation
-
-from _common import best_of, machine_info
 
 Z = np.zeros((3, 3))
 
@@ -85,7 +84,7 @@ def dense(name, data, quick):
             rows.append((f"heyoka {dtype} tol={tol:g} (2nd call, compiled code cached)", cost, err(out, ref)))
     except ImportError:
         rows.append(("heyoka", np.nan, np.nan))
-    print(f"| method | wall time [s] | max error (omega, Q) |\n|---|---|---|")
+    print("| method | wall time [s] | max error (omega, Q) |\n|---|---|---|")
     for r in rows:
         print(f"| {r[0]} | {r[1]:.3g} | {r[2]:.2e} |")
 

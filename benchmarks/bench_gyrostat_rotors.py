@@ -17,10 +17,9 @@ import sys
 import time
 
 import numpy as np
+from _common import best_of, machine_info
 
 from thetasol import solve_gyrostat
-
-from _common import best_of, machine_info
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 import test_gyrostat_rotors as T  # noqa: E402

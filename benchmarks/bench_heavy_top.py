@@ -20,12 +20,11 @@ import argparse
 import time
 
 import numpy as np
+from _common import best_of, machine_info
 
 from thetasol.core.so3 import rodrigues
 from thetasol.integrators.heavy_top import integrate_heavy_top
 from thetasol.solutions.heavy_top import solve_heavy_top
-
-from _common import best_of, machine_info
 
 
 def problems():

@@ -12,11 +12,10 @@ import time
 import warnings
 
 import numpy as np
+from _common import machine_info
 
 import thetasol as ts
 from thetasol.core.so3 import rodrigues
-
-from _common import machine_info
 
 T = np.array([0.7, 3.1, 17.3, 102.0, 997.0, 4002.0])
 KINDS = ["generic", "saddle", "fast", "slow", "nearly-symmetric", "rank-one", "near-eq", "symmetric",

@@ -17,17 +17,16 @@ import sys
 
 import mpmath
 import numpy as np
+from _common import best_of, machine_info
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
 from thetasol.core.so3 import rodrigues
+from thetasol.integrators.multibody import integrate_multibody
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
-from thetasol.solutions.mass_center import mass_center
-from thetasol.integrators.multibody import integrate_multibody
 from thetasol.scenes.pipeline import solve_configuration
-
-from _common import best_of, machine_info
+from thetasol.solutions.mass_center import mass_center
 
 REPEAT = 3
 

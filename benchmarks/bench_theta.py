@@ -23,10 +23,9 @@ if "--threads" not in sys.argv:
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
+from _common import best_of, machine_info  # noqa: E402
 
 from thetasol import RiemannTheta  # noqa: E402
-
-from _common import best_of, machine_info  # noqa: E402
 
 try:
     import flint

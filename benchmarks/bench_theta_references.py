@@ -16,10 +16,9 @@ import pathlib
 import time
 
 import numpy as np
+from _common import best_of, machine_info
 
 from thetasol import solve_rotation
-
-from _common import best_of, machine_info
 
 REFS = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "rotation" / "refs.json"
 

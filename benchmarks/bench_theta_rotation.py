@@ -21,10 +21,9 @@ import pathlib
 import sys
 
 import numpy as np
+from _common import best_of, machine_info
 
 from thetasol import integrate_rotation, solve_rotation
-
-from _common import best_of, machine_info
 
 REFS = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "rotation" / "refs.json"
 

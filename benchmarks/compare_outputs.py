@@ -45,8 +45,8 @@ import numpy as np
 import thetasol
 from thetasol import (
     ClosedFormUnavailable,  # noqa: F401  (public name; refusals are recorded by class name)
-    RiemannTheta,
     PlaneCurve,
+    RiemannTheta,
     integrate_rotation,
     invariants,
     load_scene,

@@ -16,8 +16,8 @@ import mpmath
 import numpy as np
 import pytest
 
-from thetasol.mechanics.lax import eigenvector_poles, polish_eigenvector_poles
 from thetasol.curves.spectral import spectral_curve
+from thetasol.mechanics.lax import eigenvector_poles, polish_eigenvector_poles
 
 JP = [float.fromhex(h) for h in ("0x1.3b3588f982f26p+0", "0x1.6907beb480a67p+0", "0x1.7e328eba4c591p+0")]
 M = [[float.fromhex(h) for h in row] for row in (

@@ -6,10 +6,9 @@ effective bodies.
 """
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
-from thetasol.core.so3 import hat, rodrigues
+from thetasol.core.so3 import rodrigues
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 
@@ -150,7 +149,6 @@ def test_central_means_the_mass_centre_stays_put(seed):
 
 
 def test_non_central_tree_moves_and_is_reported():
-    rng = np.random.default_rng(3)
     cfg, clouds = make_tree(0)
     shift = np.array([1e-3, -2e-3, 0.5e-3])
     joints = [Joint(j.parent, j.child, j.parent_point, j.child_point + (shift if j.child == "C" else 0))

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from thetasol import solve_rotation
+from thetasol.core.dd import cdd_div, cdd_mul, dd_div
 from thetasol.curves import _quad as _curve_quad
 from thetasol.curves._dd import curve_to_cdd, intervals_dd, numerators_to_cdd
 from thetasol.curves._mp import interval_mp, numerators_mp
-from thetasol.core.dd import cdd_div, cdd_mul, dd_div
 
 REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
 
@@ -80,7 +80,7 @@ def test_dd_interval_sums_match_mpmath(critical_call):
     worst = 0.0
     with mpmath.workdps(40):
         nums = numerators_mp(exact, 40)
-        for (p, k, (lo, hi, N)), s, (rh, rl, ih, il) in zip(crit, seeds, dd):
+        for (p, _, (lo, hi, N)), s, (rh, rl, ih, il) in zip(crit, seeds, dd):
             ref = interval_mp(tr.pieces[p], lo, hi, N, s, tr.tracker.exact, nums, 30)
             for t, row in enumerate(ref):
                 scale = max(abs(v) for v in row)

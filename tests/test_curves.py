@@ -105,7 +105,7 @@ def test_holomorphic_differentials(name, expected):
 
 
 # ---------------------------------------------------------------------- Abel map, Riemann constant
-from thetasol.curves._riemann_scan import theta_normalized_abs  # noqa: E402
+from thetasol.curves.riemann_constant import theta_normalized_abs  # noqa: E402
 
 
 def _reduce(z, tau):
@@ -324,7 +324,6 @@ def test_fermat_quartic_closed_form():
 def _hyperelliptic_mpmath_lattice(coeffs, dps=25):
     """Periods of x^k dx / (2 y), y^2 = p(x) (odd degree), over the lifts of the straight paths
     e_0 -> e_j (a Z-basis of H_1), integrated with mpmath's tanh-sinh rule."""
-    roots = np.roots(coeffs)
     lc = coeffs[0]
     g = (len(coeffs) - 2) // 2
     with mpmath.workdps(dps):
@@ -529,9 +528,9 @@ def test_sheets_turning_together_are_matched_without_refinement(monkeypatch):
     import json
     from unittest import mock
 
+    from thetasol.core.so3 import hat
     from thetasol.curves import _quad as _curve_quad
     from thetasol.curves._places import local_data
-    from thetasol.core.so3 import hat
     from thetasol.curves.spectral import spectral_curve
 
     with open(os.path.join(os.path.dirname(__file__), "data", "rotation", "refs.json")) as fh:

@@ -3,11 +3,10 @@ precision), against its own mpmath path, and against the physics (conserved spac
 momentum, the kinematic equation Qdot = Q hat(omega) by finite differences)."""
 import numpy as np
 import pytest
+from conftest import inertia, rand_Q
 
 from thetasol import integrate_rotation, solve_rotation
 from thetasol.core.so3 import hat
-
-from conftest import inertia, rand_Q
 
 Z = np.zeros((3, 3))
 

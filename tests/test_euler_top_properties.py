@@ -3,12 +3,10 @@ first integrals conserved to round-off, Q orthogonal to 1e-14, the space angular
 import math
 
 import numpy as np
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
+from conftest import rand_Q
+from hypothesis import HealthCheck, given, settings, strategies as st
 
 from thetasol import solve_rotation
-
-from conftest import rand_Q
 
 Z = np.zeros((3, 3))
 EPS = np.finfo(float).eps

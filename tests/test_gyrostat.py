@@ -5,12 +5,11 @@ import warnings
 
 import numpy as np
 import pytest
+from conftest import inertia, rand_Q
 from scipy.integrate import solve_ivp
 
 from thetasol import RotationSolution, solve_gyrostat, solve_rotation
 from thetasol.core.so3 import hat
-
-from conftest import inertia, rand_Q
 
 
 def dop853(J, N, Q0, w0, t):

@@ -11,15 +11,13 @@ import warnings
 
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, assume, example, given, settings
-from hypothesis import strategies as st
+from conftest import rand_Q
+from hypothesis import HealthCheck, assume, example, given, settings, strategies as st
 from scipy.integrate import solve_ivp
 from scipy.optimize import brentq
 
 from thetasol import solve_gyrostat
 from thetasol.core.so3 import hat
-
-from conftest import rand_Q
 
 EPS = np.finfo(float).eps
 vec = st.lists(st.floats(-3.0, 3.0), min_size=3, max_size=3)

@@ -24,10 +24,9 @@ itself when ``omega0`` moves by 1e-15 (relative): measured for each quantity (om
 import mpmath as mp
 import numpy as np
 import pytest
+from conftest import rand_Q
 
 from thetasol import solve_gyrostat
-
-from conftest import rand_Q
 
 _TAYLOR = {}
 

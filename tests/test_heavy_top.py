@@ -15,11 +15,11 @@ import math
 import numpy as np
 import pytest
 
+from thetasol.core.so3 import rodrigues
 from thetasol.integrators.heavy_top import integrate_heavy_top
 from thetasol.mechanics.heavy_top import heavy_top_invariants, kovalevskaya_integral
 from thetasol.solutions.base import ClosedFormUnavailable
 from thetasol.solutions.heavy_top import solve_heavy_top
-from thetasol.core.so3 import rodrigues
 
 TS = np.array([0.5, 1.0, 2.0, 10.0, 100.0, 1000.0])
 FLIP = np.array([[1.0, 0, 0], [0, -1.0, 0], [0, 0, -1.0]])   # hanging exactly (axis e3 down)
@@ -426,8 +426,11 @@ def test_kovalevskaya_separated_flow_against_heyoka():
     # image of the divisor, constants fitted at t = 0) against Kowalevski's variables of 80-bit heyoka:
     # measured 6.7e-16 .. 3.6e-14 relative at t <= 100 (7.4e-11 at t = 1000: the flow direction comes
     # from float64 periods, its error grows with t)
-    from thetasol.solutions.kovalevskaya_top import (kovalevskaya_frame, kovalevskaya_separated_flow,
-                                                     kovalevskaya_variables)
+    from thetasol.solutions.kovalevskaya_top import (
+        kovalevskaya_frame,
+        kovalevskaya_separated_flow,
+        kovalevskaya_variables,
+    )
 
     rng = np.random.default_rng(3)
     R = _random_rotation(rng)

@@ -8,8 +8,7 @@ import dataclasses
 import mpmath
 import numpy as np
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
+from hypothesis import given, settings, strategies as st
 
 from thetasol.core.so3 import rodrigues
 from thetasol.solutions.base import CHUNK, Solution

@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 from thetasol.core.so3 import rodrigues
+from thetasol.integrators.multibody import initial_state, integrate_multibody
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
-from thetasol.integrators.multibody import initial_state, integrate_multibody
 from thetasol.scenes.pipeline import solve_configuration
 
 EDGES = [("A", "B"), ("B", "C"), ("A", "D"), ("D", "E")]  # C^2: chains of length 2

@@ -238,7 +238,8 @@ def test_near_separatrix_is_refused_not_wrong():
 def test_powers_against_mpmath():
     """e^{ikx} by doubling (thetasol.core.periodic.powers): at most log2(k) roundings, measured 4e-16 to k = 460
     (x in [0, 2 pi): larger x are reduced by the float 2 pi, a relative change of x of order eps)."""
-    import mpmath                                      # a core dependency
+    import mpmath  # a core dependency
+
     from thetasol.core.periodic import powers
     x = np.random.default_rng(7).uniform(0.0, 2 * np.pi, 40)
     E = powers(x, 460)

@@ -253,6 +253,7 @@ def test_theta_function_form():
       half period A(a_k) - A(inf); RiemannTheta), c_k fixed at t = 0: measured 2.1e-15 at t <= 12 and
       1.3e-14 at t = 100 (the rounding of U t in the theta argument grows with t)."""
     import sympy as sp
+
     from thetasol.curves.plane_curve import PlaneCurve
     from thetasol.theta.riemann import RiemannTheta
 

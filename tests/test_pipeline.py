@@ -9,6 +9,7 @@ import tomllib
 
 import numpy as np
 import pytest
+from test_scene import SMALL
 
 from thetasol.integrators.multibody import initial_state
 from thetasol.integrators.rotation import NumericalRotation, integrate_rotation
@@ -18,8 +19,6 @@ from thetasol.scenes.format import Scene
 from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
 from thetasol.solutions.base import Solution
 from thetasol.solutions.mass_center import MassCenterMotion
-
-from test_scene import SMALL
 
 
 @pytest.fixture(scope="module")

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from thetasol import integrate_rotation
-from thetasol.mechanics.trajectories import Trajectories, write_trajectories
 from thetasol.integrators.multibody import initial_state
+from thetasol.mechanics.trajectories import Trajectories, write_trajectories
 from thetasol.scenes.format import Scene, demo_scene_path, load_scene
 from thetasol.scenes.pipeline import rotation_kind
 from thetasol.scenes.report import run

@@ -6,11 +6,10 @@ identities (sigma acts on the holomorphic differentials {1, E, E^2, w} dE/f_w by
 import numpy as np
 import pytest
 import sympy as sp
+from test_curves import assert_same_lattice, load_ref
 
 from thetasol.core.so3 import hat
 from thetasol.curves.spectral import spectral_curve
-
-from test_curves import assert_same_lattice, load_ref
 
 E, w = sp.symbols("E w")
 
@@ -78,7 +77,6 @@ def test_involution_on_the_jacobian():
 
 def test_generic_periods_match_sage():
     d, f, diffs, Pref = load_ref("spectral_g4")
-    q = sp.Rational
     J = np.array([1, 1.7, 2.9])
     m = np.array([0.3, -0.7, 1.1])
     u = np.array([[-1.2, 0.3, 0.1], [0.3, 0.5, -0.4], [0.1, -0.4, 0.9]])
@@ -213,7 +211,7 @@ def test_nearly_reducible_data_are_handled_or_refused():
 def test_random_physical_spectral_curves():
     """60 random bodies and potentials (every 5th a rank-one gravity-gradient potential): genus,
     Riemann bilinear relations, path independence, Jacobi inversion with the Riemann constant."""
-    from thetasol.curves._riemann_scan import theta_normalized_abs
+    from thetasol.curves.riemann_constant import theta_normalized_abs
     for seed in range(60):
         rng = np.random.default_rng(1000 + seed)
         J = np.sort(rng.uniform(0.2, 3.0, 3))

@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from thetasol import ClosedFormUnavailable, integrate_rotation, invariants, solve_rotation
-from thetasol.mechanics.lax import eigenvector_poles
 from thetasol.core.so3 import hat
+from thetasol.mechanics.lax import eigenvector_poles
 from thetasol.solutions.theta_rotation import ThetaRotation
 from thetasol.solutions.theta_rotation.lattice import lattice_coords as _lattice_coords
 
@@ -217,8 +217,10 @@ def test_splitting_integrator_agrees():
 
 def test_spectral_coefficients_are_exact_for_the_floats_given():
     # near an equilibrium |M|^2 ~ 1e-6 rides on O(1) terms: float64 coefficients lost it (U 3e-11 off)
-    import sympy as sp
     from fractions import Fraction
+
+    import sympy as sp
+
     from thetasol.curves.spectral import spectral_curve
     rng = np.random.default_rng(11)
     J = np.array([0.6, 1.0, 1.7])
@@ -241,8 +243,12 @@ def test_flow_velocity_divided_difference_equals_the_sum_over_the_places():
     # the closed form of sum_j J_j omega_i / ds (inf_j) against the plain sum of the per-place values
     # -h_i(x_j) / (lc prod_{l != j} (x_j - x_l)), well conditioned for well separated J
     import sympy as sp
+
     from thetasol.curves.spectral import spectral_curve
-    from thetasol.solutions.theta_rotation.infinity import infinity_data as _infinity_data, velocity_at_infinity as _velocity_at_infinity
+    from thetasol.solutions.theta_rotation.infinity import (
+        infinity_data as _infinity_data,
+        velocity_at_infinity as _velocity_at_infinity,
+    )
     J, a, Q0, w0, _ = _case("generic")
     C = spectral_curve(J, hat(J @ w0), -(Q0.T @ a @ Q0), tol=1e-12)
     nums = C.holomorphic_differentials()
@@ -402,9 +408,13 @@ def test_node_velocity_closed_form_against_a_contour_integral():
     pair at |E| ~ 2e3 only swaps the two sheets), integrated on |E| = 3 max|core|.  The FFT expansions
     at the node's branches lost 5e-12 of it."""
     import sympy as sp
-    from thetasol.mechanics.equations import inertia_from_moments
+
     from thetasol.curves.spectral import spectral_curve
-    from thetasol.solutions.theta_rotation.infinity import infinity_data as _infinity_data, velocity_at_infinity as _velocity_at_infinity
+    from thetasol.mechanics.equations import inertia_from_moments
+    from thetasol.solutions.theta_rotation.infinity import (
+        infinity_data as _infinity_data,
+        velocity_at_infinity as _velocity_at_infinity,
+    )
 
     J, a, Q0, w0 = _small_spin_body(1e-3)
     C = spectral_curve(J, hat(inertia_from_moments(J) @ w0), -(Q0.T @ a @ Q0), tol=1e-12)

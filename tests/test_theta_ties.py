@@ -15,11 +15,9 @@ gamma.tau``, reducedness) is cheap and runs over many hypothesis examples up to 
 """
 from pathlib import Path
 
-import mpmath
 import numpy as np
 import pytest
-from hypothesis import HealthCheck, example, given, settings
-from hypothesis import strategies as st
+from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 from thetasol import RiemannTheta, riemann_theta, siegel_reduce
 from thetasol.theta._lattice import siegel_reduction

@@ -80,8 +80,12 @@ if TYPE_CHECKING:
     from thetasol.mechanics.bodies import Body
     from thetasol.mechanics.configuration import Configuration, Joint
     from thetasol.mechanics.equations import invariants, spectral_coefficients, torque
-    from thetasol.mechanics.gravity_gradient import (GravityGradientStability, gravity_gradient_stability,
-                                                     gravity_gradient_torque, orbit_frame)
+    from thetasol.mechanics.gravity_gradient import (
+        GravityGradientStability,
+        gravity_gradient_stability,
+        gravity_gradient_torque,
+        orbit_frame,
+    )
     from thetasol.mechanics.heavy_top import heavy_top_invariants, kovalevskaya_integral
     from thetasol.mechanics.trajectories import Trajectories
     from thetasol.scenes.format import Scene, demo_scene_path, load_scene

@@ -4,7 +4,7 @@ One module per concept, after abelfunctions: polynomial data (``_poly``), the pa
 (``_paths``), analytic continuation and quadrature (``_quad``), places and local expansions
 (``_places``), homology (``_homology``), the curve object with differentials, periods, Abel map
 and Riemann constant (:mod:`thetasol.curves.plane_curve`), the half-period scan behind the
-Riemann constant (``_riemann_scan``), the real homology basis of a Liouville torus
+Riemann constant (:mod:`thetasol.curves.riemann_constant`), the real homology basis of a Liouville torus
 (:mod:`thetasol.curves.adapted_basis`), and the spectral curve of a body in a quadratic potential
 (:mod:`thetasol.curves.spectral`).  Depends on :mod:`thetasol.theta` and below.
 """

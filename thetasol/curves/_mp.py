@@ -292,3 +292,17 @@ def integrate_mp(tracked, ev, numer_exact, dps):
             out.append(acc)
             pos += m
     return out
+
+
+def cycle_sums_mp(res, cycles, nd: int, n: int, dps: int):
+    """Periods (nd x len(cycles) mpmath matrix) from the per-edge, per-sheet integrals ``res[e][s][d]``
+    and cycles given as integer coefficients on the lifted edges ``e * n + s``."""
+    with mpmath.workdps(dps + 10):
+        Pm = mpmath.matrix(nd, len(cycles))
+        for col, cyc in enumerate(cycles):
+            for le in np.nonzero(cyc)[0]:
+                e, s_ = divmod(int(le), n)
+                c = int(cyc[le])
+                for d in range(nd):
+                    Pm[d, col] += c * res[e][s_][d]
+    return Pm

@@ -579,3 +579,35 @@ def _newton_dd(Ahi, Alo, dhi, dlo, Y, iters, aberth=False):
         if not np.any(ok & (np.abs(step) > 1e-17 * np.abs(Y))):
             break
     return Y, delta, step
+
+
+class _Numerators(np.ndarray):
+    """Complex coefficient array (nd, I, J) of differential numerators carrying their exact form."""
+
+    exact = None
+
+
+def parse_numerators(exprs, x, y):
+    """Differential numerators (sympy expressions or strings in ``x``, ``y``) as a complex coefficient
+    array (nd, I, J) that carries their exact rational form in ``.exact``."""
+    import sympy as sp
+    polys = []
+    for g in exprs:
+        g = sp.sympify(g)
+        extra = g.free_symbols - {x, y}
+        if extra:
+            raise ValueError(f"differential numerator {g} involves {sorted(map(str, extra))}")
+        polys.append(sp.Poly(g, x, y))
+    I = max([p.degree(x) for p in polys] + [0]) + 1
+    J = max([p.degree(y) for p in polys] + [0]) + 1
+    P = np.zeros((len(polys), I, J), dtype=complex)
+    exact = []
+    for d, p in enumerate(polys):
+        ex = {}
+        for (i, j), c in p.terms():
+            P[d, i, j] = complex(c)
+            ex[(int(i), int(j))] = _to_fraction_pair(c)
+        exact.append(ex)
+    P = P.view(_Numerators)
+    P.exact = exact
+    return P

@@ -37,7 +37,7 @@ from thetasol.curves._places import (
     series_eval,
     series_integral,
 )
-from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections
+from thetasol.curves._poly import CurvePoly, parse_numerators, polynomial_roots, root_corrections
 from thetasol.curves._quad import Piece, Tracker
 
 __all__ = ["PlaneCurve", "Place"]
@@ -52,12 +52,6 @@ def _shaped(raw, weights, shape):
     if shape == "divisor":
         return weights @ raw
     return raw
-
-
-class _Numerators(np.ndarray):
-    """Complex coefficient array (nd, I, J) of differential numerators carrying their exact form."""
-
-    exact = None
 
 
 class Place:
@@ -300,29 +294,7 @@ class PlaneCurve:
 
     # ------------------------------------------------------------------ differentials
     def _numerators(self, exprs):
-        import sympy as sp
-        x, y = self.x, self.y
-        polys = []
-        for g in exprs:
-            g = sp.sympify(g)
-            extra = g.free_symbols - {x, y}
-            if extra:
-                raise ValueError(f"differential numerator {g} involves {sorted(map(str, extra))}")
-            polys.append(sp.Poly(g, x, y))
-        I = max([p.degree(x) for p in polys] + [0]) + 1
-        J = max([p.degree(y) for p in polys] + [0]) + 1
-        from thetasol.curves._poly import _to_fraction_pair
-        P = np.zeros((len(polys), I, J), dtype=complex)
-        exact = []
-        for d, p in enumerate(polys):
-            ex = {}
-            for (i, j), c in p.terms():
-                P[d, i, j] = complex(c)
-                ex[(int(i), int(j))] = _to_fraction_pair(c)
-            exact.append(ex)
-        P = P.view(_Numerators)
-        P.exact = exact
-        return P
+        return parse_numerators(exprs, self.x, self.y)
 
     def polynomial(self):
         """The curve's polynomial f(x, y) as an exact sympy expression (rational coefficients)."""
@@ -415,9 +387,7 @@ class PlaneCurve:
         return np.concatenate(ints, axis=0)  # (ne * n, nd), row e * n + s
 
     def _period_matrix_mp(self, diffs, dps):
-        import mpmath
-
-        from thetasol.curves._mp import integrate_mp
+        from thetasol.curves._mp import cycle_sums_mp, integrate_mp
         key = ("pm_mp", tuple(map(str, diffs)), dps)
         if key in self._cache:
             return self._cache[key].copy()
@@ -431,15 +401,7 @@ class PlaneCurve:
                 raise RuntimeError("the dps path found a different sheet permutation (internal error)")
         res = integrate_mp(tr, self._exact, self._numerators(diffs).exact, dps)
         A, B, _ = self._homology()
-        g, nd, n = self.genus, len(diffs), self.n
-        with mpmath.workdps(dps + 10):
-            Pm = mpmath.matrix(nd, 2 * g)
-            for col, cyc in enumerate(list(A) + list(B)):
-                for le in np.nonzero(cyc)[0]:
-                    e, s_ = divmod(int(le), n)
-                    c = int(cyc[le])
-                    for d in range(nd):
-                        Pm[d, col] += c * res[e][s_][d]
+        Pm = cycle_sums_mp(res, list(A) + list(B), len(diffs), self.n, dps)
         self._cache[key] = Pm
         return Pm.copy()
 
@@ -799,54 +761,37 @@ class PlaneCurve:
             D[P] = D.get(P, 0) - (P.e + 1)
         return D
 
+    def generic_points(self, count: int, rng: np.random.Generator) -> list:
+        """``count`` random finite points ``(x, y)`` inside the path graph's box, away from the
+        critical values (for divisors in general position)."""
+        G = self._graph
+        pts = []
+        for _ in range(count):
+            x0 = G.center + 0.7 * G.H * (rng.uniform(-1, 1) + 1j * rng.uniform(-1, 1))
+            if self._site_index(x0, rtol=1e-3) >= 0:
+                x0 += 0.01 * G.H
+            R, _ = self._poly.roots(np.array([x0]))
+            pts.append((x0, R[0, rng.integers(self.n)]))
+        return pts
+
     def riemann_constant(self, base=None) -> np.ndarray:
         """Vector of Riemann constants K (normalized coordinates, same base and paths as abel_map).
 
         For a generic effective divisor D of degree g, theta(A(P) - A(D) - K) vanishes exactly at
         the points of D.  Computed as in the literature: 2K = -A(div dx) fixes K up to a half period,
         and the half period is the one with theta(K + A(D')) = 0 for effective D' of degree g - 1
-        (D' = (g - 1) base point and random D').
+        (D' = (g - 1) base point and random D'): :mod:`thetasol.curves.riemann_constant`.
         """
-        from thetasol.curves._riemann_scan import half_period_scan, theta_normalized_abs
+        from thetasol.curves.riemann_constant import choose_riemann_constant
         g = self.genus
         if g == 0:
             return np.zeros(0, complex)
         if "K" not in self._cache:
             tau = self.riemann_matrix()
             AC = self.abel_map(self.canonical_divisor())
-            K0 = -0.5 * AC
-            vals, a_bits, b_bits = half_period_scan(K0, tau, tol=1e-12)
-            cands = K0[None, :] + 0.5 * a_bits + 0.5 * (b_bits @ tau.T)
-            # D' = (g - 1) * base point: theta(K) = 0; keep the few smallest, then random D'
-            keep = np.argsort(vals)[:min(len(vals), 8)]
-            cands = cands[keep]
-            score = vals[keep]
-            if g > 1:
-                rng = np.random.default_rng(12345)
-                G = self._graph
-                ADs = []
-                for _ in range(3):
-                    pts = []
-                    for _ in range(g - 1):
-                        x0 = G.center + 0.7 * G.H * (rng.uniform(-1, 1) + 1j * rng.uniform(-1, 1))
-                        if self._site_index(x0, rtol=1e-3) >= 0:
-                            x0 += 0.01 * G.H
-                        R, _ = self._poly.roots(np.array([x0]))
-                        pts.append((x0, R[0, rng.integers(self.n)]))
-                    ADs.append(self.abel_map(pts).sum(axis=0))
-                z = cands[None, :, :] + np.array(ADs)[:, None, :]  # one theta set-up for all D'
-                score = np.maximum(score, theta_normalized_abs(z.reshape(-1, g), tau, tol=1e-15)
-                                   .reshape(len(ADs), -1).max(axis=0))
-            order = np.argsort(score)
-            best, second = score[order[0]], score[order[1]] if len(order) > 1 else np.inf
-            # theta at the right candidate vanishes to rounding level; on a nearly degenerate curve
-            # (a nearly pinched cycle, Im tau_ii large) a wrong candidate can be small too, but not
-            # at rounding level
-            if not (best < 1e-8 and second > 10 * best):
-                raise RuntimeError(f"Riemann constant: no half-period candidate makes theta vanish "
-                                   f"unambiguously (best {best:.2g}, next {second:.2g}); nearly "
-                                   f"degenerate curve?")
-            self._cache["K"] = cands[order[0]]
+            rng = np.random.default_rng(12345)
+            ADs = [self.abel_map(self.generic_points(g - 1, rng)).sum(axis=0) for _ in range(3)] if g > 1 else []
+            self._cache["K"] = choose_riemann_constant(tau, AC, ADs)
         K = self._cache["K"].copy()
         if base is not None:
             K = K + (g - 1) * self.abel_map(base)

@@ -114,7 +114,7 @@ class Body:
         object.__setattr__(self, "name", str(self.name))
 
     @classmethod
-    def from_point_masses(cls, masses: ArrayLike, points: ArrayLike, name: str = "") -> "Body":
+    def from_point_masses(cls, masses: ArrayLike, points: ArrayLike, name: str = "") -> Body:
         """A body made of point masses ``masses[k]`` at body-frame points ``points[k]``.
 
         Parameters
@@ -143,7 +143,7 @@ class Body:
         return cls(mass=m, J=J, center=c, name=name)
 
     @classmethod
-    def box(cls, mass: float, size: ArrayLike, center: ArrayLike = (0.0, 0.0, 0.0), name: str = "") -> "Body":
+    def box(cls, mass: float, size: ArrayLike, center: ArrayLike = (0.0, 0.0, 0.0), name: str = "") -> Body:
         """A homogeneous box with edge lengths ``size`` along the body axes, centred at ``center``.
 
         Its second moments are ``J_i = m size_i^2 / 12``.
@@ -162,7 +162,7 @@ class Body:
         d = V.vector3(point, "point") - self.center
         return self.J + self.mass * np.outer(d, d)
 
-    def renamed(self, name: str) -> "Body":
+    def renamed(self, name: str) -> Body:
         """A copy with another name."""
         return Body(mass=self.mass, J=self.J, center=self.center, name=name)
 

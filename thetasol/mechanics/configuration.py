@@ -24,8 +24,8 @@ centres; :meth:`Configuration.place` rebuilds every body's position and velocity
 """
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -269,7 +269,7 @@ class Configuration:
         """Shift of every child joint point (child's frame) that makes the tree central, keyed by child."""
         return {v.child: -v.offset for v in self.violations()}
 
-    def make_central(self) -> "Configuration":
+    def make_central(self) -> Configuration:
         """The same bodies with every joint moved, in the child, to the child's effective mass centre.
 
         Parent points are kept; effective bodies do not depend on child points, so the result

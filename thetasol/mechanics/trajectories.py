@@ -61,7 +61,7 @@ class Trajectories:
         return {"position": self.position[i], "velocity": self.velocity[i],
                 "attitude": self.attitude[i], "omega": self.omega[i]}
 
-    def deviation(self, other: "Trajectories") -> dict[str, float]:
+    def deviation(self, other: Trajectories) -> dict[str, float]:
         """Max deviations from another set on the same grid: position, velocity, attitude, omega, mass centre."""
         if self.names != other.names or self.t.shape != other.t.shape or np.any(self.t != other.t):
             raise ValueError("trajectories must share body names and time grid to be compared")

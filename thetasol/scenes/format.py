@@ -8,9 +8,10 @@ naming the file and the entry.  Unknown keys are errors: a typo must not change 
 from __future__ import annotations
 
 import tomllib
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -75,7 +76,7 @@ class Scene:
         return self.solution(rotation)(self.t)
 
     @classmethod
-    def from_dict(cls, d: Mapping[str, Any], source: str = "scene") -> "Scene":
+    def from_dict(cls, d: Mapping[str, Any], source: str = "scene") -> Scene:
         """Build and validate a scene from the parsed TOML table (docs/scene_format.md)."""
         return _scene_from_dict(d, source)
 

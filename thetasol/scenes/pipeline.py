@@ -18,8 +18,9 @@ The result, a :class:`ConfigurationSolution`, places every physical body down th
 from __future__ import annotations
 
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike

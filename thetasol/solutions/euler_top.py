@@ -56,12 +56,17 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import special as _sp
 
-from thetasol.special import elliptic as _el
-from thetasol.core.attitude import (angle_mod_2pi as _angle_mod_2pi,
-                                     attitude_from_precession as _attitude, minimal_rotation as _minimal_rotation,
-                                     norm3 as _norm, principal_frame as _principal_frame, uniform_rotation as _uniform_rotation,
-                                     unit_rows as _unit)
+from thetasol.core.attitude import (
+    angle_mod_2pi as _angle_mod_2pi,
+    attitude_from_precession as _attitude,
+    minimal_rotation as _minimal_rotation,
+    norm3 as _norm,
+    principal_frame as _principal_frame,
+    uniform_rotation as _uniform_rotation,
+    unit_rows as _unit,
+)
 from thetasol.solutions.base import RotationSolution
+from thetasol.special import elliptic as _el
 
 __all__ = ["EulerTopSolution"]
 

@@ -38,9 +38,8 @@ A radial orbit (zero angular momentum) is refused: its collision makes the close
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import math
+from dataclasses import dataclass, field
 
 import mpmath
 import numpy as np

@@ -37,12 +37,20 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from thetasol.core import validate as V
-from thetasol.core.periodic import (HermiteTable, SeriesNotConverged, eval_series, fit_series, integrated,
-                                    powers, sum_series, sum_series_derivative)
+from thetasol.core.periodic import (
+    HermiteTable,
+    SeriesNotConverged,
+    eval_series,
+    fit_series,
+    integrated,
+    powers,
+    sum_series,
+    sum_series_derivative,
+)
 from thetasol.core.roots import monotone_newton, quadratic_roots
-from thetasol.special.pendulum import pendulum_angle, pendulum_params
-from thetasol.solutions.base import ClosedFormUnavailable, Solution
 from thetasol.solutions._symmetry import SNAP_TOL
+from thetasol.solutions.base import ClosedFormUnavailable, Solution
+from thetasol.special.pendulum import pendulum_angle, pendulum_params
 
 __all__ = ["NeumannSolution", "solve_neumann", "NeumannTorus", "Oscillator", "EllipticNeumann",
            "LatitudeCircle", "PlanarNeumann", "neumann_model", "series_or_unavailable",

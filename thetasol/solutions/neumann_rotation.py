@@ -30,10 +30,20 @@ import numpy as np
 
 from thetasol.core.periodic import eval_series, integrated, powers, refined_fft, sum_series
 from thetasol.mechanics.equations import invariants as _invariants
+from thetasol.solutions._symmetry import (
+    SNAP_TOL,
+    sorted_principal_frame as _principal_frame,
+    symmetry_axis as _symmetry_axis,
+)
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
-from thetasol.solutions.neumann import (EllipticNeumann, LatitudeCircle, NeumannTorus, PlanarNeumann,
-                                        neumann_model, series_or_unavailable)
-from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame as _principal_frame, symmetry_axis as _symmetry_axis
+from thetasol.solutions.neumann import (
+    EllipticNeumann,
+    LatitudeCircle,
+    NeumannTorus,
+    PlanarNeumann,
+    neumann_model,
+    series_or_unavailable,
+)
 
 __all__ = ["NeumannRotation"]
 

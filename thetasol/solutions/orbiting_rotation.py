@@ -47,10 +47,10 @@ from thetasol.core import validate as V
 from thetasol.core.attitude import angle_mod_2pi, principal_frame, uniform_rotation
 from thetasol.core.so3 import rotation_about
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability, orbit_frame
-from thetasol.special.elliptic import ellipj, ellipk
-from thetasol.special.pendulum import pendulum_angle, pendulum_params
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
+from thetasol.special.elliptic import ellipj, ellipk
+from thetasol.special.pendulum import pendulum_angle, pendulum_params
 
 __all__ = ["OrbitingRotation", "solve_orbiting_rotation"]
 

@@ -21,10 +21,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from thetasol.core.so3 import rotation_about
-from thetasol.special.elliptic import ellipk
-from thetasol.special.pendulum import pendulum_angle as _pendulum_angle, pendulum_params as _pendulum_params
 from thetasol.mechanics.equations import invariants as _invariants
 from thetasol.solutions.base import RotationSolution
+from thetasol.special.elliptic import ellipk
+from thetasol.special.pendulum import pendulum_angle as _pendulum_angle, pendulum_params as _pendulum_params
 
 __all__ = ["PendulumRotation"]
 

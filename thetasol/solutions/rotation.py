@@ -24,15 +24,11 @@ and returns an object with the same protocol.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
 from thetasol.core import validate as V
-from thetasol.core.so3 import hat
-from thetasol.mechanics.equations import inertia_from_moments
-
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 
 __all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]

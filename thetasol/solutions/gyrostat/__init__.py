@@ -93,7 +93,6 @@ on) a separatrix, and motions within 1e-60 (relative) of a relative equilibrium,
 :class:`NotImplementedError`.  There is no ``dps=`` path.
 """
 from __future__ import annotations
-from __future__ import annotations
 
 from thetasol.solutions.gyrostat._rotors import Rotor
 from thetasol.solutions.gyrostat._solve import GyrostatSolution, solve_gyrostat

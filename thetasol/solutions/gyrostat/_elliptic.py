@@ -7,11 +7,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from thetasol.special import elliptic as _el
-from thetasol.core.attitude import (angle_mod_2pi as _angle_mod_2pi, attitude_from_precession as _attitude,
-                                     minimal_rotation as _minimal_rotation, norm3 as _norm, unit_rows as _unit)
+from thetasol.core.attitude import (
+    angle_mod_2pi as _angle_mod_2pi,
+    attitude_from_precession as _attitude,
+    minimal_rotation as _minimal_rotation,
+    norm3 as _norm,
+    unit_rows as _unit,
+)
 from thetasol.solutions.gyrostat._algebra import mpq, orbit_algebra
 from thetasol.solutions.gyrostat._forms import frame_with_e3
+from thetasol.special import elliptic as _el
 
 __all__ = ["EllipticMotion", "reanchor", "MIN_TORSION_RATIO"]
 

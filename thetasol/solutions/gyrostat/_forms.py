@@ -4,10 +4,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from thetasol.core.attitude import (angle_mod_2pi as _angle_mod_2pi, attitude_from_precession as _attitude,
-                                     minimal_rotation as _minimal_rotation, norm3 as _norm,
-                                     rotation_about_axis as _rot_about, uniform_rotation as _uniform_rotation,
-                                     unit_rows as _unit)
+from thetasol.core.attitude import (
+    angle_mod_2pi as _angle_mod_2pi,
+    attitude_from_precession as _attitude,
+    minimal_rotation as _minimal_rotation,
+    norm3 as _norm,
+    rotation_about_axis as _rot_about,
+    uniform_rotation as _uniform_rotation,
+    unit_rows as _unit,
+)
 
 __all__ = ["frame_with_e3", "Steady", "Sphere", "Axisymmetric", "Delegate", "Scaled", "BodyMap"]
 

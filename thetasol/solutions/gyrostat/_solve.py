@@ -14,10 +14,10 @@ import numpy as np
 
 from thetasol.core import validate as V
 from thetasol.core.attitude import norm3 as _norm, principal_frame as _principal_frame
-from thetasol.solutions.rotation import RotationSolution, solve_rotation
 from thetasol.solutions.gyrostat._elliptic import EllipticMotion, reanchor
 from thetasol.solutions.gyrostat._forms import Axisymmetric, BodyMap, Delegate, Scaled, Sphere, Steady
 from thetasol.solutions.gyrostat._rotors import RotorAngles, parse_rotors
+from thetasol.solutions.rotation import RotationSolution, solve_rotation
 
 __all__ = ["GyrostatSolution", "solve_gyrostat"]
 

@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from thetasol.mechanics.equations import invariants as first_integrals
-from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._symmetry import sorted_principal_frame, symmetry_axis
+from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.theta_rotation.divisors import eigenvector_divisors
 from thetasol.solutions.theta_rotation.evaluator import FlowEvaluator, flow_evaluator
 from thetasol.solutions.theta_rotation.exponents import exponents

@@ -1,4 +1,8 @@
-"""The half-period scan that picks the Riemann constant among its 2^(2g) candidates.
+"""The vector of Riemann constants: the half-period scan that picks it among its 2^(2g) candidates.
+
+2K = -A(div dx) fixes K up to a half period (:meth:`PlaneCurve.canonical_divisor`); the half period
+is the one with theta(K + A(D')) = 0 for effective divisors D' of degree g - 1
+(:func:`choose_riemann_constant`).
 
 :func:`half_period_scan` evaluates |theta| at all 4^g half periods around one point with one lattice
 sum per b (a tailored trick the general evaluator does not offer): Im(tau) is LLL-reduced by a
@@ -97,3 +101,50 @@ def half_period_scan(z0, tau, tol=1e-9):
             B_out.append(np.mod(U @ bp, 2))
             V_out.append(vals[ib, ia])
     return np.array(V_out), np.array(A_out, dtype=np.int64), np.array(B_out, dtype=np.int64)
+
+
+def choose_riemann_constant(tau: np.ndarray, AC: np.ndarray, ADs: list) -> np.ndarray:
+    """The Riemann constant K (normalized coordinates) from ``2K = -AC`` and the zero test.
+
+    Parameters
+    ----------
+    tau : ndarray, shape (g, g)
+        Riemann matrix.
+    AC : ndarray, shape (g,)
+        Abel image of a canonical divisor (the divisor of dx).
+    ADs : list of ndarray, shape (g,)
+        Abel images of random effective divisors D' of degree g - 1 (empty for genus 1).
+
+    Returns
+    -------
+    ndarray, shape (g,)
+        The half-period translate of ``-AC / 2`` at which theta vanishes at ``(g - 1)`` times the
+        base point and at every ``D'``.
+
+    Raises
+    ------
+    RuntimeError
+        No candidate makes theta vanish unambiguously (a nearly degenerate curve).
+    """
+    g = tau.shape[0]
+    K0 = -0.5 * AC
+    vals, a_bits, b_bits = half_period_scan(K0, tau, tol=1e-12)
+    cands = K0[None, :] + 0.5 * a_bits + 0.5 * (b_bits @ tau.T)
+    # D' = (g - 1) * base point: theta(K) = 0; keep the few smallest, then the random D'
+    keep = np.argsort(vals)[:min(len(vals), 8)]
+    cands = cands[keep]
+    score = vals[keep]
+    if ADs:
+        z = cands[None, :, :] + np.array(ADs)[:, None, :]  # one theta set-up for all D'
+        score = np.maximum(score, theta_normalized_abs(z.reshape(-1, g), tau, tol=1e-15)
+                           .reshape(len(ADs), -1).max(axis=0))
+    order = np.argsort(score)
+    best, second = score[order[0]], score[order[1]] if len(order) > 1 else np.inf
+    # theta at the right candidate vanishes to rounding level; on a nearly degenerate curve
+    # (a nearly pinched cycle, Im tau_ii large) a wrong candidate can be small too, but not
+    # at rounding level
+    if not (best < 1e-8 and second > 10 * best):
+        raise RuntimeError(f"Riemann constant: no half-period candidate makes theta vanish "
+                           f"unambiguously (best {best:.2g}, next {second:.2g}); nearly "
+                           f"degenerate curve?")
+    return cands[order[0]]
