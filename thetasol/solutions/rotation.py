@@ -34,6 +34,7 @@ from thetasol.core.so3 import hat
 from thetasol.mechanics.equations import inertia_from_moments
 
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
+from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
 
 __all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]
 
@@ -140,8 +141,18 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     w0 = V.vector3(omega0, "omega0")
     if dps is not None and (not isinstance(dps, (int, np.integer)) or dps < 15):
         raise ValueError(f"dps must be an integer >= 15, got {dps!r}")
+    # no torque from an isotropic a: its units are those of the Euler top (J and omega0 only)
+    am_solve = np.zeros((3, 3)) if _isotropic(am) else am
+    sc = choose_scales(Jm, am_solve, w0)
+    if sc.trivial:
+        return _dispatch(Jm, am, Q0m, w0, dps)
+    Js, as_, ws = dimensionless_data(Jm, am_solve, w0, sc)
+    return scaled_solution(_dispatch(Js, as_, Q0m, ws, dps), Jm, am, Q0m, w0, sc)
+
+
+def _dispatch(J, a, Q0, omega0, dps) -> RotationSolution:
     for branch in _BRANCHES:
-        sol = branch(Jm, am, Q0m, w0, dps)
+        sol = branch(J, a, Q0, omega0, dps)
         if sol is not None:
             return sol
     raise AssertionError("unreachable: the last branch always answers")  # pragma: no cover
