@@ -34,6 +34,7 @@ from thetasol.core.so3 import hat
 from thetasol.mechanics.equations import inertia_from_moments
 
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
+from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame, symmetry_axis
 from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
 
 __all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]
@@ -70,8 +71,42 @@ def _neumann_branch(J, a, Q0, omega0, dps):
     return _solve_neumann_rotation(J, a, Q0, omega0, dps)
 
 
+#: Smallest potential the theta-function set-up is given, as ``|a - c 1| / (|omega0|^2 + |a - c 1|)``
+#: (eigenvalue norms; J of order one after the change of units): below it the spectral curve is within
+#: a few digits of the free top's and the set-up fails or loses accuracy.  Measured against heyoka
+#: 80-bit at t <= 4002 (benchmarks/bench_units_sweep.py, tests/test_units.py): a generic body keeps
+#: 2.1e-11 at 1e-10 (8.5e-11 and a warning at 1e-12); a rank-one a 1.7e-14 at 1e-5 and is refused by
+#: the curve engine at 1e-6 after 1.6 s; a symmetric body 1.4e-11 at 1e-6, 7.2e-10 at 1e-7.
+MIN_POTENTIAL = {"generic": 1e-10, "rank-one": 1e-5, "symmetric": 1e-6}
+
+
+def _potential_kind(J: np.ndarray, a: np.ndarray) -> str:
+    lam = np.linalg.eigvalsh(a)
+    if symmetry_axis(sorted_principal_frame(J)[0]) is not None:
+        return "symmetric"
+    if np.min(np.diff(lam)) <= SNAP_TOL * (lam[-1] - lam[0]):
+        return "rank-one"
+    return "generic"
+
+
+def _check_potential_size(J, a, omega0):
+    """Refuse at once a potential too weak for the theta-function set-up (:data:`MIN_POTENTIAL`)."""
+    lam = np.linalg.eigvalsh(a - np.trace(a) / 3.0 * np.eye(3))
+    dev = float(np.abs(lam).max())
+    rel = dev / (float(omega0 @ omega0) + dev)
+    kind = _potential_kind(J, a)
+    if rel < MIN_POTENTIAL[kind]:
+        raise ClosedFormUnavailable(
+            f"the potential is weak against the spin (|a - c 1| = {rel:.1e} of |omega0|^2; below {MIN_POTENTIAL[kind]:g} for a {kind} body): its spectral curve is within "
+            "rounding of the free top's, out of the theta-function set-up's reach; use "
+            "thetasol.integrate_rotation (or the free top, solve_rotation with a = 0, when the torque's "
+            "effect over your horizon is below your tolerance)")
+
+
 def _potential_branch(J, a, Q0, omega0, dps):
     from thetasol.solutions.theta_rotation import _solve_theta_rotation
+
+    _check_potential_size(J, a, omega0)
 
     return _solve_theta_rotation(J, a, Q0, omega0, dps=dps)
 
