@@ -93,20 +93,53 @@ class ScaledRotation(RotationSolution):
     inner: RotationSolution = field(default=None, repr=False)
     scales: Scales = field(default=None)
 
-    def _evaluate(self, t: np.ndarray):
+    def _per_time(self, w: np.ndarray) -> np.ndarray:
+        """w / T, exact: mpf values (dps=) are shifted by the exponent, not rounded to mpmath's precision."""
         T = self.scales.time_unit
-        w, Q = self.inner(t / T)
-        return w / T, Q
+        if w.dtype != object:
+            return w / T
+        import mpmath
+
+        k = -(math.frexp(T)[1] - 1)
+        return np.vectorize(lambda x: mpmath.ldexp(x, k), otypes=[object])(w)
+
+    def _evaluate(self, t: np.ndarray):
+        w, Q = self.inner(t / self.scales.time_unit)
+        return self._per_time(w), Q
 
     def _omega(self, t: np.ndarray) -> np.ndarray:
-        T = self.scales.time_unit
-        return self.inner.omega(t / T) / T
+        return self._per_time(self.inner.omega(t / self.scales.time_unit))
+
+
+#: Entries of the branches' ``invariants`` that carry units: a time, a rate, a rate squared (Neumann's
+#: ``k``, eigenvalues of a multiple of ``a``: meaningful in the user's units only without isotropic shift).
+_TIMES = ("period",)
+_RATES = ("precession_rate", "pendulum_nu")
+
+
+def _user_invariants(inner: RotationSolution, J, a, Q0, omega0, sc: Scales) -> dict:
+    """The inner solution's entries in the user's units; the first integrals from the user's data."""
+    T = sc.time_unit
+    inv = dict(inner.invariants)
+    for key in _TIMES:
+        if key in inv:
+            inv[key] = inv[key] * T
+    for key in _RATES:
+        if key in inv:
+            inv[key] = inv[key] / T
+    if "k" in inv:
+        if sc.isotropic == 0.0:
+            inv["k"] = inv["k"] / T**2
+        else:
+            del inv["k"]                         # shifted by the isotropic part: see diagnostics
+    first = _invariants(J, a, Q0, omega0)
+    inv.update({k: (float(v) if np.ndim(v) == 0 else v) for k, v in first.items()})
+    return inv
 
 
 def scaled_solution(inner: RotationSolution, J, a, Q0, omega0, sc: Scales) -> ScaledRotation:
     """Wrap ``inner`` (the solution for :func:`dimensionless_data`) in the user's units."""
-    inv = _invariants(J, a, Q0, omega0)
-    inv = {k: (float(v) if np.ndim(v) == 0 else v) for k, v in inv.items()}
+    inv = _user_invariants(inner, J, a, Q0, omega0, sc)
     diag = {"scales": sc.as_dict(), "dimensionless_invariants": inner.invariants,
             "dimensionless_diagnostics": inner.diagnostics}
     return ScaledRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=inner.method, invariants=inv,

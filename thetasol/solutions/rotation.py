@@ -19,6 +19,12 @@ Dispatch (one small function per branch, tried in order, see ``_BRANCHES``):
   :mod:`thetasol.solutions.theta_rotation` (genus 4; genus 3 for a potential with a repeated eigenvalue
   or for a symmetric body, genus 2 for both).
 
+Units: the data are first put in units where ``max J`` and the larger of ``|omega0|`` and
+``sqrt|a - c 1|`` are of order one, by exact powers of two, and an isotropic part ``c 1`` of ``a``
+that dominates is removed (it exerts no torque); the solution is returned in the user's units
+(:mod:`thetasol.solutions._scaling`, docs/units.md).  A potential too weak against the spin for the
+theta-function set-up (``MIN_POTENTIAL``) is refused at once.
+
 The free gyrostat (8.39)-(8.40) has its own entry point, :func:`thetasol.solve_gyrostat`,
 and returns an object with the same protocol.
 """
@@ -139,7 +145,11 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     -------
     RotationSolution
         ``sol(t) -> (omega, Q)``, ``sol.omega(t)``, ``sol.Q(t)``, ``sol.M(t)``, ``sol.u(t)``,
-        ``sol.method``, ``sol.invariants``.
+        ``sol.method``, ``sol.invariants``.  Data of order one (scales within ``2^+-4`` of 1, no
+        dominant isotropic part) get the branch's own solution object; others a
+        :class:`~thetasol.solutions._scaling.ScaledRotation` around the solution of the
+        dimensionless problem (``sol.diagnostics["scales"]``), with the user's ``J``, ``a`` and
+        first integrals.
 
     Raises
     ------
@@ -148,7 +158,8 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     ClosedFormUnavailable
         (a ``NotImplementedError``) A symmetric body (two equal principal moments) with little
         (but not zero) spin about its symmetry axis in a potential with torque, a Neumann torus
-        too close to a separatrix or too thin, ``dps`` with a potential,
+        too close to a separatrix or too thin, ``dps`` with a potential, a potential far weaker
+        than the spin (``|a - c 1|`` below ``MIN_POTENTIAL`` of ``|omega0|^2``),
         or nearly degenerate data for which the curve computations cannot reach the solution's
         accuracy; the message says which.
 
