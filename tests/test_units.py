@@ -35,7 +35,7 @@ def _integrator(hy):
                 m[0] * w[1] - m[1] * w[0] + tau[2]]
         W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
         Qdot = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
-        _TA["ta"] = hy.taylor_adaptive(list(zip(xs, mdot + Qdot)), np.zeros(12, dtype=LD), tol=LD(1e-19),
+        _TA["ta"] = hy.taylor_adaptive(list(zip(xs, mdot + Qdot, strict=True)), np.zeros(12, dtype=LD), tol=LD(1e-19),
                                        fp_type=LD, pars=np.zeros(27, dtype=LD))
     return _TA["ta"]
 
@@ -212,6 +212,6 @@ def test_dps_in_other_units():
     import mpmath
 
     with mpmath.workdps(30):
-        assert max(abs(x * 2**30 - y) for x, y in zip(w.ravel(), wb.ravel())) < 1e-28
-        assert max(abs(x - y) for x, y in zip(Q.ravel(), Qb.ravel())) < 1e-28
+        assert max(abs(x * 2**30 - y) for x, y in zip(w.ravel(), wb.ravel(), strict=True)) < 1e-28
+        assert max(abs(x - y) for x, y in zip(Q.ravel(), Qb.ravel(), strict=True)) < 1e-28
     assert type(w[0, 0]).__name__ == "mpf"
