@@ -25,6 +25,7 @@ __all__ = ["Scales", "choose_scales", "dimensionless_data", "ScaledRotation", "s
 
 #: Data whose scale lies within 2^+-ORDER_ONE of 1 are left in the user's units (bit-identical results).
 ORDER_ONE = 4
+EPS = np.finfo(float).eps
 
 
 @dataclass(frozen=True)
@@ -73,10 +74,28 @@ def choose_scales(J: np.ndarray, a: np.ndarray, omega0: np.ndarray) -> Scales:
     return Scales(J_unit=sJ, time_unit=T, isotropic=c)
 
 
+def _snap_double_eigenvalue(a_dev: np.ndarray, rounding: float) -> np.ndarray:
+    """a_dev with two eigenvalues closer than ``rounding`` (the user's a cannot tell them apart) made equal."""
+    lam, V = np.linalg.eigh(a_dev)
+    k = int(np.argmin(np.diff(lam)))
+    if not 0.0 < lam[k + 1] - lam[k] <= rounding:
+        return a_dev
+    lam[k] = lam[k + 1] = 0.5 * (lam[k] + lam[k + 1])
+    out = (V * lam) @ V.T
+    return 0.5 * (out + out.T)
+
+
 def dimensionless_data(J, a, omega0, sc: Scales):
-    """``(J', a', omega0')`` of the data in the units ``sc`` (exact but for ``a - c 1``)."""
+    """``(J', a', omega0')`` of the data in the units ``sc`` (exact but for ``a - c 1``).
+
+    With a dominant isotropic part the user's ``a`` fixes the trace-free part only to
+    ``eps max|a_ij|``: a double eigenvalue split by less than that (a gravity gradient plus a large
+    ``c 1``) is made exact, as the curve computations expect of a rank-one potential.
+    """
     T = sc.time_unit
-    a_dev = a - sc.isotropic * np.eye(3) if sc.isotropic != 0.0 else a
+    a_dev = a
+    if sc.isotropic != 0.0:
+        a_dev = _snap_double_eigenvalue(a - sc.isotropic * np.eye(3), 16 * EPS * float(np.abs(a).max()))
     return J / sc.J_unit, (a_dev * T) * T, omega0 * T
 
 
