@@ -171,6 +171,8 @@ SOLVED = {
     "GEO to 4002 orbital radians": (J_SAT, _gravity_gradient(7.29e-5), Q00, W_SAT, T_REF / 7.29e-5, 2e-11),  # 4.0e-12
     "LEO gravity gradient (SI)": (J_SAT, _gravity_gradient(1.1e-3), Q00, 15 * W_SAT, T_REF, 5e-14),  # 4.9e-15
     "rank-one a + 1000": (J0, -1.3 * np.outer(GAMMA, GAMMA) + 1000 * np.eye(3), Q00, W0, T_REF, 3e-11),  # 7.1e-12
+    # the float data fix a - c 1 only to eps 1e6: bound by the conditioning (3.9e-9, 0.05 of it)
+    "rank-one a + 1e6": (J0, -1.3 * np.outer(GAMMA, GAMMA) + 1e6 * np.eye(3), Q00, W0, T_REF, None),
     "generic a + 1e5": (J0, A0 + 1e5 * np.eye(3), Q00, W0, T_REF, 1e-12),          # 1.0e-13
     "a = 1 + 1e-8 A": (J0, np.eye(3) + 1e-8 * A0, Q00, W0, T_REF, 3e-11),          # 6.3e-12
     "|a| = 1e4": (J0, 1e4 * A0, Q00, W0, T_REF / 100, 5e-12),                      # 6.6e-13
@@ -182,6 +184,11 @@ def test_reproducers_solved_against_heyoka(name):
     J, a, Q0, w0, t, bound = SOLVED[name]
     sol = solve_rotation(J, a, Q0, w0)
     w_ref, Q_ref = heyoka_rotation(J, a, Q0, w0, t)
+    if bound is None:
+        # the reference's own spread under a change of a of the size of its rounding, eps max|a_ij|
+        S = np.array([[0.3, -0.7, 0.2], [-0.7, 0.5, 1.0], [0.2, 1.0, -0.9]])
+        w_p, Q_p = heyoka_rotation(J, a + EPS * np.abs(a).max() * S, Q0, w0, t)
+        bound = 0.2 * max(np.abs(w_p - w_ref).max() / np.abs(w_ref).max(), np.abs(Q_p - Q_ref).max())
     assert _error(sol, w_ref, Q_ref, t) <= bound
     # the first integrals are the user's data's
     inv = invariants(J, a, Q0, w0)
@@ -198,6 +205,14 @@ def test_tiny_potential_refused_at_once(rel):
     with pytest.raises(ClosedFormUnavailable, match="integrate_rotation"):
         solve_rotation(J0, a, Q00, W0)
     assert time.perf_counter() - t0 < 30          # a hang guard, not a speed claim
+
+
+def test_nearly_rank_one_refused_at_once():
+    """Eigenvalues of a 1e-9 apart (relative): near the node, refused before the curve is built."""
+    V = np.linalg.qr(np.column_stack([GAMMA, [1.0, 0.2, 0.3], [0.1, 1.0, -0.4]]))[0]
+    a = V @ np.diag([-1.3, 0.0, 1.3e-9]) @ V.T
+    with pytest.raises(ClosedFormUnavailable, match="nearly rank-one potential.*integrate_rotation"):
+        solve_rotation(J0, a, Q00, W0)
 
 
 def test_dps_in_other_units():
