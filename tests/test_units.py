@@ -148,10 +148,10 @@ def test_units_transform_as_physics_says(kind, seed, k, m, logc, sign):
     w1, Q1 = sol(t * s)
     w, Q = base(t)
     # conditioning: the base solution under a change of a and omega0 of the rounding size
+    # (a turned and scaled: a change of the rounding size that keeps a rank-one a rank-one)
     delta = EPS * (3 + abs(c) / scale_a)
-    S = rng.normal(size=(3, 3))
-    pert = solve_rotation(J, a + delta * scale_a * (S + S.T) / np.abs(S + S.T).max(), Q0,
-                          w0 * (1 + delta * rng.choice([-1, 1], 3)))
+    R = rodrigues(delta * rng.choice([-1, 1], 3))
+    pert = solve_rotation(J, (1 + delta) * (R @ a @ R.T), Q0, w0 * (1 + delta * rng.choice([-1, 1], 3)))
     wp, Qp = pert(t)
     cond = max(np.abs(wp - w).max() / np.abs(w).max(), np.abs(Qp - Q).max())
     err = max(np.abs(w1 * s - w).max() / np.abs(w).max(), np.abs(Q1 - Q).max())
