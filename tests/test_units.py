@@ -133,7 +133,8 @@ def test_powers_of_two_give_identical_bits():
 def test_units_transform_as_physics_says(kind, seed, k, m, logc, sign):
     """J -> 10^k J, t -> 10^m t, a -> (a + c 1) 10^-2m with |c| up to 1e6 |a|: omega -> omega 10^-m, Q
     unchanged, within 20 x the conditioning (the spread of the base solution under relative changes of
-    the data of the rounding size, eps (3 + |c| / |a|)) plus 1e-12.  Measured: at most 0.3 of the bound."""
+    the data of the rounding size, eps (3 + |c| / |a|)) plus 1e-12.  Measured on 18 draws: at most 0.23 of
+    the bound (2.5e-13 on a rank-one body, against the 1e-12 floor); 0.03 elsewhere."""
     rng = np.random.default_rng(seed)
     J, a, Q0, w0 = _body(kind, rng)
     scale_a = np.abs(np.linalg.eigvalsh(a)).max()
