@@ -127,10 +127,25 @@ def test_powers_of_two_give_identical_bits():
     assert np.array_equal(out[0][0], out[1][0]) and np.array_equal(out[0][1], out[1][1])
 
 
-@settings(max_examples=6, deadline=None, suppress_health_check=[HealthCheck.too_slow])
-@given(kind=st.sampled_from(["generic", "rank-one", "symmetric"]), seed=st.integers(0, 2**31),
-       k=st.integers(-8, 8), m=st.integers(-8, 8), logc=st.floats(-3.0, 6.0), sign=st.sampled_from([-1, 1]))
+_UNITS = dict(kind=st.sampled_from(["generic", "rank-one", "symmetric"]), seed=st.integers(0, 2**31),
+              k=st.integers(-8, 8), m=st.integers(-8, 8), logc=st.floats(-3.0, 6.0), sign=st.sampled_from([-1, 1]))
+
+
+@settings(max_examples=4, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(**_UNITS)
 def test_units_transform_as_physics_says(kind, seed, k, m, logc, sign):
+    """The units property on 4 draws (30 in the slow run: python -m pytest -m slow -k units_transform_many)."""
+    _check_units(kind, seed, k, m, logc, sign)
+
+
+@pytest.mark.slow
+@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(**_UNITS)
+def test_units_transform_many(kind, seed, k, m, logc, sign):
+    _check_units(kind, seed, k, m, logc, sign)
+
+
+def _check_units(kind, seed, k, m, logc, sign):
     """J -> 10^k J, t -> 10^m t, a -> (a + c 1) 10^-2m with |c| up to 1e6 |a|: omega -> omega 10^-m, Q
     unchanged, within 20 x the conditioning (the spread of the base solution under relative changes of
     the data of the rounding size, eps (3 + |c| / |a|)) plus 1e-12.  Measured on 18 draws: at most 0.23 of
