@@ -106,3 +106,18 @@ def test_readme_example():
     assert sol.method == "theta/genus-4"
     omega, Q = sol(np.linspace(0, 1000, 2001))
     assert omega.shape == (2001, 3) and Q.shape == (2001, 3, 3)
+
+
+def test_unwritable_output_refused_before_solving(tmp_path, capsys, monkeypatch):
+    """-o into a missing directory: exit 2 naming it, and the scene is never solved."""
+    import thetasol.scenes.report as scene_mod
+
+    def never(*args, **kwargs):
+        raise AssertionError("solved before checking the output path")
+
+    monkeypatch.setattr(scene_mod, "run", never)
+    missing = tmp_path / "missing" / "out.csv"
+    assert main(["solve", str(EXAMPLE), "-o", str(missing)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("thetasol: error:") and "does not exist" in err and str(tmp_path / "missing") in err
+    assert not (tmp_path / "missing").exists()

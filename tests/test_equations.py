@@ -257,3 +257,15 @@ def test_first_integrals_long_run():
         assert rel_drift(inv[key]) < 1e-10, key
     C = inv["curve"]
     assert np.max(np.abs(C - C[0])) < 1e-10 * np.max(np.abs(C[0]))
+
+
+def test_invariants_take_J_as_solve_rotation_does():
+    """J as a list, a 1-D array of principal values or a 3x3 tensor: the same integrals; other shapes name J."""
+    a = np.array([[0.3, -0.2, 0.1], [-0.2, -0.4, 0.25], [0.1, 0.25, 0.6]])
+    Q, w = np.eye(3), np.array([0.3, -0.6, 0.45])
+    ref = invariants(np.diag([0.6, 1.0, 1.7]), a, Q, w)
+    for J in ([0.6, 1.0, 1.7], np.array([0.6, 1.0, 1.7])):
+        got = invariants(J, a, Q, w)
+        assert all(np.array_equal(got[k], ref[k]) for k in ref)
+    with pytest.raises(ValueError, match="J must be 3 principal values"):
+        invariants([0.6, 1.0], a, Q, w)

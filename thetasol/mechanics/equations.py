@@ -72,6 +72,16 @@ def paper_variables(J: np.ndarray, a: np.ndarray, Q: np.ndarray,
     return M, u, W
 
 
+def _moments_matrix(J) -> np.ndarray:
+    """J as a 3x3 array from three principal values or a 3x3 tensor (values unchanged)."""
+    J = np.asarray(J, dtype=float)
+    if J.shape == (3,):
+        return np.diag(J)
+    if J.shape != (3, 3):
+        raise ValueError(f"J must be 3 principal values or a 3x3 tensor, got shape {J.shape}")
+    return J
+
+
 def _tr(X):
     return np.trace(X, axis1=-2, axis2=-1)
 
@@ -87,7 +97,17 @@ def invariants(J: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray) -
     ``I3``      (4.13) ``tr(M^2 u + J^2 u^2)``;
     ``m2``      ``|m|^2 = -1/2 tr(M^2)`` ((4.7), conserved only when ``a`` is isotropic or zero);
     ``curve``   all coefficients of the spectral curve (4.12), see :func:`spectral_coefficients`.
+
+    ``J`` may be given as :func:`thetasol.solve_rotation` takes it: three principal values (a list
+    or a 1-D array) or a 3x3 tensor; ``a`` as a 3x3 matrix.
     """
+    J = _moments_matrix(J)
+    a = np.asarray(a, dtype=float)
+    if a.shape != (3, 3):
+        raise ValueError(f"a must be a 3x3 matrix, got shape {a.shape}")
+    Q, omega = np.asarray(Q, dtype=float), np.asarray(omega, dtype=float)
+    if Q.shape[-2:] != (3, 3) or omega.shape[-1:] != (3,):
+        raise ValueError(f"Q must end in shape (3, 3) and omega in (3,), got {Q.shape} and {omega.shape}")
     M, u, W = paper_variables(J, a, Q, omega)
     J2 = J @ J
     M2 = M @ M

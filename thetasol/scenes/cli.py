@@ -11,6 +11,7 @@ message starts with ``thetasol: error:``; nothing is written).
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 
 from thetasol._version import __version__
@@ -34,6 +35,17 @@ def _parser() -> argparse.ArgumentParser:
     return p
 
 
+def _check_output(path: str) -> None:
+    """Refuse an output path that cannot be written, before the (long) solve."""
+    if not path.lower().endswith((".npz", ".csv")):
+        raise ValueError(f"output file must end in .npz or .csv, got {path!r}")
+    folder = os.path.dirname(os.path.abspath(path))
+    if not os.path.isdir(folder):
+        raise ValueError(f"output directory {folder!r} does not exist (for {path!r})")
+    if not os.access(folder, os.W_OK):
+        raise ValueError(f"output directory {folder!r} is not writable (for {path!r})")
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit status."""
     args = _parser().parse_args(argv)
@@ -42,8 +54,8 @@ def main(argv: list[str] | None = None) -> int:
     from thetasol.scenes.report import run
 
     try:
-        if args.output is not None and not args.output.lower().endswith((".npz", ".csv")):
-            raise ValueError(f"output file must end in .npz or .csv, got {args.output!r}")
+        if args.output is not None:
+            _check_output(args.output)
         path = demo_scene_path() if args.command == "demo" else args.scene
         scene = load_scene(path)
         traj, report, checks = run(scene, check=not args.no_check, out=sys.stdout)

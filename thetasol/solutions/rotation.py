@@ -19,6 +19,12 @@ Dispatch (one small function per branch, tried in order, see ``_BRANCHES``):
   :mod:`thetasol.solutions.theta_rotation` (genus 4; genus 3 for a potential with a repeated eigenvalue
   or for a symmetric body, genus 2 for both).
 
+Units: the data are first put in units where ``max J`` and the larger of ``|omega0|`` and
+``sqrt|a - c 1|`` are of order one, by exact powers of two, and an isotropic part ``c 1`` of ``a``
+that dominates is removed (it exerts no torque); the solution is returned in the user's units
+(:mod:`thetasol.solutions._scaling`, docs/units.md).  A potential too weak against the spin for the
+theta-function set-up (``MIN_POTENTIAL``) is refused at once.
+
 The free gyrostat (8.39)-(8.40) has its own entry point, :func:`thetasol.solve_gyrostat`,
 and returns an object with the same protocol.
 """
@@ -29,6 +35,8 @@ from collections.abc import Callable
 import numpy as np
 
 from thetasol.core import validate as V
+from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
+from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame, symmetry_axis
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 
 __all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]
@@ -65,7 +73,54 @@ def _neumann_branch(J, a, Q0, omega0, dps):
     return _solve_neumann_rotation(J, a, Q0, omega0, dps)
 
 
+#: Smallest potential the theta-function set-up is given, as ``|a - c 1| / (|omega0|^2 + |a - c 1|)``
+#: (eigenvalue norms; J of order one after the change of units): below it the spectral curve is within
+#: a few digits of the free top's and the set-up fails or loses accuracy.  Measured against heyoka
+#: 80-bit at t <= 4002 (benchmarks/bench_units_sweep.py, tests/test_units.py): a generic body keeps
+#: 2.1e-11 at 1e-10 (8.5e-11 and a warning at 1e-12); a rank-one a 1.7e-14 at 1e-5 and is refused by
+#: the curve engine at 1e-6 after 1.6 s; a symmetric body 1.4e-11 at 1e-6, 7.2e-10 at 1e-7.
+MIN_POTENTIAL = {"generic": 1e-10, "rank-one": 1e-5, "symmetric": 1e-6}
+#: Two eigenvalues of ``a`` closer than this (relative to their spread) but not within ``SNAP_TOL``: the
+#: spectral curve is near the node of a rank-one potential and is refused at once.  Measured on one body
+#: against heyoka 80-bit at t <= 4002: gap 1e-5 2.2e-11, 1e-6 1.3e-10, 1e-7 2.0e-10, 3e-8 2.2e-9, 1e-8
+#: 6.1e-9 (no warning), 1e-11 .. 1e-9 refused by the set-up after 1.5-3 s.
+MIN_A_GAP = 1e-7
+
+
+def _potential_kind(J: np.ndarray, a: np.ndarray) -> str:
+    lam = np.linalg.eigvalsh(a)
+    if symmetry_axis(sorted_principal_frame(J)[0]) is not None:
+        return "symmetric"
+    if np.min(np.diff(lam)) <= SNAP_TOL * (lam[-1] - lam[0]):
+        return "rank-one"
+    return "generic"
+
+
+def _check_potential_size(J, a, omega0):
+    """Refuse at once a potential too weak for the theta-function set-up (:data:`MIN_POTENTIAL`)."""
+    lam = np.linalg.eigvalsh(a - np.trace(a) / 3.0 * np.eye(3))
+    dev = float(np.abs(lam).max())
+    rel = dev / (float(omega0 @ omega0) + dev)
+    full = np.linalg.eigvalsh(a)
+    gap, spread = float(np.min(np.diff(full))), float(full[-1] - full[0])
+    snapped = gap <= SNAP_TOL * max(spread, float(np.abs(full).max()))   # as the spectral curve snaps it
+    gap /= spread
+    if not snapped and gap < MIN_A_GAP:
+        raise ClosedFormUnavailable(
+            f"nearly rank-one potential (two eigenvalues of a {gap:.1e} apart relative to their spread, "
+            f"above the snapping tolerance {SNAP_TOL:g} and below {MIN_A_GAP:g}): the spectral curve is near "
+            "the node of the rank-one case, out of the curve engine's reach; use thetasol.integrate_rotation")
+    kind = _potential_kind(J, a)
+    if rel < MIN_POTENTIAL[kind]:
+        raise ClosedFormUnavailable(
+            f"the potential is weak against the spin (|a - c 1| = {rel:.1e} of |omega0|^2; below {MIN_POTENTIAL[kind]:g} for a {kind} body): its spectral curve is within "
+            "rounding of the free top's, out of the theta-function set-up's reach; use "
+            "thetasol.integrate_rotation (or the free top, solve_rotation with a = 0, when the torque's "
+            "effect over your horizon is below your tolerance)")
+
+
 def _potential_branch(J, a, Q0, omega0, dps):
+    _check_potential_size(J, a, omega0)
     from thetasol.solutions.theta_rotation import _solve_theta_rotation
 
     return _solve_theta_rotation(J, a, Q0, omega0, dps=dps)
@@ -99,7 +154,11 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     -------
     RotationSolution
         ``sol(t) -> (omega, Q)``, ``sol.omega(t)``, ``sol.Q(t)``, ``sol.M(t)``, ``sol.u(t)``,
-        ``sol.method``, ``sol.invariants`` (first integrals), ``sol.diagnostics`` (self-checks).
+        ``sol.method``, ``sol.invariants`` (first integrals), ``sol.diagnostics`` (self-checks).  Data
+        of order one (scales within ``2^+-4`` of 1, no dominant isotropic part) get the branch's own
+        solution object; others a :class:`~thetasol.solutions._scaling.ScaledRotation` around the
+        solution of the dimensionless problem (``sol.diagnostics["scales"]``), with the user's ``J``,
+        ``a`` and first integrals.
 
     Raises
     ------
@@ -108,7 +167,8 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     ClosedFormUnavailable
         (a ``NotImplementedError``) A symmetric body (two equal principal moments) with little
         (but not zero) spin about its symmetry axis in a potential with torque, a Neumann torus
-        too close to a separatrix or too thin, ``dps`` with a potential,
+        too close to a separatrix or too thin, ``dps`` with a potential, a potential far weaker
+        than the spin (``|a - c 1|`` below ``MIN_POTENTIAL`` of ``|omega0|^2``),
         or nearly degenerate data for which the curve computations cannot reach the solution's
         accuracy; the message says which.
 
@@ -135,8 +195,18 @@ def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolut
     w0 = V.vector3(omega0, "omega0")
     if dps is not None and (not isinstance(dps, (int, np.integer)) or dps < 15):
         raise ValueError(f"dps must be an integer >= 15, got {dps!r}")
+    # no torque from an isotropic a: its units are those of the Euler top (J and omega0 only)
+    am_solve = np.zeros((3, 3)) if _isotropic(am) else am
+    sc = choose_scales(Jm, am_solve, w0)
+    if sc.trivial:
+        return _dispatch(Jm, am, Q0m, w0, dps)
+    Js, as_, ws = dimensionless_data(Jm, am_solve, w0, sc)
+    return scaled_solution(_dispatch(Js, as_, Q0m, ws, dps), Jm, am, Q0m, w0, sc)
+
+
+def _dispatch(J, a, Q0, omega0, dps) -> RotationSolution:
     for branch in _BRANCHES:
-        sol = branch(Jm, am, Q0m, w0, dps)
+        sol = branch(J, a, Q0, omega0, dps)
         if sol is not None:
             return sol
     raise AssertionError("unreachable: the last branch always answers")  # pragma: no cover
