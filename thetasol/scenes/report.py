@@ -140,7 +140,7 @@ def _reference_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectori
     if scene.constraint is not None:
         R = scene.constraint.radius
         gap = float(np.max(np.abs(scene.constraint.residual(traj.mass_center)))) / R
-        # the models put the point on the unit sphere to rounding: measured <= 4.5e-16 (tests/test_constrained_scene.py)
+        # the models put the point on the unit sphere to rounding: measured 5.6e-16 (tests/test_constrained_scene.py)
         checks.append(Check(f"mass centre on |q| = {R:g}: max ||q| - R| / R", gap, 1e-13, "-"))
     for i, n in enumerate(traj.names):
         r = traj.info["rotations"][n]
