@@ -16,13 +16,15 @@ import pytest
 
 from thetasol.core.so3 import rodrigues
 from thetasol.integrators.multibody import integrate_multibody
+from thetasol.integrators.neumann import NumericalNeumann, integrate_neumann, numerical_neumann
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.mechanics.constraints import Sphere
 from thetasol.scenes.format import load_scene
 from thetasol.scenes.pipeline import solve_configuration
 from thetasol.scenes.report import run
-from thetasol.solutions.neumann import NeumannSolution
+from thetasol.solutions.base import ClosedFormUnavailable
+from thetasol.solutions.neumann import NeumannSolution, solve_neumann
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "neumann_station.toml"
 EDGES = [("A", "B"), ("B", "C"), ("A", "D")]  # 4 bodies, C^2: a chain of length 2
@@ -65,7 +67,7 @@ def test_example_scene_split_against_unsplit():
     assert sc.constraint == Sphere(2.0) and len(sc.config) == 4 and sc.config.depth == 2
     traj, report, checks = run(sc, check=False)  # the multibody check is repeated below, per quantity
     assert all(c.ok for c in checks), report
-    assert "Neumann's problem on |q| = 2: neumann/genus-2" in report
+    assert "Neumann's problem on |q| = 2: closed form neumann/genus-2" in report
     assert all("closed form" in m for m in traj.info["models"]["rotations"].values())
     # the constraint along the split: measured 5.6e-16 relative
     assert np.max(np.abs(np.linalg.norm(traj.mass_center, axis=1) - 2.0)) < 4e-15
@@ -219,3 +221,41 @@ def test_constraint_table_must_be_a_table(tmp_path):
                  .replace('type = "sphere"\nradius = 2.0\n', "", 1))
     with pytest.raises(ValueError, match=r"\[constraint\] must be a table"):
         load_scene(p)
+
+
+# -- the numerical fallback near a separatrix --------------------------------------------------------
+
+def test_integrate_neumann_converges_to_the_closed_form():
+    """integrate_neumann (Baumgarte-stabilized, both directions of time) against solve_neumann on the
+    example's mass centre over t in [-60, 60]: the gap falls with rtol, so it is the integrator's."""
+    sc = load_scene(EXAMPLE)
+    t = np.linspace(-60.0, 60.0, 241)
+    q, v = solve_neumann(sc.a, sc.q0, sc.v0)(t)
+    gaps = []
+    for rtol in (1e-10, 1e-13):
+        qn, vn = integrate_neumann(sc.a, sc.q0, sc.v0, t, rtol=rtol)
+        gaps.append(max(np.max(np.abs(q - qn)), np.max(np.abs(v - vn))))
+        assert np.max(np.abs(np.linalg.norm(qn, axis=1) - 2.0)) < 4e-15  # measured 4.4e-16 (projected)
+    assert gaps[1] < 1e-11  # measured 1.7e-12
+    assert gaps[0] / gaps[1] > 100  # measured 6.1e-9 / 1.7e-12
+    sol = numerical_neumann(sc.a, sc.q0, sc.v0, rtol=1e-13)
+    qs, vs = sol(t[1:].reshape(3, -1)[:, ::-1])  # any shape, any order
+    assert qs.shape == (3, 80, 3) and np.allclose(qs, q[1:].reshape(3, -1, 3)[:, ::-1], atol=1e-11, rtol=0)
+
+
+def test_fallback_near_a_separatrix_matches_the_unsplit_system():
+    """The mass centre started 1e-3 from the unstable equilibrium on the middle axis: solve_neumann
+    refuses the data (its series do not converge), the split uses numerical_neumann and still agrees
+    with the constrained multibody system."""
+    cfg, a, b, s = make_system(7)
+    axes = np.linalg.eigh(a)[1]
+    s = {**s, "q0": 1.5 * axes[:, 1], "v0": 1e-3 * (axes[:, 0] + axes[:, 2])}
+    with pytest.raises(ClosedFormUnavailable):
+        solve_neumann(a, s["q0"], s["v0"])
+    sol = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-13, constraint=Sphere(1.5), **s)
+    assert isinstance(sol.mass_center, NumericalNeumann)
+    assert "numerical fallback" in sol.diagnostics["models"]["mass_center"]
+    assert "separatrix" in sol.diagnostics["mass_center_reason"]
+    t = np.linspace(0.0, 20.0, 81)
+    dev = sol(t).deviation(integrate_multibody(cfg, a, b, t=t, rtol=1e-12, constraint=Sphere(1.5), **s))
+    assert max(dev["position"], dev["attitude"]) < 1e-10  # measured 1.4e-12, 5.5e-13
