@@ -19,6 +19,15 @@ system in Schur-complement form ``(G M^-1 G^T) lambda = -gamma - G M^-1 f - 2 al
 alpha^2 g`` (Baumgarte stabilization, critically damped at rate ``alpha``).  ``Q`` is kept
 orthogonal by the term ``Q (1 - Q^T Q) kappa / 2`` added to ``Qdot`` (zero on SO(3)).
 
+With ``constraint=Sphere(R)`` (Section 6, Theorem 3) the system mass centre
+``q = sum m_i x_i / M`` is held on ``|q| = R`` by one more holonomic constraint,
+``g = (|q|^2 - R^2) / (2 R) = 0`` (a length, like the joint gaps).  Its gradient in ``x_i`` is
+``(m_i / M) q / R``, so its multiplier ``mu`` pushes every body with the force
+``mu (m_i / M) q / R``: in proportion to its mass, the same acceleration ``mu q / (M R)`` for all,
+and no torque.  The row joins the joint rows of the same KKT system with
+``gdot = q.qdot / R`` and ``gamma = |qdot|^2 / R`` (``gddot = G acc + gamma``).  This models the
+rod of the paper without choosing a material attachment point (the mass centre is none).
+
 The ODE is integrated by :func:`scipy.integrate.solve_ivp` (DOP853 by default).  Dense
 maximal coordinates are slow compared with the split (it is a reference, not the product),
 but they are transparent, and the code is short enough to audit.  It also serves users as
@@ -37,6 +46,7 @@ from scipy.integrate import solve_ivp
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize, vee
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
+from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.trajectories import Trajectories
 
 __all__ = ["initial_state", "integrate_multibody"]
@@ -88,7 +98,8 @@ def initial_state(config: Configuration, q0: ArrayLike, v0: ArrayLike, Q0: Mappi
 class _System:
     """Right-hand side of the maximal-coordinate equations (module docstring)."""
 
-    def __init__(self, config, a, b, alpha, kappa):
+    def __init__(self, config, a, b, alpha, kappa, radius=None):
+        self.radius = radius  # of the sphere constraint on the system mass centre, or None
         self.names = config.order
         idx = {n: i for i, n in enumerate(self.names)}
         bodies = [config.bodies[n] for n in self.names]
@@ -144,6 +155,32 @@ class _System:
               - v[..., C, :] - np.einsum("...kij,...kj->...ki", QC, cross(wC, self.rhoC)))
         return g, gd
 
+    def _joint_rows(self, x, v, Q, w):
+        """Jacobian ``G`` (3K, 6N) of the joints and the right-hand side of ``G acc = rhs``."""
+        N, K = self.N, self.K
+        P, C, ks = self.P, self.C, self._ks
+        QP, QC = Q[P], Q[C]
+        G4 = self._G0.copy()
+        G4[ks, :, P, 3:] = -QP @ self._hatP
+        G4[ks, :, C, 3:] = QC @ self._hatC
+        G = G4.reshape(3 * K, 6 * N)
+        wP, wC = w[P], w[C]
+        gamma = (np.einsum("kij,kj->ki", QP, cross(wP, cross(wP, self.rhoP)))
+                 - np.einsum("kij,kj->ki", QC, cross(wC, cross(wC, self.rhoC))))
+        g, gd = self.constraint(x, v, Q, w)
+        return G, -(gamma + 2 * self.alpha * gd + self.alpha ** 2 * g).ravel()
+
+    def _sphere_row(self, x, v):
+        """The row (1, 6N) of ``g = (|q|^2 - R^2) / (2R)`` and its right-hand side (module docstring)."""
+        R, M = self.radius, self.m.sum()
+        q, qd = self.m @ x / M, self.m @ v / M
+        G = np.zeros((self.N, 6))
+        G[:, :3] = (self.m / (M * R))[:, None] * q
+        rq = float(np.linalg.norm(q))
+        g = (rq - R) * (rq + R) / (2 * R)
+        rhs = -(qd @ qd / R + 2 * self.alpha * (q @ qd) / R + self.alpha ** 2 * g)
+        return G.reshape(1, 6 * self.N), np.array([rhs])
+
     def __call__(self, _t, y):
         N, K = self.N, self.K
         x, v, Q, w = self.unpack(y)
@@ -155,18 +192,11 @@ class _System:
         f[:, :3] = -self.m[:, None] * (x @ a + 0.5 * self.b)
         f[:, 3:] = np.einsum("nji,nj->ni", Q, tau_space) - cross(w, Iw)
         f = f.ravel()
-        if K:
-            P, C, ks = self.P, self.C, self._ks
-            QP, QC = Q[P], Q[C]
-            G4 = self._G0.copy()
-            G4[ks, :, P, 3:] = -QP @ self._hatP
-            G4[ks, :, C, 3:] = QC @ self._hatC
-            G = G4.reshape(3 * K, 6 * N)
-            wP, wC = w[P], w[C]
-            gamma = (np.einsum("kij,kj->ki", QP, cross(wP, cross(wP, self.rhoP)))
-                     - np.einsum("kij,kj->ki", QC, cross(wC, cross(wC, self.rhoC))))
-            g, gd = self.constraint(x, v, Q, w)
-            rhs = -(gamma + 2 * self.alpha * gd + self.alpha ** 2 * g).ravel()
+        if K or self.radius is not None:
+            G, rhs = self._joint_rows(x, v, Q, w)
+            if self.radius is not None:
+                Gs, rs = self._sphere_row(x, v)
+                G, rhs = np.concatenate([G, Gs]), np.concatenate([rhs, rs])
             MG = self.Minv @ G.T
             acc = self.Minv @ f
             lam = np.linalg.solve(G @ MG, rhs - G @ acc)
@@ -182,7 +212,8 @@ class _System:
 def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: ArrayLike, v0: ArrayLike,
                         Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike], t: ArrayLike,
                         rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
-                        alpha: float | None = None, kappa: float | None = None) -> Trajectories:
+                        alpha: float | None = None, kappa: float | None = None,
+                        constraint: Sphere | None = None) -> Trajectories:
     """Integrate a tree of rigid bodies on spherical joints in ``phi(x) = 1/2 x^T a x + 1/2 b^T x``.
 
     Parameters
@@ -210,12 +241,17 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
         ``|omega0|_max + sqrt(|a|)``, at least 1).
     kappa : float, optional
         Rate pulling ``Q`` back to SO(3) (default ``alpha``).
+    constraint : Sphere, optional
+        Hold the system mass centre on ``|q| = constraint.radius`` (Theorem 3; module
+        docstring).  Needs ``b = 0``, ``|q0| = radius`` and ``v0`` tangent
+        (:meth:`Sphere.check`, else ``ValueError``).
 
     Returns
     -------
     Trajectories
         ``info`` holds ``"constraint_residual"`` (max joint gap), ``"orthogonality"``
-        (max ``|Q^T Q - 1|`` before the output projection), ``"nfev"``, ``"seconds"``.
+        (max ``|Q^T Q - 1|`` before the output projection), ``"nfev"``, ``"seconds"``; with a
+        constraint also ``"sphere_residual"`` (max ``| |q| - radius |``).
 
     Notes
     -----
@@ -233,11 +269,15 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     if not (0 < rtol < 1):
         raise ValueError(f"rtol must be in (0, 1), got {rtol}")
     atol = 1e-3 * rtol if atol is None else float(atol)
+    if constraint is not None:
+        if not isinstance(constraint, Sphere):
+            raise ValueError(f"constraint must be a Sphere or None, got {type(constraint).__name__}")
+        b, q0, v0 = constraint.check(b, q0, v0)
     x, v, Q, w = initial_state(config, q0, v0, Q0, omega0)
     if alpha is None:
         alpha = max(1.0, float(np.max(np.linalg.norm(w, axis=1))) + float(np.sqrt(np.max(np.abs(np.linalg.eigvalsh(a))))))
     kappa = alpha if kappa is None else float(kappa)
-    sys = _System(config, a, b, float(alpha), kappa)
+    sys = _System(config, a, b, float(alpha), kappa, None if constraint is None else constraint.radius)
     y0 = sys.pack(x, v, Q, w)
     start = time.perf_counter()
     if tt[-1] > 0:
@@ -260,5 +300,7 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     info = {"model": "multibody (maximal coordinates, KKT, Baumgarte)", "method": method, "rtol": rtol,
             "atol": atol, "alpha": float(alpha), "kappa": kappa, "nfev": int(nfev), "seconds": seconds,
             "constraint_residual": resid, "orthogonality": ortho}
+    if constraint is not None:
+        info["sphere_residual"] = float(np.max(np.abs(constraint.residual(mc))))
     return Trajectories(t=tt.copy(), names=tuple(sys.names), position=X, velocity=Vel, attitude=Qs, omega=W,
                         mass_center=mc, mass_center_velocity=mcv, info=info)

@@ -2,7 +2,8 @@
 
 A scene (TOML, read with the standard library's :mod:`tomllib`; format in
 docs/scene_format.md) gives bodies, joints, the potential (2.4), the initial state and the
-output times.  :func:`load_scene` reads and validates one; every error is a ``ValueError``
+output times, and optionally a ``[constraint]`` on the system mass centre (the sphere of
+Theorem 3).  :func:`load_scene` reads and validates one; every error is a ``ValueError``
 naming the file and the entry.  Unknown keys are errors: a typo must not change the physics.
 """
 from __future__ import annotations
@@ -19,12 +20,13 @@ from thetasol.core import validate as V
 from thetasol.core.so3 import rodrigues
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
+from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
 
 __all__ = ["Scene", "load_scene", "demo_scene_path"]
 
-_TOP_KEYS = {"name", "description", "bodies", "joints", "potential", "initial", "output", "solver"}
+_TOP_KEYS = {"name", "description", "bodies", "joints", "potential", "initial", "output", "solver", "constraint"}
 _BODY_KEYS = {"name", "mass", "J", "I", "center", "box", "masses", "points"}
 _JOINT_KEYS = {"parent", "child", "parent_point", "child_point"}
 _SOLVER_KEYS = {"rtol", "method", "rotation", "make_central", "check_multibody", "check_t_end", "check_rtol"}
@@ -50,6 +52,8 @@ class Scene:
     solver : dict
         ``rtol``, ``method``, ``rotation``, ``check_multibody``, ``check_t_end``, ``check_rtol``,
         ``make_central``.
+    constraint : Sphere or None
+        The system mass centre held on a sphere about the origin (Theorem 3), if any.
     """
 
     config: Configuration
@@ -63,13 +67,14 @@ class Scene:
     name: str = ""
     description: str = ""
     solver: dict = field(default_factory=dict)
+    constraint: Sphere | None = None
 
     def solution(self, rotation: str | None = None) -> ConfigurationSolution:
         """The split solution (:func:`~thetasol.scenes.pipeline.solve_configuration`) with the scene's options."""
         s = self.solver
         return solve_configuration(self.config, self.a, self.b, self.q0, self.v0, self.Q0, self.omega0,
                                    rotation=rotation or s.get("rotation", "auto"), rtol=s.get("rtol", 1e-12),
-                                   method=s.get("method", "DOP853"))
+                                   method=s.get("method", "DOP853"), constraint=self.constraint)
 
     def solve(self, rotation: str | None = None) -> Trajectories:
         """The split solution on the output times: ``self.solution(rotation)(self.t)``."""
@@ -274,6 +279,27 @@ def _initial(d: Mapping, order: list[str]) -> tuple[np.ndarray, np.ndarray, dict
     return q0, v0, Q0, w0
 
 
+def _constraint(d: Mapping, b: np.ndarray, q0: np.ndarray, v0: np.ndarray) -> Sphere | None:
+    """The ``[constraint]`` (``type = "sphere"``, ``radius``), checked against the potential and ``q0, v0``."""
+    if "constraint" not in d:
+        return None
+    c = _table(d, "constraint")
+    _unknown(c, {"type", "radius"}, "[constraint]")
+    if c.get("type") != "sphere":
+        raise ValueError(f"constraint.type must be \"sphere\", got {c.get('type')!r}")
+    if "radius" not in c:
+        raise ValueError("[constraint] needs 'radius'")
+    sphere = Sphere(_number(c["radius"], "constraint.radius", positive=True))
+    try:
+        sphere.check(b, q0, v0)
+    except ValueError as exc:
+        msg = str(exc)
+        for name, entry in (("b", "potential.b"), ("q0", "initial.q"), ("v0", "initial.v")):
+            msg = msg.replace(f"{name} must", f"{entry} must", 1)
+        raise ValueError(f"[constraint] sphere: {msg}") from exc
+    return sphere
+
+
 def _output(d: Mapping) -> np.ndarray:
     """The output times: ``times``, or ``samples`` points on ``[0, t_end]``."""
     out = _table(d, "output")
@@ -350,6 +376,7 @@ def _build_scene(d: Any) -> Scene:
     config = _configuration(list(byname.values()), raw_joints, make_central)
     a, b = _potential(d)
     q0, v0, Q0, w0 = _initial(d, config.order)
+    constraint = _constraint(d, b, q0, v0)
     t = _output(d)
     return Scene(config=config, a=a, b=b, q0=q0, v0=v0, Q0=Q0, omega0=w0, t=t, name=name, description=desc,
-                 solver=_solver_options(solver, t, make_central))
+                 solver=_solver_options(solver, t, make_central), constraint=constraint)

@@ -12,6 +12,13 @@
   :func:`thetasol.integrate_rotation` on demand at the requested times.  Which one, and why, is
   recorded per body.
 
+With ``constraint=Sphere(R)`` (Section 6, Theorem 3) the mass centre is held on ``|q| = R`` (a rod
+on a spherical joint at the origin of the potential ``1/2 q^T a q``): it then moves as C. Neumann's
+point, :func:`~thetasol.solutions.neumann.solve_neumann` with the same ``a`` (per unit mass: the
+rod's force acts on the total mass; near a separatrix, where that closed form is refused,
+:func:`~thetasol.integrators.neumann.numerical_neumann`), and the rotations are unchanged (the force is a uniform
+acceleration field on the bodies: no torque about any mass centre).
+
 The result, a :class:`ConfigurationSolution`, places every physical body down the tree
 (:meth:`Configuration.place`) at any times it is asked for.
 """
@@ -26,12 +33,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.integrators.neumann import NumericalNeumann, numerical_neumann
 from thetasol.integrators.rotation import numerical_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
+from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import invariants as rotation_invariants
 from thetasol.mechanics.trajectories import Trajectories
-from thetasol.solutions.base import Solution
+from thetasol.solutions.base import ClosedFormUnavailable, Solution
 from thetasol.solutions.mass_center import MassCenterMotion
+from thetasol.solutions.neumann import NeumannSolution, solve_neumann
 
 __all__ = ["ConfigurationSolution", "solve_configuration", "rotation_kind", "closed_form_rotation"]
 
@@ -79,8 +89,9 @@ class ConfigurationSolution(Solution):
     config : Configuration
     a, b : ndarray
         Potential (2.4).
-    mass_center : MassCenterMotion
-        The system mass centre (3.2).
+    mass_center : MassCenterMotion, NeumannSolution or NumericalNeumann
+        The system mass centre (3.2); on the sphere of ``constraint``, Neumann's point (6.1)-(6.2)
+        (numerical where its closed form refuses the data).
     rotations : dict name -> Solution
         The rotation of every effective body (3.3), root first: a closed form of
         ``solve_rotation`` or a :class:`~thetasol.integrators.rotation.NumericalRotation`.
@@ -88,22 +99,27 @@ class ConfigurationSolution(Solution):
         ``"split: "``, the mass centre's method, then ``name=method`` per rotation.
     invariants : dict
         First integrals: ``energy`` (the whole system's, ``M E_q + sum_B E_B``),
-        ``mass_center`` (per unit mass, :attr:`MassCenterMotion.invariants`) and ``rotations``
+        ``mass_center`` (per unit mass, the ``invariants`` of :attr:`mass_center`) and ``rotations``
         (name -> ``energy``, ``I2``, ``I3`` (4.13), ``curve`` (4.12) of each effective body).
     diagnostics : dict
-        ``models`` (the mass-centre modes and a line per rotation), ``rotation_kind``,
+        ``models`` (the mass-centre modes, or the Neumann model on the sphere, and a line per
+        rotation), ``rotation_kind``,
         ``rotations`` (name -> ``model``, ``closed_form``, ``reason``, ``setup_seconds``),
-        ``mass_center_setup_seconds``, ``setup_seconds`` (all set-up).
+        ``mass_center_setup_seconds``, ``mass_center_reason`` (why the mass centre is numerical,
+        or ""), ``setup_seconds`` (all set-up).
+    constraint : Sphere or None
+        The constraint on the system mass centre (Theorem 3), if any.
     """
 
     config: Configuration
     a: np.ndarray
     b: np.ndarray
-    mass_center: MassCenterMotion
+    mass_center: MassCenterMotion | NeumannSolution | NumericalNeumann
     rotations: dict
     method: str
     invariants: dict = field(repr=False)
     diagnostics: dict = field(default_factory=dict, repr=False)
+    constraint: Sphere | None = None
 
     @property
     def names(self) -> tuple[str, ...]:
@@ -181,9 +197,11 @@ class ConfigurationSolution(Solution):
         return self(t)
 
 
-def _check_arguments(config: Configuration, rotation: str, check_central: bool) -> None:
+def _check_arguments(config: Configuration, rotation: str, check_central: bool, constraint: Any) -> None:
     if not isinstance(config, Configuration):
         raise ValueError(f"config must be a Configuration, got {type(config).__name__}")
+    if constraint is not None and not isinstance(constraint, Sphere):
+        raise ValueError(f"constraint must be a Sphere or None, got {type(constraint).__name__}")
     if rotation not in ("auto", "numerical"):
         raise ValueError(f"rotation must be 'auto' or 'numerical', got {rotation!r}")
     if check_central:
@@ -210,7 +228,28 @@ def _rotations(config: Configuration, a: np.ndarray, Qa: np.ndarray, wa: np.ndar
     return sols, diag
 
 
-def _first_integrals(config: Configuration, a: np.ndarray, mc: MassCenterMotion, Qa: np.ndarray,
+def _mass_center(a: np.ndarray, b: np.ndarray, q0: ArrayLike, v0: ArrayLike, constraint: Sphere | None,
+                 rtol: float) -> tuple[MassCenterMotion | NeumannSolution | NumericalNeumann, Any, str, float]:
+    """The mass-centre solution, its entry in ``models``, why it is numerical ("" if not), its set-up seconds."""
+    start = time.perf_counter()
+    why = ""
+    if constraint is None:
+        mc = MassCenterMotion(a, b, q0, v0)
+        model = list(zip(mc.eigenvalues.tolist(), mc.kinds, strict=True))
+    else:
+        _, q0, v0 = constraint.check(b, q0, v0)
+        head = f"Neumann's problem on |q| = {constraint.radius:g}: "
+        try:
+            mc = solve_neumann(a, q0, v0, reference="thetasol.integrators.neumann.integrate_neumann")
+            model = head + f"closed form {mc.method}"
+        except ClosedFormUnavailable as exc:
+            why = str(exc)
+            mc = numerical_neumann(a, q0, v0, rtol=rtol)
+            model = head + f"numerical fallback (integrate_neumann DOP853, rtol={rtol:g})"
+    return mc, model, why, time.perf_counter() - start
+
+
+def _first_integrals(config: Configuration, a: np.ndarray, mc: Any, Qa: np.ndarray,
                      wa: np.ndarray) -> dict:
     rot = {}
     for i, (n, e) in enumerate(config.effective_bodies().items()):
@@ -224,7 +263,7 @@ def _first_integrals(config: Configuration, a: np.ndarray, mc: MassCenterMotion,
 def solve_configuration(config: Configuration, a: ArrayLike, b: ArrayLike, q0: ArrayLike, v0: ArrayLike,
                         Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike], *,
                         rotation: str = "auto", rtol: float = 1e-12, method: str = "DOP853",
-                        check_central: bool = True) -> ConfigurationSolution:
+                        check_central: bool = True, constraint: Sphere | None = None) -> ConfigurationSolution:
     """Every body of a C^k-central configuration by the split (3.1), as a solution to evaluate.
 
     Parameters
@@ -247,6 +286,14 @@ def solve_configuration(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
         integrates.
     rtol, method : float, str
         Passed to :func:`~thetasol.integrate_rotation` for the numerical rotations.
+    constraint : Sphere, optional
+        Hold the system mass centre on the sphere ``|q| = constraint.radius`` about the origin
+        (Theorem 3): it then moves by :func:`~thetasol.solutions.neumann.solve_neumann` with the
+        same ``a``; the rotations are unchanged.  Needs ``b = 0``, ``|q0| = radius`` and ``v0``
+        tangent, to 1e-12 relative (else ``ValueError``).  Where ``solve_neumann`` builds no closed
+        form (near a separatrix) the mass centre is a
+        :class:`~thetasol.integrators.neumann.NumericalNeumann` at ``rtol`` and
+        ``diagnostics["mass_center_reason"]`` says why.
 
     Returns
     -------
@@ -263,20 +310,18 @@ def solve_configuration(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     >>> sol([0.0, 1.0]).position.shape
     (1, 2, 3)
     """
-    _check_arguments(config, rotation, check_central)
+    _check_arguments(config, rotation, check_central, constraint)
     a = V.symmetric_matrix(a, "a")
     b = V.vector3(b, "b")
     Qa, wa = initial_attitudes(config, Q0, omega0)
-    start = time.perf_counter()
-    mc = MassCenterMotion(a, b, q0, v0)
-    mc_seconds = time.perf_counter() - start
+    mc, mc_model, mc_why, mc_seconds = _mass_center(a, b, q0, v0, constraint, rtol)
     kind = rotation_kind(a)
     rots, rot_diag = _rotations(config, a, Qa, wa, rotation, rtol, method, kind)
-    models = {"mass_center": list(zip(mc.eigenvalues.tolist(), mc.kinds, strict=True)),
-              "rotations": {n: r["model"] for n, r in rot_diag.items()}}
-    diagnostics = {"models": models, "rotation_kind": kind, "rotations": rot_diag,
+    models = {"mass_center": mc_model, "rotations": {n: r["model"] for n, r in rot_diag.items()}}
+    diagnostics = {"models": models, "rotation_kind": kind, "rotations": rot_diag, "mass_center_reason": mc_why,
                    "mass_center_setup_seconds": mc_seconds,
                    "setup_seconds": mc_seconds + sum(r["setup_seconds"] for r in rot_diag.values())}
     method_text = "split: " + mc.method + "; " + ", ".join(f"{n}={r.method}" for n, r in rots.items())
     return ConfigurationSolution(config=config, a=a, b=b, mass_center=mc, rotations=rots, method=method_text,
-                                 invariants=_first_integrals(config, a, mc, Qa, wa), diagnostics=diagnostics)
+                                 invariants=_first_integrals(config, a, mc, Qa, wa), diagnostics=diagnostics,
+                                 constraint=constraint)

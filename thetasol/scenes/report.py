@@ -4,7 +4,9 @@
 effective bodies, the model of each part, and the exact parts against numerical references
 that do not use them, each with its max deviation, a stated tolerance and timings:
 
-* the closed-form mass centre against DOP853 at rtol 1e-13 (tolerance 1e-9 times the scale);
+* the closed-form mass centre against DOP853 at rtol 1e-13 (tolerance 1e-9 times the scale); on
+  the sphere of a ``[constraint]`` (Theorem 3) Neumann's equation
+  ``qddot = -a q + lambda q``, ``lambda = (q.aq - |qdot|^2) / |q|^2``, and ``|q| = R`` along the split;
 * each closed-form rotation against :func:`thetasol.integrate_rotation` at rtol 1e-13
   (tolerance 1e-8);
 * the whole split against the unsplit multibody system of :mod:`thetasol.integrators.multibody`
@@ -24,6 +26,7 @@ from scipy.integrate import solve_ivp
 
 from thetasol.integrators.multibody import integrate_multibody
 from thetasol.integrators.rotation import integrate_rotation
+from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import invariants
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.scenes.format import Scene
@@ -70,11 +73,17 @@ def _fmt(x) -> str:
     return np.array2string(x, precision=6, suppress_small=True, floatmode="maxprec", separator=", ")
 
 
-def _mass_center_numerical(a, b, q0, v0, t) -> tuple[np.ndarray, np.ndarray]:
+def _mass_center_numerical(a, b, q0, v0, t, constraint: Sphere | None = None) -> tuple[np.ndarray, np.ndarray]:
     def rhs(_t, y):
         return np.concatenate([y[3:], -(a @ y[:3] + 0.5 * b)])
 
-    sol = solve_ivp(rhs, (0.0, float(t[-1])), np.concatenate([q0, v0]), t_eval=t, method="DOP853",
+    def rhs_sphere(_t, y):
+        q, v = y[:3], y[3:]
+        aq = a @ q
+        return np.concatenate([v, -aq + (q @ aq - v @ v) / (q @ q) * q])
+
+    sol = solve_ivp(rhs if constraint is None else rhs_sphere, (0.0, float(t[-1])), np.concatenate([q0, v0]),
+                    t_eval=t, method="DOP853",
                     rtol=1e-13, atol=1e-15)
     if not sol.success:
         raise RuntimeError(f"mass-centre reference failed: {sol.message}")
@@ -87,6 +96,9 @@ def _describe_scene(scene: Scene, say: _Text) -> None:
     viol = max((v.relative for v in cfg.violations()), default=0.0)
     say(f"{len(cfg)} bodies, root {cfg.root!r}, C^{cfg.depth}-central (max relative joint offset {viol:.2g}), "
         f"total mass {cfg.mass:.6g}" + ("; joints shifted to central positions" if scene.solver.get("make_central") else ""))
+    if scene.constraint is not None:
+        say(f"constraint: the system mass centre on the sphere |q| = {scene.constraint.radius:g} about the origin "
+            "(Theorem 3, Neumann's problem)")
     say(f"output: {t.size} times in [{t[0]:g}, {t[-1]:g}]")
     say()
     say("effective bodies (2.15), (3.7), in each body's frame:")
@@ -99,11 +111,16 @@ def _describe_scene(scene: Scene, say: _Text) -> None:
 
 
 def _describe_models(sol: ConfigurationSolution, say: _Text) -> None:
-    modes = sol.mass_center.describe()
     say("models:")
-    say(f"  mass centre (3.2): closed form, {modes[0]}")
-    for line in modes[1:]:
-        say(f"                                  {line}")
+    if sol.constraint is not None:
+        say(f"  mass centre (6.1)-(6.2): {sol.diagnostics['models']['mass_center']}")
+        if sol.diagnostics["mass_center_reason"]:
+            say(f"    (no closed form: {sol.diagnostics['mass_center_reason']})")
+    else:
+        modes = sol.mass_center.describe()
+        say(f"  mass centre (3.2): closed form, {modes[0]}")
+        for line in modes[1:]:
+            say(f"                                  {line}")
     rot = sol.diagnostics["rotations"]
     for n, r in rot.items():
         say(f"  rotation of {n}: {r['model']}")
@@ -116,12 +133,18 @@ def _reference_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectori
     """The closed-form mass centre against DOP853, each closed-form rotation against integrate_rotation."""
     t = scene.t
     start = time.perf_counter()
-    qn, vn = _mass_center_numerical(scene.a, scene.b, scene.q0, scene.v0, t)
+    qn, vn = _mass_center_numerical(scene.a, scene.b, scene.q0, scene.v0, t, scene.constraint)
     ref_seconds = time.perf_counter() - start
     scale = 1.0 + float(np.max(np.abs(qn))) + float(np.max(np.abs(vn)))
     dev = max(float(np.max(np.abs(qn - traj.mass_center))), float(np.max(np.abs(vn - traj.mass_center_velocity))))
-    checks = [Check("mass centre: closed form vs DOP853 (rtol 1e-13)", dev, 1e-9 * scale,
+    kind = "numerical fallback" if sol.diagnostics.get("mass_center_reason") else "closed form"
+    checks = [Check(f"mass centre: {kind} vs DOP853 (rtol 1e-13)", dev, 1e-9 * scale,
                     f"{traj.info['mass_center_seconds'] * 1e3:.2f} ms vs {ref_seconds * 1e3:.1f} ms")]
+    if scene.constraint is not None:
+        R = scene.constraint.radius
+        gap = float(np.max(np.abs(scene.constraint.residual(traj.mass_center)))) / R
+        # the models put the point on the unit sphere to rounding: measured 5.6e-16 (tests/test_constrained_scene.py)
+        checks.append(Check(f"mass centre on |q| = {R:g}: max ||q| - R| / R", gap, 1e-13, "-"))
     for i, n in enumerate(traj.names):
         r = traj.info["rotations"][n]
         if not r["closed_form"]:
@@ -160,7 +183,7 @@ def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say
     say()
     say(f"the split against the unsplit multibody system (maximal coordinates, KKT, t <= {t_end:g}):")
     mb = integrate_multibody(scene.config, scene.a, scene.b, scene.q0, scene.v0, scene.Q0, scene.omega0, t[sel],
-                             rtol=s.get("check_rtol", 1e-12))
+                             rtol=s.get("check_rtol", 1e-12), constraint=scene.constraint)
     sub = Trajectories(t=t[sel], names=traj.names, position=traj.position[:, sel],
                        velocity=traj.velocity[:, sel], attitude=traj.attitude[:, sel], omega=traj.omega[:, sel],
                        mass_center=traj.mass_center[sel], mass_center_velocity=traj.mass_center_velocity[sel])
@@ -171,7 +194,8 @@ def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say
     tol = 10.0 * s.get("check_rtol", 1e-12) * (1.0 + t_end) * size
     say(f"  positions {dv['position']:.2e}, velocities {dv['velocity']:.2e}, attitudes {dv['attitude']:.2e}, "
         f"angular velocities {dv['omega']:.2e}")
-    say(f"  multibody: {mb.info['nfev']} right-hand sides, max joint gap {mb.info['constraint_residual']:.1e}")
+    say(f"  multibody: {mb.info['nfev']} right-hand sides, max joint gap {mb.info['constraint_residual']:.1e}"
+        + (f", max sphere gap ||q| - R| {mb.info['sphere_residual']:.1e}" if scene.constraint is not None else ""))
     check = Check("split vs unsplit multibody: positions and attitudes", max(dv["position"], dv["attitude"]), tol,
                   f"split {split_seconds:.2f} s vs multibody {mb.info['seconds']:.2f} s")
     say(check.line())

@@ -1,0 +1,82 @@
+"""Constraints on the system mass centre: the sphere of Section 6 (6.1) and Theorem 3.
+
+:class:`Sphere` holds the mass centre ``q`` of a whole configuration on ``|q| = R`` about the
+origin of the potential (physically: a massless rod of length ``R`` from a spherical joint at the
+origin to the mass centre).  Its force ``mu q`` acts on the total mass; spread over the bodies in
+proportion to their masses it is a uniform acceleration field, which exerts no torque about any
+mass centre, so the rotations of the effective bodies are those of Theorem 2 and only the mass
+centre changes: per unit mass it obeys C. Neumann's problem ``qddot = -a q + lambda q`` in
+``phi = 1/2 q^T a q`` (6.2).  That needs ``b = 0``: a linear term would make the mass centre's
+problem a different one (not Neumann's), so :meth:`Sphere.check` refuses it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from thetasol.core import validate as V
+
+__all__ = ["Sphere", "SPHERE_TOL"]
+
+#: Relative tolerance on ``|q0| = R`` and on ``q0 . v0 = 0`` (the initial state must satisfy the constraint).
+SPHERE_TOL = 1e-12
+
+
+@dataclass(frozen=True)
+class Sphere:
+    """The system mass centre on the sphere ``|q| = radius`` about the origin (6.1), Theorem 3.
+
+    Parameters
+    ----------
+    radius : float
+        Positive and finite (the length of the rod).
+
+    Examples
+    --------
+    >>> Sphere(2.0).radius
+    2.0
+    """
+
+    radius: float
+
+    def __post_init__(self) -> None:
+        r = self.radius
+        if isinstance(r, bool) or not isinstance(r, (int, float, np.floating, np.integer)):
+            raise ValueError(f"sphere radius must be a number, got {r!r}")
+        r = float(r)
+        if not np.isfinite(r) or r <= 0:
+            raise ValueError(f"sphere radius must be positive and finite, got {r!r}")
+        object.__setattr__(self, "radius", r)
+
+    def check(self, b: ArrayLike, q0: ArrayLike, v0: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(b, q0, v0)`` validated for this constraint.
+
+        Raises
+        ------
+        ValueError
+            ``b != 0`` (Neumann's problem has the homogeneous potential (6.2) only), ``|q0|`` not
+            ``radius`` to ``SPHERE_TOL`` relative, or ``v0`` not tangent (``|q0.v0| >
+            SPHERE_TOL |q0| |v0|``).
+        """
+        b = V.vector3(b, "b")
+        q0 = V.vector3(q0, "q0")
+        v0 = V.vector3(v0, "v0")
+        if np.any(b != 0):
+            raise ValueError(f"b must be 0 with the sphere constraint (Theorem 3 needs the homogeneous "
+                             f"potential 1/2 q^T a q (6.2)), got b = {b.tolist()}")
+        R = self.radius
+        rq = float(np.linalg.norm(q0))
+        if abs(rq - R) > SPHERE_TOL * R:
+            raise ValueError(f"q0 must be on the sphere |q| = {R:g}: |q0| = {rq!r}, relative offset "
+                             f"{(rq - R) / R:.3g} (tolerance {SPHERE_TOL:g})")
+        vn = float(np.linalg.norm(v0))
+        if abs(q0 @ v0) > SPHERE_TOL * rq * vn:
+            raise ValueError(f"v0 must be tangent to the sphere |q| = {R:g}: q0.v0 / (|q0| |v0|) = "
+                             f"{(q0 @ v0) / (rq * vn):.3g} (tolerance {SPHERE_TOL:g})")
+        return b, q0, v0
+
+    def residual(self, q: ArrayLike) -> np.ndarray:
+        """``|q| - radius`` over the last axis of ``q``."""
+        return np.linalg.norm(np.asarray(q, dtype=float), axis=-1) - self.radius
