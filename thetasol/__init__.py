@@ -35,6 +35,7 @@ _group("thetasol.solutions.mass_center", "MassCenterMotion", "mass_center")
 _group("thetasol.mechanics.bodies", "Body")
 _group("thetasol.mechanics.configuration", "Configuration", "Joint")
 _group("thetasol.mechanics.trajectories", "Trajectories")
+_group("thetasol.mechanics.constraints", "Sphere")
 _group("thetasol.mechanics.equations", "invariants", "spectral_coefficients", "torque")
 _group("thetasol.mechanics.heavy_top", "heavy_top_invariants", "kovalevskaya_integral")
 _group("thetasol.mechanics.gravity_gradient", "gravity_gradient_stability", "GravityGradientStability",
@@ -44,6 +45,7 @@ _group("thetasol.integrators.rotation", "integrate_rotation")
 _group("thetasol.integrators.multibody", "integrate_multibody")
 _group("thetasol.integrators.orbiting_rotation", "integrate_orbiting_rotation")
 _group("thetasol.integrators.heavy_top", "integrate_heavy_top")
+_group("thetasol.integrators.neumann", "integrate_neumann")
 # scenes: the split pipeline of a whole configuration
 _group("thetasol.scenes.format", "Scene", "load_scene", "demo_scene_path")
 _group("thetasol.scenes.pipeline", "solve_configuration", "ConfigurationSolution")
@@ -75,10 +77,12 @@ if TYPE_CHECKING:
     from thetasol.curves.spectral import SpectralCurve, spectral_curve
     from thetasol.integrators.heavy_top import integrate_heavy_top
     from thetasol.integrators.multibody import integrate_multibody
+    from thetasol.integrators.neumann import integrate_neumann
     from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
     from thetasol.integrators.rotation import integrate_rotation
     from thetasol.mechanics.bodies import Body
     from thetasol.mechanics.configuration import Configuration, Joint
+    from thetasol.mechanics.constraints import Sphere
     from thetasol.mechanics.equations import invariants, spectral_coefficients, torque
     from thetasol.mechanics.gravity_gradient import (
         GravityGradientStability,
