@@ -8,8 +8,8 @@ bodies, no Neumann formulas).  The unsplit side is checked on its own: energy su
 conserved (the rod does no work), joints and sphere held, and its attitudes equal to those of the
 same system without the rod (Theorem 3 seen without the split).
 """
-from pathlib import Path
 import textwrap
+from pathlib import Path
 
 import numpy as np
 import pytest
