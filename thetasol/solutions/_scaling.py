@@ -105,8 +105,9 @@ class ScaledRotation(RotationSolution):
 
     ``omega(t) = omega'(t / T) / T`` and ``Q(t) = Q'(t / T)`` with ``T = scales.time_unit`` (a power of
     two: both maps are exact).  ``J``, ``a``, ``Q0``, ``omega0`` and ``invariants`` are the user's;
-    ``method`` is the inner solution's; ``diagnostics`` holds the scales and the inner solution's
-    invariants and diagnostics (times there in units of ``T``, rates in units of ``1 / T``).
+    ``method`` is the inner solution's; ``diagnostics`` holds the inner solution's diagnostics in the
+    user's units, the scales, and the inner invariants (times there in units of ``T``, rates in
+    units of ``1 / T``).
     """
 
     inner: RotationSolution = field(default=None, repr=False)
@@ -136,21 +137,27 @@ _TIMES = ("period",)
 _RATES = ("precession_rate", "pendulum_nu")
 
 
+def _in_user_units(entries: dict, sc: Scales) -> dict:
+    """A branch's ``invariants`` or ``diagnostics`` with times, rates and ``k`` in the user's units."""
+    T = sc.time_unit
+    out = dict(entries)
+    for key in _TIMES:
+        if key in out:
+            out[key] = out[key] * T
+    for key in _RATES:
+        if key in out:
+            out[key] = out[key] / T
+    if "k" in out:
+        if sc.isotropic == 0.0:
+            out["k"] = out["k"] / T**2
+        else:
+            del out["k"]                         # shifted by the isotropic part: see dimensionless_invariants
+    return out
+
+
 def _user_invariants(inner: RotationSolution, J, a, Q0, omega0, sc: Scales) -> dict:
     """The inner solution's entries in the user's units; the first integrals from the user's data."""
-    T = sc.time_unit
-    inv = dict(inner.invariants)
-    for key in _TIMES:
-        if key in inv:
-            inv[key] = inv[key] * T
-    for key in _RATES:
-        if key in inv:
-            inv[key] = inv[key] / T
-    if "k" in inv:
-        if sc.isotropic == 0.0:
-            inv["k"] = inv["k"] / T**2
-        else:
-            del inv["k"]                         # shifted by the isotropic part: see diagnostics
+    inv = _in_user_units(inner.invariants, sc)
     first = _invariants(J, a, Q0, omega0)
     inv.update({k: (float(v) if np.ndim(v) == 0 else v) for k, v in first.items()})
     return inv
@@ -159,7 +166,7 @@ def _user_invariants(inner: RotationSolution, J, a, Q0, omega0, sc: Scales) -> d
 def scaled_solution(inner: RotationSolution, J, a, Q0, omega0, sc: Scales) -> ScaledRotation:
     """Wrap ``inner`` (the solution for :func:`dimensionless_data`) in the user's units."""
     inv = _user_invariants(inner, J, a, Q0, omega0, sc)
-    diag = {"scales": sc.as_dict(), "dimensionless_invariants": inner.invariants,
-            "dimensionless_diagnostics": inner.diagnostics}
+    diag = _in_user_units(inner.diagnostics, sc)
+    diag.update(scales=sc.as_dict(), dimensionless_invariants=inner.invariants)
     return ScaledRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=inner.method, invariants=inv,
                           dps=inner.dps, diagnostics=diag, inner=inner, scales=sc)
