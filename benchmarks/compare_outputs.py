@@ -438,7 +438,7 @@ def group_curves(rec, root):
 
 
 def group_theta(rec, root):
-    """tests/data/theta (the reported tau, z) and a few random taus of genus 1-4 (test_theta.random_tau)."""
+    """tests/data/theta (a tau with a tie of the Siegel reduction, z on its theta divisor) and a few random taus of genus 1-4 (test_theta.random_tau)."""
     tau = np.load(root / "tests" / "data" / "theta" / "theta_bug_tau.npy")
     z = np.load(root / "tests" / "data" / "theta" / "theta_bug_z.npy")
     Z = np.array([z, z + np.array([0.1, -0.2 + 0.3j, 0.05j]), 0.5 * z, z.conj(), np.zeros(3)])
