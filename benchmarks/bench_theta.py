@@ -161,8 +161,8 @@ def main():
                         f"| {r['setup'] * 1e3:.0f} |")
                 lines.append(line)
                 print(line, flush=True)
-    lines += ["", "Trajectory pattern of the theta rotation (ill-conditioned tau, 1000 times x 20 shifts = 20000 points, "
-              "one characteristic, exponent-separated output):", "", "| g | values ms | values + gradients ms |", "|---|---|---|"]
+    lines += ["", "Trajectory pattern of the theta rotation (ill-conditioned tau, 1000 times x 20 shifts = 20000 "
+              "points, one characteristic, exponent-separated output):", "", "| g | values ms | values + gradients ms |", "|---|---|---|"]
     for g in (3, 4):
         tv, tj = heavy_use_case(g)
         lines.append(f"| {g} | {tv * 1e3:.0f} | {tj * 1e3:.0f} |")

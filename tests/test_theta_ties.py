@@ -187,7 +187,7 @@ def compare_with_mpmath(tau, zs, th, tol_v=1e-12, tol_d=1e-10, w=None):
 # ----------------------------------------------------------------------------------------
 # a tie on the theta divisor
 # ----------------------------------------------------------------------------------------
-def test_reported_case_on_theta_divisor():
+def test_tie_on_theta_divisor():
     """A z on the theta divisor of a tau with Re tau_23 = +-1/2 (a tie of the shift step).  A shift
     B built from tau_23 and tau_32 rounded differently is not symmetric, and theta there comes out
     O(1) (2.9957+4.9373j) instead of 0.  Measured against mpmath (30 digits), relative to exp(e):
