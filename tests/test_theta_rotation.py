@@ -465,8 +465,8 @@ def test_random_symmetric_bodies_against_dop853(seed):
 def test_principal_axes_along_eigenvectors_of_a(turn):
     """J and a diagonal, Q0 = 1 or a turn about one axis: some e_k is an eigenvector of u, the zeros of
     v_k sit at places over E = 0 with no w of their own.  These are the README's example data: the
-    set-up must handle those zeros, not refuse the data (ClosedFormUnavailable).  Measured against heyoka 80-bit at
-    t <= 4002: 5.3e-13, 6.3e-13, 7.4e-12."""
+    set-up must handle those zeros, not refuse the data (ClosedFormUnavailable).  Measured against
+    heyoka 80-bit at t <= 4002: 5.3e-13, 6.3e-13, 7.4e-12."""
     from thetasol.core.so3 import rotation_about
 
     J, a, w0 = [0.6, 1.0, 1.7], np.diag([-1.0, 0.4, 1.5]), np.array([0.5, -0.8, 0.6])
