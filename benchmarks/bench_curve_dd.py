@@ -1,11 +1,12 @@
-"""Double-double against mpmath for the curve quadrature's critical intervals (issue 6, set-up time).
+"""Double-double against mpmath for the curve quadrature's critical intervals (set-up time of the theta rotation).
 
-Run:  OPENBLAS_NUM_THREADS=1 /work/devenv/bin/python benchmarks/bench_curve_dd.py [case ...]
+Run:  OPENBLAS_NUM_THREADS=1 python benchmarks/bench_curve_dd.py [case ...]   (a Python with thetasol's
+dependencies and mpmath)
 
 For every case of tests/data/rotation/refs.json with critical intervals (intervals whose float64
 Gauss-Legendre sum is not accurate enough): the time of re-summing them in double-double
 (thetasol.curves._dd, the default) and in mpmath at 20 digits (thetasol.curves._mp.interval_mp, the
-previous fallback), measured side by side in one run, the error of each against 30-digit mpmath sums
+alternative), measured side by side in one run, the error of each against 30-digit mpmath sums
 of the same intervals (max |error| / max |interval sum| over all intervals, tracks and
 differentials, before rounding to complex128), and the whole set-up time of solve_rotation with each
 fallback.  Times are the best of 3 (the machine is shared).

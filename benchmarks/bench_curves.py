@@ -1,13 +1,14 @@
 """Speed against accuracy of thetasol's curve engine, with Sage's RiemannSurface side by side.
 
-Run:  /work/devenv/bin/python benchmarks/bench_curves.py [--quick]
+Run:  python benchmarks/bench_curves.py [--quick] [--sage-python PATH]
 
 For every curve: the time of thetasol (curve + period matrix; and the "full" pipeline: curve,
 periods, tau, 12 Abel images, Riemann constant), its lattice distance to an independent 212-bit
 reference (Sage at 212 bits, tests/data/curves, or thetasol's own 30-digit mpmath path where Sage has no
 reference), the dps=30 path's time and accuracy, and Sage's RiemannSurface time and accuracy at 53
-bits measured in the same run (a subprocess of the Sage Python; the column is skipped when
-/work/sagevenv is absent).  Times are the best of several runs (the machine is shared).
+bits measured in the same run (a subprocess of a Python with Sage (passagemath) installed, given by
+--sage-python PATH or the environment variable THETASOL_SAGE_PYTHON; without either the Sage columns
+are skipped).  Times are the best of several runs (the machine is shared).
 """
 from __future__ import annotations
 
@@ -30,7 +31,6 @@ from thetasol.core.so3 import hat  # noqa: E402
 from thetasol.curves.plane_curve import PlaneCurve  # noqa: E402
 from thetasol.curves.spectral import spectral_curve  # noqa: E402
 
-SAGE = "/work/sagevenv/bin/python"
 DATA = os.path.join(ROOT, "tests", "data", "curves")
 x, y = sp.symbols("x y")
 
@@ -130,7 +130,7 @@ def full_pipeline(C):
     C.riemann_constant()
 
 
-def main(quick=False):
+def main(quick=False, sage_python=None):
     reps = 2 if quick else 5
     cases = []
     for name, label in [("hyp_x5m1", "hyperelliptic g=2, y^2 = x^5 - 1"),
@@ -187,11 +187,11 @@ def main(quick=False):
                                 for g in (c["diffs"] or C.holomorphic_differentials())]))
         print(f"  done {c['label']}", file=sys.stderr, flush=True)
     # Sage, same run
-    have_sage = os.path.exists(SAGE)
+    have_sage = sage_python is not None
     if have_sage:
         job = [{"f": r["sage_f"], "reps": 1 if quick else 2} for r in rows]
         try:
-            res = subprocess.run([SAGE, "-c", SAGE_WORKER], input=json.dumps(job), capture_output=True,
+            res = subprocess.run([sage_python, "-c", SAGE_WORKER], input=json.dumps(job), capture_output=True,
                                  text=True, timeout=3600)
             sage = json.loads(res.stdout.strip().splitlines()[-1])
         except Exception as exc:  # pragma: no cover - environment dependent
@@ -220,5 +220,19 @@ def main(quick=False):
     print("\nfull pipeline = curve + periods + tau + 12 Abel images + Riemann constant.")
 
 
+def _sage_python(argv):
+    """The Sage Python from --sage-python PATH or THETASOL_SAGE_PYTHON; None if neither is given."""
+    path = os.environ.get("THETASOL_SAGE_PYTHON")
+    if "--sage-python" in argv:
+        i = argv.index("--sage-python")
+        if i + 1 >= len(argv):
+            sys.exit("--sage-python needs the path of a Python with Sage (passagemath) installed")
+        path = argv[i + 1]
+    if path is not None and not os.path.exists(path):
+        sys.exit(f"no Sage Python at {path!r} (--sage-python / THETASOL_SAGE_PYTHON): give the path of a "
+                 "Python with Sage (passagemath) installed, or neither to skip the Sage columns")
+    return path
+
+
 if __name__ == "__main__":
-    main(quick="--quick" in sys.argv)
+    main(quick="--quick" in sys.argv, sage_python=_sage_python(sys.argv[1:]))

@@ -111,7 +111,7 @@ def bench_case(g, kind, npts, nref, nflint, reps, tols):
 
 
 def heavy_use_case(g, T=1000, S=20):
-    """Issue-6 pattern: z(t) + c_j for T times and S shifts, values and gradients."""
+    """The theta rotation's pattern: z(t) + c_j for T times and S shifts, values and gradients."""
     tau = make_tau("ill", g, 3)
     rng = np.random.default_rng(4)
     th = RiemannTheta(tau)
@@ -161,8 +161,8 @@ def main():
                         f"| {r['setup'] * 1e3:.0f} |")
                 lines.append(line)
                 print(line, flush=True)
-    lines += ["", "Trajectory pattern of issue 6 (ill-conditioned tau, 1000 times x 20 shifts = 20000 points, "
-              "one characteristic, exponent-separated output):", "", "| g | values ms | values + gradients ms |", "|---|---|---|"]
+    lines += ["", "Trajectory pattern of the theta rotation (ill-conditioned tau, 1000 times x 20 shifts = 20000 "
+              "points, one characteristic, exponent-separated output):", "", "| g | values ms | values + gradients ms |", "|---|---|---|"]
     for g in (3, 4):
         tv, tj = heavy_use_case(g)
         lines.append(f"| {g} | {tv * 1e3:.0f} | {tj * 1e3:.0f} |")

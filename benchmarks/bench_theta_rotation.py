@@ -1,4 +1,4 @@
-"""Speed against error: the theta-function rotation (issue 6) against numerical integrators.
+"""Speed against error: the theta-function rotation in a quadratic potential against numerical integrators.
 
 Everything is measured in one run on this machine:
 

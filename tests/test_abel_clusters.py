@@ -1,4 +1,4 @@
-"""Abel map next to clustered branch points (motion near a relative equilibrium, issue 6).
+"""Abel map next to clustered branch points (the theta rotation near a relative equilibrium).
 
 The spectral curve (4.12) of a body near a relative equilibrium has its 12 branch points in tight
 pairs (relative separation 2e-4..4e-3).  Exact identities that must hold to rounding there:
@@ -10,7 +10,10 @@ pairs (relative separation 2e-4..4e-3).  Exact identities that must hold to roun
 * the float periods agree with the engine's 30-digit path.
 
 The data are those of the solver for the worst random near-equilibrium case found (a body within
-1e-3 of a relative equilibrium, |omega0| ~ 1e-3), in the principal frame.  Before the fix these were off by 3.5e-10, 5e-11 and 5.8e-10.
+1e-3 of a relative equilibrium, |omega0| ~ 1e-3), in the principal frame.  An error in the handling
+of the clusters shows in these identities as 5e-11 .. 6e-10; measured (lattice distance, bound 1e-13):
+alpha-independence 3.3e-14 (3.6e-14 with the solver's polished float poles), Abel-Jacobi at the
+branch points 2.0e-14, segments next to a pair against mpmath 3.9e-15; periods 1.2e-16 relative.
 """
 import mpmath
 import numpy as np
@@ -197,7 +200,7 @@ def test_points_next_to_a_pair_against_mpmath_segments(curve):
 
 def test_polished_float_poles_are_the_mpmath_poles_and_alpha_independent(curve):
     """The solver's path: np.roots poles polished by polish_eigenvector_poles.  Without the polish the
-    spread of A(D_alpha) was 9.5e-13 here (np.roots leaves E a few ulps off next to the pairs)."""
+    spread of A(D_alpha) is 9.5e-13 here (np.roots leaves E a few ulps off next to the pairs)."""
     tau = curve.riemann_matrix()
     Jp = np.sqrt(curve.J2)
     rng = np.random.default_rng(11)

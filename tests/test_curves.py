@@ -250,7 +250,7 @@ def test_dps_path_spectral_30_digits():
 def test_edge_integrals_summed_in_double_double():
     """The edge integrals that periods and Abel potentials are summed from come out of double-double
     sums: each within 6e-16 of itself against 22-digit mpmath on the same edges (measured 3.8e-16,
-    the quadrature's own error; the float64 interval sums were 1.9e-15 off on this spectral curve)."""
+    the quadrature's own error; float64 interval sums are 1.9e-15 off on this spectral curve)."""
     from thetasol.curves._mp import integrate_mp
     from thetasol.curves._quad import Piece, Tracker
 

@@ -119,7 +119,7 @@ def test_heyoka_float64_reference_conserves_to_round_off():
     for key in ("H", "I2", "I3"):
         assert rel_drift(inv[key]) < 1e-13, key
     wd, Qd = integrate_rotation(J, a, Q0, w0, t, rtol=1e-12)
-    assert np.max(np.abs(Qd - Q)) < 1e-9 and np.max(np.abs(wd - w)) < 1e-9  # the t <= 100 figure
+    assert np.max(np.abs(Qd - Q)) < 1e-9 and np.max(np.abs(wd - w)) < 1e-9  # the acceptance bound for t <= 100
 
 
 @pytest.mark.parametrize("dtype", ["ldbl", "f128"])

@@ -35,9 +35,10 @@ def gyrostats(draw):
     return J, N, w0
 
 
-# found by the explore profile: the energy off by 6.9e-11 of its scale (W&W's inversion based at
-# a general point has common zeros of numerator and denominator on this orbit); with these seeds
-# the random times fall next to them (errors 5e-13 and 4e-12 before the fix)
+# found by the explore profile: W&W's inversion based at a general point has common zeros of
+# numerator and denominator on this orbit (evaluated as written, the energy is 6.9e-11 of its scale
+# off); with these seeds the random times fall next to them (5e-13 and 4e-12 off as written).
+# Measured: energy 1.5 and 0.5 eps, |h| 3 and 1 eps
 _FAILURE = (np.array([4.5, 2.0, 3.5]), np.array([0.0, -1.75, 1.421875]), np.array([0.0, 3.0, 0.0]))
 
 
@@ -152,8 +153,8 @@ def _solve(J, N, Q0, w0):
 
 
 # the first two were found on singular level sets: a data point next to the saddle (the tangent
-# line of the pencil's anchor passed close to it: 2.4e-11 with the anchor there), a turning point
-# of the pencil next to the saddle (a residual coefficient cancelling there: 1e-12)
+# line of the pencil's anchor passes close to it: 2.4e-11 with the anchor there), a turning point
+# of the pencil next to the saddle (a residual coefficient cancels there: 1e-12)
 _HARD = [
     (np.array([1.5422519500024736, 1.737423829414948, 1.0215431193207938]),
      np.array([-5.829591040703852, -3.4742576190041543, -4.5236231145773225]),
@@ -162,8 +163,8 @@ _HARD = [
      np.array([-0.8480358053942576, 0.6699161416834842, -1.363954913923379]),
      np.array([-0.18837914651566254, -2.0416296115943746, -0.08081750545349492])),
     (np.array([0.75, 0.25, 1.25]), np.array([0.0, 0.0, 2.0]), np.array([0.0, 2.0, 1.0])),  # on it
-    # mc = 5e-17: the mpmath algebra needs digits growing like log(1/mc) (at 34 digits the
-    # re-anchored curve's mc was off by 3e-12 and the phase by 1e-13 after 0.08 periods)
+    # mc = 5e-17: the mpmath algebra needs digits growing like log(1/mc) (at a fixed 34 digits the
+    # re-anchored curve's mc is off by 3e-12 and the phase by 1e-13 after 0.08 periods)
     (np.array([3.30182274, 1.9, 1.80965273]), np.array([0.0, 1e-05, 0.0]),
      np.array([9.18896998e-10, -1.01638667e-05, 4.84024988e-10])),
 ]

@@ -1,4 +1,4 @@
-"""Theta-function rotation in a quadratic potential (issue 6): every stage and the whole solution.
+"""Theta-function rotation in a quadratic potential: every stage and the whole solution.
 
 References nobody here wrote: long extended-precision Taylor integrations (heyoka, 80-bit, tol
 1e-19, checked against quadruple precision; tests/data/rotation/make_refs.py), scipy's DOP853, and
@@ -17,10 +17,13 @@ from thetasol.solutions.theta_rotation import ThetaRotation
 from thetasol.solutions.theta_rotation.lattice import lattice_coords as _lattice_coords
 
 REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
-# Every reference case passes.  The near-unstable-equilibrium case once "drifted" to 1.3e-9 against
-# references integrated with the float64 inverse of the float64 inertia, a body one ulp away that is
-# not integrable; against the corrected quadruple-precision references it is 6.1e-12.  The symmetric
-# fast spin drifted (4.2e-9) until the exponents' difference at the node became exact.
+# Measured (max over the six times, largest at t = 4002): 7.4e-15 (near the stable equilibrium) to
+# 7.8e-13 on most cases; fast spin 4.0e-11, symmetric fast spin 2.7e-11, near the unstable equilibrium
+# 1.2e-11 (its reference is itself good to 4e-11 there, make_refs.py).  The references form the inverse
+# inertia in quadruple precision: the float64 inverse of the float64 inertia is a body one ulp away, not
+# integrable, and moves the near-unstable case by ~1e-9.  The symmetric fast spin needs the exact
+# exponents' difference at the node (test_node_exponent_gap_is_exact_and_used): with the fitted one it
+# drifts to 4.2e-9.
 
 
 def _case(name):
@@ -30,7 +33,7 @@ def _case(name):
 
 @pytest.mark.parametrize("name", [n for n in REFS])
 def test_against_long_high_accuracy_integration(name):
-    """Max error in omega and Q <= 1e-9 at t in {0.7, 3.1, 17.3, 102, 997, 4002} (issue 6)."""
+    """Max error in omega and Q <= 1e-9 at t in {0.7, 3.1, 17.3, 102, 997, 4002}."""
     J, a, Q0, w0, r = _case(name)
     sol = solve_rotation(J, a, Q0, w0)
     assert isinstance(sol, ThetaRotation)
@@ -216,7 +219,7 @@ def test_splitting_integrator_agrees():
 
 
 def test_spectral_coefficients_are_exact_for_the_floats_given():
-    # near an equilibrium |M|^2 ~ 1e-6 rides on O(1) terms: float64 coefficients lost it (U 3e-11 off)
+    # near an equilibrium |M|^2 ~ 1e-6 rides on O(1) terms: float64 coefficients lose it (U 3e-11 off)
     from fractions import Fraction
 
     import sympy as sp
@@ -267,9 +270,9 @@ def test_flow_velocity_divided_difference_equals_the_sum_over_the_places():
 
 def test_nearly_symmetric_bodies_down_to_the_refusal_limit():
     # J2 / J1 = 1 + 1e-3 .. 1 + 2e-7 on these data: accurate and silent (measured 8.7e-12 .. 8e-13 at
-    # t = 997 against heyoka; before the engine's cluster fix 1 + 1e-4 lost 1e-7 and 1 + 1e-5, 1 + 1e-6
-    # were refused).  A relative gap below 1e-7 (of max J) is refused at once: from 3e-8 down random
-    # bodies stopped in the set-up or ran for minutes.
+    # t = 997 against heyoka).  The small gap puts branch points in tight clusters: an error in the
+    # curve engine's cluster handling shows here as ~1e-7 or a refusal.  A relative gap below 1e-7 (of
+    # max J) is refused at once: from 3e-8 down random bodies stop in the set-up or run for minutes.
     import warnings
 
     from thetasol.core.so3 import rodrigues
@@ -293,10 +296,10 @@ def test_nearly_symmetric_bodies_down_to_the_refusal_limit():
 
 def test_nearly_symmetric_body_with_far_cell_vertices_against_dop853():
     """J gap 2.3e-7 relative (a random body of the hidden-case sweep, seed 7): the cells of the critical
-    values next to E = +-1.2 have vertices at |E| ~ 1e7, and the line from there ended at a + (b - a),
-    ~eps |a| = 2e-9 off the circle's start b next to a branch point: y was 2e-7 off and the set-up
-    stopped ('starting value ... is not a root').  Lines now end exactly at b: 2.8e-12 at t = 4002
-    against heyoka 80-bit."""
+    values next to E = +-1.2 have vertices at |E| ~ 1e7.  A line from there computed as a + (b - a) ends
+    ~eps |a| = 2e-9 off the circle's start b next to a branch point, where y is then 2e-7 off and the
+    set-up stops ('starting value ... is not a root'); lines end exactly at b.  Measured 2.8e-12 at
+    t = 4002 against heyoka 80-bit."""
     J = np.array([0.44747052264601117, 0.44747052264601117 * (1 + 1e-6), 1.940866823715262])
     a = np.array([[-1.1140671431510563, 0.5773031540758372, 0.11239990014646231],
                   [0.5773031540758372, 0.6530885027011638, -0.18200658236154083],
@@ -324,8 +327,8 @@ def test_symmetric_body_with_little_axial_spin_is_refused_at_once(monkeypatch):
 
 
 def test_nearly_spherical_symmetric_body_with_small_spin_is_refused_at_once(monkeypatch):
-    """J gap 0.25 %, axial spin 1e-3 relative: branch points at |E| ~ 4.2e4 sqrt|a| / J (the set-up
-    took 4.8 s CPU with the guard lifted; at spin 3e-4, 1.4e5, the curve alone took 114 s): refused
+    """J gap 0.25 %, axial spin 1e-3 relative: branch points at |E| ~ 4.2e4 sqrt|a| / J (with the guard
+    lifted the set-up takes 4.8 s CPU; at spin 3e-4, 1.4e5, the curve alone takes 114 s): refused
     before the curve is built."""
     import thetasol.solutions.theta_rotation.spectral_data as tr
 
@@ -347,12 +350,12 @@ def _small_spin_body(spin):
 
 @pytest.mark.parametrize("spin", [3e-3, 1e-3])
 def test_symmetric_body_with_small_axial_spin_against_heyoka(spin):
-    """Axial spin 1.2e-3 and 4.1e-4 of |omega0| + sqrt|a|, branch points at |E| ~ 750 and 2250.  Before
-    the fixes both stopped in the set-up (a canonical divisor of degree 8: the orders at the node's
-    branches were read off unscaled Laurent coefficients, which grow like spin^-k), and with that
-    fixed but U and the exponent gap from the expansions at the node the second was 1.5e-8 off at
-    t = 4002.  Measured 1.7e-11 and 8.9e-12 against heyoka 80-bit with fitted exponents and float64
-    periods, 1.5e-13 and 2.4e-13 since (the bound was 1e-10)."""
+    """Axial spin 1.2e-3 and 4.1e-4 of |omega0| + sqrt|a|, branch points at |E| ~ 750 and 2250.  The
+    orders of the canonical divisor at the node's branches are read off scaled Laurent coefficients
+    (unscaled ones grow like spin^-k and give a divisor of degree 8: the set-up stops); U and the
+    exponent gap come from the exact relations (from the expansions at the node the second body is
+    1.5e-8 off at t = 4002; with fitted exponents and float64 periods 1.7e-11 and 8.9e-12).  Measured
+    1.4e-13 and 2.5e-13 against heyoka 80-bit."""
     _check_against_heyoka(*_small_spin_body(spin), "theta/symmetric-genus-3", 2e-12)
 
 
@@ -395,9 +398,9 @@ def test_exponents_obey_the_exact_relations(name):
 
 def test_symmetric_rank_one_small_axial_spin_against_heyoka():
     """Rank-one a, axial spin 3.3e-4 of |omega0| + sqrt|a|.  With the exponents fitted from theta
-    derivatives (circle means at the node's branches biased by ~1e-12) the attitude drifted linearly:
-    2.1e-9 at t = 4002 against heyoka 80-bit; with the exact relations 1.6e-11, and with the periods
-    summed in double-double 1.8e-12."""
+    derivatives (circle means at the node's branches biased by ~1e-12) the attitude drifts linearly,
+    2.1e-9 at t = 4002 against heyoka 80-bit; with the exact relations but float64 periods 1.6e-11.
+    Measured (exact relations, periods summed in double-double) 4.0e-12."""
     _check_against_heyoka(*_rank_one_symmetric_body(7.3e-4), "theta/symmetric-nodal-genus-2", 8e-12)
 
 
@@ -405,8 +408,8 @@ def test_node_velocity_closed_form_against_a_contour_integral():
     """sum_j J_j (g_i dE / f_w) / dt at the places over E = infinity (t = 1/E) for a symmetric body with
     axial spin 1e-3: the closed form (Euler-Jacobi) against the t^0 coefficient of the sum over the
     node's two sheets, a function single-valued and holomorphic outside the core branch points (the far
-    pair at |E| ~ 2e3 only swaps the two sheets), integrated on |E| = 3 max|core|.  The FFT expansions
-    at the node's branches lost 5e-12 of it."""
+    pair at |E| ~ 2e3 only swaps the two sheets), integrated on |E| = 3 max|core|.  FFT expansions at
+    the node's branches lose 5e-12 of it."""
     import sympy as sp
 
     from thetasol.curves.spectral import spectral_curve
@@ -461,9 +464,9 @@ def test_random_symmetric_bodies_against_dop853(seed):
 @pytest.mark.parametrize("turn", [None, (2, 0.7), (0, -1.1)])
 def test_principal_axes_along_eigenvectors_of_a(turn):
     """J and a diagonal, Q0 = 1 or a turn about one axis: some e_k is an eigenvector of u, the zeros of
-    v_k sit at places over E = 0 with no w of their own.  From 666a0f1 to 6ef5add these data (the
-    README's example) raised ClosedFormUnavailable.  Measured against heyoka 80-bit at t <= 4002:
-    1.6e-12, 1.4e-12, 9.3e-12."""
+    v_k sit at places over E = 0 with no w of their own.  These are the README's example data: the
+    set-up must handle those zeros, not refuse the data (ClosedFormUnavailable).  Measured against
+    heyoka 80-bit at t <= 4002: 5.3e-13, 6.3e-13, 7.4e-12."""
     from thetasol.core.so3 import rotation_about
 
     J, a, w0 = [0.6, 1.0, 1.7], np.diag([-1.0, 0.4, 1.5]), np.array([0.5, -0.8, 0.6])
@@ -534,8 +537,8 @@ def test_node_branch_eigenvectors_against_mpmath():
 
 def test_rank_one_node_next_to_branch_points_against_dop853():
     """The Cauchy circles around the places over E = 0 are small here (r = 8e-5: every zero of the
-    eigenvector components lies outside the largest admissible radius), where the float64 eigenvectors
-    on the node's branches lost eps / r: 1.9e-11 at t = 17.3 and 3.7e-9 at t = 4002 against heyoka
-    80-bit.  With the node's scaled eigenproblem (and the exact exponents): 1.3e-14 and 1.9e-12.
-    DOP853 at rtol 1e-13 is itself 3.5e-13 off here."""
+    eigenvector components lies outside the largest admissible radius), where plain float64
+    eigenvectors on the node's branches lose eps / r: 1.9e-11 at t = 17.3 and 3.7e-9 at t = 4002
+    against heyoka 80-bit.  With the node's scaled eigenproblem (and the exact exponents) measured
+    1.6e-14 and 1.5e-12.  DOP853 at rtol 1e-13 is itself 3.5e-13 off here."""
     _check_against_dop853(*_NODE_NEAR_BRANCH, "theta/nodal-genus-3", [0.0, 3.1, 17.3], 1e-12)

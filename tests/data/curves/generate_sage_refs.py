@@ -1,6 +1,6 @@
 """Generate the reference period matrices in this directory with Sage (an oracle only).
 
-Run with a Sage (passagemath) Python:  /work/sagevenv/bin/python generate_sage_refs.py [names...]
+Run with a Python that has Sage (passagemath) installed:  python generate_sage_refs.py [names...]
 Each curve is written to <name>.json: the polynomial (exact rationals, variables x, y), the basis of
 differential numerators g (omega = g dx / f_y) Sage used, and the period matrix at ``prec`` bits
 as decimal strings.  thetasol's tests recompute the periods for the same numerators and compare the

@@ -1,8 +1,8 @@
 """Regenerate the long high-accuracy reference trajectories used by the rotation tests.
 
 Each case is integrated with heyoka's Taylor method in quadruple precision (dtype="f128",
-tolerance 1e-25) at the sample times of issue 6, the inverse inertia and m0 = I omega0 formed in
-that precision from the float64 data (integrate_rotation).  The extended-precision run (80-bit,
+tolerance 1e-25) at the sample times TIMES of tests/test_theta_rotation.py, the inverse inertia and
+m0 = I omega0 formed in that precision from the float64 data (integrate_rotation).  The extended-precision run (80-bit,
 tolerance 1e-19) is the cross-check: its largest distance from the stored values over all six
 times is ``ref_error`` (4e-11 near the unstable relative equilibrium, 5e-10 at worst on 801 times
 in [0, 4002] there; 1.3e-12 for fast spin; f128 at tolerance 1e-28 moved the dense values by 7e-16).
