@@ -20,7 +20,7 @@ import pytest
 from hypothesis import HealthCheck, example, given, settings, strategies as st
 
 from thetasol import RiemannTheta, riemann_theta, siegel_reduce
-from thetasol.theta._lattice import siegel_reduction
+from thetasol.theta.lattice import siegel_reduction
 
 DATA = Path(__file__).parent / "data" / "theta"
 FAMILIES = ("B", "LLL", "S=", "S<", "sp")

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from thetasol.theta._lattice import lll_gram
+from thetasol.theta.lattice import lll_gram
 from thetasol.theta.riemann import riemann_theta_separated
 
 

@@ -68,7 +68,7 @@ from thetasol.core.attitude import (
 from thetasol.solutions.base import RotationSolution
 from thetasol.special import elliptic as _el
 
-__all__ = ["EulerTopSolution"]
+__all__ = ["EulerTopSolution", "solve_euler_top"]
 
 
 
@@ -552,7 +552,8 @@ def _method(c) -> str:
     return "euler-top/symmetric" if c.symmetric else "euler-top/elliptic"
 
 
-def _solve_euler_top(Jm, am, Q0, omega0, dps=None) -> EulerTopSolution:
+def solve_euler_top(Jm: np.ndarray, am: np.ndarray, Q0: np.ndarray, omega0: np.ndarray,
+                    dps: int | None = None) -> EulerTopSolution:
     """Build the Euler-top solution from validated data (``a`` isotropic or zero)."""
     inv = _basic_invariants(Jm, am, omega0)
     if dps is not None:

@@ -45,7 +45,7 @@ from thetasol.solutions.neumann import (
     series_or_unavailable,
 )
 
-__all__ = ["NeumannRotation"]
+__all__ = ["NeumannRotation", "solve_neumann_rotation"]
 
 _EPS = np.finfo(float).eps
 N_MAX_2D = 1024
@@ -372,7 +372,8 @@ def _reduce(Jp, P, ax, a, Q0, omega0) -> _Reduced:
     return _Reduced(P, (a1, a2, ax), k, V, x0, y0, V.T @ Q0p[:, a1])
 
 
-def _solve_neumann_rotation(J, a, Q0, omega0, dps=None):
+def solve_neumann_rotation(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray,
+                           dps: int | None = None) -> NeumannRotation | None:
     """The Neumann branch of :func:`thetasol.solve_rotation` (None when it does not apply)."""
     found = _symmetric_no_spin(J, a, omega0)
     if found is None:

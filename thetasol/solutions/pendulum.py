@@ -26,7 +26,7 @@ from thetasol.solutions.base import RotationSolution
 from thetasol.special.elliptic import ellipk
 from thetasol.special.pendulum import pendulum_angle as _pendulum_angle, pendulum_params as _pendulum_params
 
-__all__ = ["PendulumRotation"]
+__all__ = ["PendulumRotation", "solve_pendulum"]
 
 _EPS = np.finfo(float).eps
 
@@ -67,7 +67,8 @@ def _axis_of(J, a, Q0, omega0):
     return None
 
 
-def _solve_pendulum(J, a, Q0, omega0, dps=None):
+def solve_pendulum(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray,
+                   dps: int | None = None) -> PendulumRotation | None:
     """The pendulum branch of :func:`thetasol.solve_rotation` (None when it does not apply)."""
     if dps is not None:
         return None

@@ -55,22 +55,22 @@ def _free_branch(J, a, Q0, omega0, dps):
     # a spherical body feels no torque either ([u, J] = 0)
     if not (_isotropic(a) or _isotropic(J)):
         return None
-    from thetasol.solutions.euler_top import _solve_euler_top
+    from thetasol.solutions.euler_top import solve_euler_top
 
-    return _solve_euler_top(J, a, Q0, omega0, dps=dps)
+    return solve_euler_top(J, a, Q0, omega0, dps=dps)
 
 
 def _pendulum_branch(J, a, Q0, omega0, dps):
-    from thetasol.solutions.pendulum import _solve_pendulum
+    from thetasol.solutions.pendulum import solve_pendulum
 
-    return _solve_pendulum(J, a, Q0, omega0, dps)
+    return solve_pendulum(J, a, Q0, omega0, dps)
 
 
 def _neumann_branch(J, a, Q0, omega0, dps):
     # symmetric body without axial spin: the axis moves as in Neumann's problem (tacnode of (4.12))
-    from thetasol.solutions.neumann_rotation import _solve_neumann_rotation
+    from thetasol.solutions.neumann_rotation import solve_neumann_rotation
 
-    return _solve_neumann_rotation(J, a, Q0, omega0, dps)
+    return solve_neumann_rotation(J, a, Q0, omega0, dps)
 
 
 #: Smallest potential the theta-function set-up is given, as ``|a - c 1| / (|omega0|^2 + |a - c 1|)``
@@ -121,9 +121,9 @@ def _check_potential_size(J, a, omega0):
 
 def _potential_branch(J, a, Q0, omega0, dps):
     _check_potential_size(J, a, omega0)
-    from thetasol.solutions.theta_rotation import _solve_theta_rotation
+    from thetasol.solutions.theta_rotation import solve_theta_rotation
 
-    return _solve_theta_rotation(J, a, Q0, omega0, dps=dps)
+    return solve_theta_rotation(J, a, Q0, omega0, dps=dps)
 
 
 #: Tried in order; each returns a RotationSolution or None (not its case).

@@ -6,7 +6,7 @@ import math
 import numpy as np
 
 from thetasol.core.validate import finite_array
-from thetasol.theta._lattice import MAX_GENUS
+from thetasol.theta.lattice import MAX_GENUS
 
 #: Relative tolerance on the symmetry of tau: rounding of a computed period matrix passes and is
 #: symmetrized (FLINT returns NaN for tau symmetric only up to rounding); anything larger is refused.

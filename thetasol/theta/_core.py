@@ -32,7 +32,7 @@ import numpy as np
 from scipy.linalg import solve_triangular
 
 from thetasol.core.dd import DD, dd_sum, two_prod
-from thetasol.theta._lattice import babai, radius_for, shortest_vector, union_set
+from thetasol.theta.lattice import babai, radius_for, shortest_vector, union_set
 
 TWO_PI_I = 2j * math.pi
 #: Largest |log| of a factor the split engine accepts (float64 overflows at ~709).

@@ -20,7 +20,7 @@ from thetasol.theta._checks import (
     check_tau as _check_tau,
     check_z as _check_z,
 )
-from thetasol.theta._lattice import babai, radius_for, shortest_vector, union_set
+from thetasol.theta.lattice import babai, radius_for, shortest_vector, union_set
 
 #: Largest dps accepted (the float64 tail bound underflows beyond ~1e-300).
 MAX_DPS = 250

@@ -62,7 +62,7 @@ from thetasol.theta._checks import (
     check_z as _check_z,
 )
 from thetasol.theta._core import TWO_PI_I, ReducedLattice, group_jets, jet_layout
-from thetasol.theta._lattice import babai, siegel_reduction
+from thetasol.theta.lattice import babai, siegel_reduction
 
 __all__ = ["RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce"]
 

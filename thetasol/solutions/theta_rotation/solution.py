@@ -1,6 +1,6 @@
 """The theta-function rotation as a :class:`~thetasol.RotationSolution`, and its set-up in stages.
 
-:func:`_solve_theta_rotation` (called by :func:`thetasol.solve_rotation`) runs the stages in order,
+:func:`solve_theta_rotation` (called by :func:`thetasol.solve_rotation`) runs the stages in order,
 each a function returning a frozen dataclass:
 
 0. :func:`~.frame.body_frame`: principal (and turning) frame, refusals of data out of reach;
@@ -125,7 +125,8 @@ def _build(J, a, Q0, omega0) -> ThetaRotation:
                          normalization=sd.Ainv, evaluator=ev)
 
 
-def _solve_theta_rotation(J, a, Q0, omega0, dps=None) -> ThetaRotation:
+def solve_theta_rotation(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray,
+                         dps: int | None = None) -> ThetaRotation:
     """Build the theta-function solution (called by :func:`thetasol.solve_rotation`)."""
     if dps is not None:
         raise ClosedFormUnavailable("dps= is not available for the theta-function solution")
