@@ -220,8 +220,10 @@ class Case:
             text = ",".join(["t", *self.columns]) + "\n" + "\n".join(
                 ",".join(_g17(x) for x in (ti, *row)) for ti, row in zip(tt, ys, strict=True)) + "\n"
         elif suffix == ".json":
-            doc = {**self.metadata(), "t": tt.tolist(), "states": ys.tolist()}
-            text = json.dumps(doc, indent=1) + "\n"
+            # metadata indented, one state per line
+            head = json.dumps({**self.metadata(), "t": tt.tolist()}, indent=1)[:-2]
+            rows = ",\n  ".join(json.dumps(row) for row in ys.tolist())
+            text = f'{head},\n "states": [\n  {rows}\n ]\n}}\n'
         else:
             raise ValueError(f"export: file must end in .csv or .json, got {str(path)!r}")
         tmp = p.with_name(p.name + ".tmp")
