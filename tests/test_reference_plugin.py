@@ -66,7 +66,9 @@ def test_plugin_options_select_cases(tmp_path):
 
 def test_plugin_catches_a_wrong_integrator(tmp_path):
     """A too-loose integrator fails the user's assertion: the plugin's tests can fail."""
-    (tmp_path / "test_user.py").write_text(USER_TEST.replace('method="DOP853",\n                    rtol=1e-10, atol=1e-10',
-                                                             'method="RK23",\n                    rtol=1e-3, atol=1e-3'))
+    loose = USER_TEST.replace('method="DOP853",\n                    rtol=1e-10, atol=1e-10',
+                              'method="RK23",\n                    rtol=1e-3, atol=1e-3')
+    assert loose != USER_TEST
+    (tmp_path / "test_user.py").write_text(loose)
     res = _pytest(tmp_path, "--thetasol-cases=free_top_long_axis,kepler_ellipse")
     assert res.returncode == 1 and "2 failed, 1 passed" in res.stdout, res.stdout

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import json
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
@@ -49,8 +49,8 @@ class Report:
 
     ``errors[g][i]`` is the error of group ``g`` at ``t[i]`` (relative as in :meth:`Case.score`);
     ``drift[name][i]`` is ``|I(y(t_i)) - I(y0)| / scale`` (``scale`` the larger of the integral's
-    natural size at ``t0`` and at ``t_i``, e.g. kinetic plus absolute potential energy) for each first integral (and constraint,
-    such as ``orthogonality = max |Q^T Q - 1|``) of the case.
+    natural size at ``t0`` and at ``t_i``, e.g. kinetic plus absolute potential energy) for each
+    first integral (and constraint, such as ``orthogonality = max |Q^T Q - 1|``) of the case.
     """
 
     name: str
@@ -210,7 +210,8 @@ class Case:
         """Write the exact states at ``t`` (default ``times(101)``) to ``.csv`` or ``.json``.
 
         The CSV has a header line naming the columns (``t`` first) and each value in the
-        shortest form that reads back to the same float64 (Python's ``repr``); the JSON holds :meth:`metadata` plus ``t`` and ``states`` (a list of rows).
+        shortest form that reads back to the same float64 (Python's ``repr``); the JSON holds
+        :meth:`metadata` plus ``t`` and ``states`` (a list of rows).
         """
         p = Path(path)
         tt = self.times() if t is None else np.atleast_1d(np.asarray(t, dtype=float)).ravel()

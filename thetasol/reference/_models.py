@@ -11,7 +11,6 @@ import numpy as np
 from thetasol.core.so3 import cross, hat
 from thetasol.mechanics.equations import inertia_from_moments, invariants, rotation_rhs
 from thetasol.mechanics.heavy_top import heavy_top_invariants
-
 from thetasol.reference._case import Group
 
 __all__ = ["ROTATION_COLUMNS", "rotation_groups", "rotation_system", "free_top_integrals",
@@ -221,7 +220,8 @@ def mass_center_system(a: np.ndarray, b: np.ndarray):
         q, v = y[..., 0:3], y[..., 3:6]
         kin = 0.5 * np.sum(v * v, axis=-1)
         pot = 0.5 * np.einsum("...i,ij,...j->...", q, a, q) + 0.5 * q @ b
-        scale = kin + 0.5 * np.einsum("...i,ij,...j->...", np.abs(q), np.abs(a), np.abs(q)) + 0.5 * np.abs(q) @ np.abs(b)
+        aq = np.abs(q)
+        scale = kin + 0.5 * np.einsum("...i,ij,...j->...", aq, np.abs(a), aq) + 0.5 * aq @ np.abs(b)
         return {"energy": (kin + pot, scale)}
 
     return rhs, integrals
