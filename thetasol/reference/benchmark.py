@@ -33,10 +33,11 @@ def _figure(table: Table):
         return None
     fig = Figure(figsize=(7, 5))
     ax = fig.add_subplot()
-    for name in dict.fromkeys(r["case"] for r in table):
+    for i, name in enumerate(dict.fromkeys(r["case"] for r in table)):
         rows = [r for r in table if r["case"] == name and r["success"] and np.isfinite(r["error"])]
-        if rows:
-            ax.loglog([max(r["error"], 1e-17) for r in rows], [r["nfev"] for r in rows], "o-", label=name, ms=3)
+        if rows:                      # ten colours per line style
+            ax.loglog([max(r["error"], 1e-17) for r in rows], [r["nfev"] for r in rows], marker="o",
+                      ls=("-", "--", ":")[(i // 10) % 3], label=name, ms=3)
     ax.set_xlabel("max relative error (worst component group)")
     ax.set_ylabel("right-hand-side evaluations")
     ax.set_title("work-precision on the thetasol reference cases")
