@@ -7,6 +7,7 @@ same module once thetasol is installed).
 import os
 import subprocess
 import sys
+import tomllib
 from pathlib import Path
 
 from thetasol import reference
@@ -28,10 +29,16 @@ def test_not_using_the_fixture():
 '''
 
 
-def _pytest(project: Path, *args: str) -> subprocess.CompletedProcess:
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")]),
-           "OPENBLAS_NUM_THREADS": "1"}
-    cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "thetasol.reference.pytest_plugin",
+def _pytest(project: Path, *args: str, entry_point_dir: Path | None = None) -> subprocess.CompletedProcess:
+    """pytest on the project in a subprocess: the plugin module loaded with ``-p`` (entry points off,
+    as an installed thetasol would otherwise register it twice), or through ``entry_point_dir``."""
+    path = [str(ROOT)] + ([str(entry_point_dir)] if entry_point_dir else []) + [os.environ.get("PYTHONPATH", "")]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(path), "OPENBLAS_NUM_THREADS": "1"}
+    plugin = []
+    if entry_point_dir is None:
+        env["PYTEST_DISABLE_PLUGIN_AUTOLOAD"] = "1"
+        plugin = ["-p", "thetasol.reference.pytest_plugin"]
+    cmd = [sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", *plugin,
            "--rootdir", str(project), *args, str(project / "test_user.py")]
     return subprocess.run(cmd, cwd=project, env=env, capture_output=True, text=True, timeout=600)
 
@@ -72,3 +79,21 @@ def test_plugin_catches_a_wrong_integrator(tmp_path):
     (tmp_path / "test_user.py").write_text(loose)
     res = _pytest(tmp_path, "--thetasol-cases=free_top_long_axis,kepler_ellipse")
     assert res.returncode == 1 and "2 failed, 1 passed" in res.stdout, res.stdout
+
+
+def test_the_pyproject_entry_point_loads_the_plugin(tmp_path):
+    """pyproject's ``pytest11`` entry point, as an install would write it (a dist-info directory with
+    entry_points.txt), gives the fixture without ``-p``."""
+    eps = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["entry-points"]["pytest11"]
+    assert eps == {"thetasol": "thetasol.reference.pytest_plugin"}
+    site = tmp_path / "site"
+    info = site / "thetasol_reference_probe-0.0.dist-info"
+    info.mkdir(parents=True)
+    (info / "METADATA").write_text("Metadata-Version: 2.1\nName: thetasol-reference-probe\nVersion: 0.0\n")
+    (info / "entry_points.txt").write_text("[pytest11]\n" + "".join(f"{k} = {v}\n" for k, v in eps.items()))
+    (info / "RECORD").write_text("")
+    project = tmp_path / "project"
+    project.mkdir()
+    res = _pytest(_project(project), "--collect-only", "--thetasol-model=Kepler orbit", entry_point_dir=site)
+    assert res.returncode == 0, res.stdout + res.stderr
+    assert res.stdout.count("test_my_integrator[") == 2 and "kepler_hyperbola" in res.stdout
