@@ -2,8 +2,9 @@
 
 Installed thetasol registers this module as the ``pytest11`` entry point ``thetasol``, so any
 project's tests can ask for the fixture; without the install, load it with
-``pytest -p thetasol.reference.pytest_plugin`` (not both: pytest refuses to register the module twice).  A test that takes ``thetasol_case`` runs once per
-case of :func:`thetasol.reference.cases` (test ids are the case names)::
+``pytest -p thetasol.reference.pytest_plugin`` (not both: pytest refuses to register the module
+twice).  A test that takes ``thetasol_case`` runs once per case of :func:`thetasol.reference.cases`
+(test ids are the case names)::
 
     def test_my_integrator(thetasol_case):
         sol = my_solve_ivp(thetasol_case.rhs, thetasol_case.t_span, thetasol_case.y0, t_eval=thetasol_case.times())
