@@ -1,9 +1,14 @@
-"""Command line: ``python -m thetasol demo`` and ``python -m thetasol solve SCENE.toml``.
+"""Command line: ``python -m thetasol demo``, ``python -m thetasol solve SCENE.toml`` and
+``python -m thetasol reference {list, export}``.
 
-Both print the report of :func:`thetasol.scenes.report.run` (effective bodies, the model of each
+``demo`` and ``solve`` print the report of :func:`thetasol.scenes.report.run` (effective bodies, the model of each
 part, the exact parts against the numerical references with deviations and timings).
 ``solve`` (and ``demo`` with ``-o``) also writes the trajectories (``.npz`` or ``.csv``)
 and the report (``<stem>.report.txt``), atomically.
+
+``reference list`` prints the exact reference cases of :mod:`thetasol.reference`;
+``reference export NAME -o FILE [--t0 T0 --t1 T1 --n N]`` writes one case's exact states on ``N``
+equally spaced times to ``.csv`` or ``.json`` (default: the case's own interval, 101 times).
 
 Exit status: 0 when every check passed, 1 when a check failed, 2 on bad input (the
 message starts with ``thetasol: error:``; nothing is written).
@@ -27,6 +32,15 @@ def _parser() -> argparse.ArgumentParser:
     d = sub.add_parser("demo", help="run the bundled space-station scene and compare with numerical references")
     s = sub.add_parser("solve", help="solve a scene file (TOML; see docs/scene_format.md)")
     s.add_argument("scene", help="scene file (.toml)")
+    r = sub.add_parser("reference", help="exact reference cases for testing integrators (docs/reference_cases.md)")
+    rsub = r.add_subparsers(dest="action", required=True)
+    rsub.add_parser("list", help="list the cases")
+    e = rsub.add_parser("export", help="write a case's exact states to .csv or .json")
+    e.add_argument("name", help="case name (see 'reference list')")
+    e.add_argument("-o", "--output", required=True, help="output file (.csv or .json)")
+    e.add_argument("--t0", type=float, help="first time (default: the case's own)")
+    e.add_argument("--t1", type=float, help="last time (default: the case's own)")
+    e.add_argument("--n", type=int, default=101, help="number of equally spaced times (default 101)")
     for q in (d, s):
         q.add_argument("-o", "--output", help="write the trajectories to this .npz or .csv file "
                                               "(and the report to <stem>.report.txt)")
@@ -49,6 +63,8 @@ def _check_output(path: str) -> None:
 def main(argv: list[str] | None = None) -> int:
     """Entry point; returns the exit status."""
     args = _parser().parse_args(argv)
+    if args.command == "reference":
+        return _reference(args)
     from thetasol.mechanics.trajectories import write_trajectories
     from thetasol.scenes.format import demo_scene_path, load_scene
     from thetasol.scenes.report import run
@@ -66,3 +82,33 @@ def main(argv: list[str] | None = None) -> int:
         print(f"thetasol: error: {exc}", file=sys.stderr)
         return 2
     return 0 if all(c.ok for c in checks) else 1
+
+
+def _reference(args) -> int:
+    """``reference list`` / ``reference export``; the catalogue is imported only here."""
+    import numpy as np
+
+    from thetasol.reference import case, cases
+
+    try:
+        if args.action == "list":
+            for c in cases():
+                print(f"{c.name:<26s} {c.model:<38s} t in [{c.t_span[0]:g}, {c.t_span[1]:g}], {c.y0.size} components")
+            return 0
+        if not args.output.lower().endswith((".csv", ".json")):
+            raise ValueError(f"output file must end in .csv or .json, got {args.output!r}")
+        if args.n < 1:
+            raise ValueError(f"--n must be at least 1, got {args.n}")
+        try:
+            c = case(args.name)
+        except KeyError as exc:
+            raise ValueError(exc.args[0]) from None
+        t0 = c.t_span[0] if args.t0 is None else args.t0
+        t1 = c.t_span[1] if args.t1 is None else args.t1
+        if not (np.isfinite(t0) and np.isfinite(t1)):
+            raise ValueError(f"times must be finite, got t0={t0}, t1={t1}")
+        print(f"wrote {c.export(args.output, np.linspace(t0, t1, args.n))}")
+    except ValueError as exc:
+        print(f"thetasol: error: {exc}", file=sys.stderr)
+        return 2
+    return 0

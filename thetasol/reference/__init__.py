@@ -1,0 +1,19 @@
+"""Exact reference cases for testing numerical integrators (``thetasol.reference``).
+
+Every model thetasol solves in closed form gives a few named initial-value problems: the model's
+ODE ``y' = rhs(t, y)`` on a flat float state in :func:`scipy.integrate.solve_ivp`'s signature and
+its exact solution ``exact(t)``, with ``score`` and ``report`` to measure a user's numerical states
+against it, and ``export`` to CSV/JSON for other languages.  docs/reference_cases.md lists them.
+
+>>> from scipy.integrate import solve_ivp
+>>> from thetasol import reference
+>>> c = reference.case("free_top_long_axis")
+>>> sol = solve_ivp(c.rhs, c.t_span, c.y0, method="DOP853", rtol=1e-10, atol=1e-10, t_eval=c.times(21))
+>>> c.score(sol.t, sol.y).worst < 1e-7
+True
+"""
+from thetasol.reference._case import Case, Group, Report, Score
+from thetasol.reference.benchmark import Table, benchmark
+from thetasol.reference.catalogue import case, cases, names
+
+__all__ = ["Case", "Group", "Report", "Score", "Table", "benchmark", "case", "cases", "names"]
