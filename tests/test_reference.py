@@ -12,7 +12,7 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from thetasol import reference
-from thetasol.scenes.cli import main
+from thetasol.cli import main
 
 NAMES = reference.names()
 
@@ -173,7 +173,7 @@ def test_cli_reference_list_and_export(tmp_path, capsys):
 def test_cli_imports_the_catalogue_lazily():
     import subprocess
     import sys
-    code = "import sys, thetasol.scenes.cli; print('thetasol.reference' in sys.modules)"
+    code = "import sys, thetasol.cli; print('thetasol.reference' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "False"
 

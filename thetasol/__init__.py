@@ -55,10 +55,12 @@ _group("thetasol.theta.riemann", "RiemannTheta", "riemann_theta", "riemann_theta
 _group("thetasol.curves.plane_curve", "PlaneCurve", "Place")
 _group("thetasol.curves.spectral", "SpectralCurve", "spectral_curve")
 
-__all__ = sorted(_API) + ["__version__"]
+__all__ = sorted(_API) + ["reference", "__version__"]
 
 
 def __getattr__(name: str):
+    if name == "reference":  # the catalogue of exact cases is a subpackage
+        return importlib.import_module("thetasol.reference")
     try:
         module = _API[name]
     except KeyError:
@@ -73,6 +75,7 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:
+    from thetasol import reference
     from thetasol.curves.plane_curve import Place, PlaneCurve
     from thetasol.curves.spectral import SpectralCurve, spectral_curve
     from thetasol.integrators.heavy_top import integrate_heavy_top

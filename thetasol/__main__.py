@@ -1,6 +1,6 @@
-"""``python -m thetasol``: the command line of :mod:`thetasol.scenes.cli`."""
+"""``python -m thetasol``: the command line of :mod:`thetasol.cli`."""
 import sys
 
-from thetasol.scenes.cli import main
+from thetasol.cli import main
 
 sys.exit(main())
