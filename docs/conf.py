@@ -6,6 +6,7 @@ Build: ``python -m sphinx -W -b html docs docs/_build/html`` (needs the ``docs``
 from __future__ import annotations
 
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -52,6 +53,7 @@ nb_merge_streams = True
 # API reference from the numpydoc docstrings
 autodoc_member_order = "bysource"
 autodoc_typehints = "description"
+autodoc_typehints_description_target = "documented"   # no second, undocumented parameter list
 autodoc_default_options = {"members": True, "show-inheritance": True}
 napoleon_google_docstring = False
 napoleon_numpy_docstring = True
@@ -76,5 +78,36 @@ def _check_api_coverage(app) -> None:
                            f"docs/api/*.md page: add it to the page of its concept")
 
 
+_SECTION = re.compile(r"^\s*-{3,}\s*$")
+_GROUPED = re.compile(r"^(\s*)([A-Za-z_]\w*(?:\s*,\s*[A-Za-z_]\w*)+)\s*:(.*)$")
+
+
+def _split_grouped_attributes(app, what, name, obj, options, lines) -> None:
+    """``a, b : type`` in an "Attributes" section becomes one entry per name (napoleon's fields
+    take one name each; Parameters sections it splits itself)."""
+    out, in_attributes, i = [], False, 0
+    while i < len(lines):
+        line = lines[i]
+        if i + 1 < len(lines) and _SECTION.match(lines[i + 1]) and line.strip():
+            in_attributes = line.strip() == "Attributes"
+        match = _GROUPED.match(line) if in_attributes else None
+        if match is None:
+            out.append(line)
+            i += 1
+            continue
+        indent, names, rest = match.groups()
+        body = []
+        i += 1
+        while i < len(lines) and (not lines[i].strip() or
+                                  len(lines[i]) - len(lines[i].lstrip()) > len(indent)):
+            body.append(lines[i])
+            i += 1
+        for n in names.split(","):
+            out += [f"{indent}{n.strip()} :{rest}"] + body
+    lines[:] = out
+
+
 def setup(app):
     app.connect("builder-inited", _check_api_coverage)
+    # before napoleon (priority 500) turns the sections into fields
+    app.connect("autodoc-process-docstring", _split_grouped_attributes, priority=400)
