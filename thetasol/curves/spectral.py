@@ -152,7 +152,7 @@ def spectral_curve(J, M, u, *, tol: float = 1e-9) -> SpectralCurve:
         Symmetric 3x3 ``u = -Q^T a Q`` (docs/conventions.md).
     tol : float
         Relative tolerance under which two eigenvalues of ``u`` (relative to the spread of its
-        eigenvalues and to |u|) or two principal values of ``J^2`` count as equal; such data are
+        eigenvalues and to ``|u|``) or two principal values of ``J^2`` count as equal; such data are
         made exactly degenerate (see the module docstring and :attr:`SpectralCurve.degeneracy`).
 
     Returns

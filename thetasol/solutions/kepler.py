@@ -161,15 +161,15 @@ def _elements(mu, r0, v0, h, evec):
 class KeplerOrbit(Solution):
     """The two-body orbit ``qddot = -mu q / |q|^3`` (7.7) through ``(r0, v0)`` at ``t = 0``.
 
+    Calling ``orbit(t)`` returns ``(r, v)`` of shapes ``t.shape + (3,)``; ``position(t)`` and
+    ``velocity(t)`` return one of them.  ``period`` is ``inf`` unless the orbit is an ellipse.
+
     Parameters
     ----------
     mu : float
         Gravitational parameter ``G m0`` (> 0), in the user's units (e.g. 3.986004418e14 m^3/s^2).
     r0, v0 : array_like, shape (3,)
         Position and velocity at ``t = 0``; ``r0 x v0 != 0`` (radial orbits are refused).
-
-    Calling ``orbit(t)`` returns ``(r, v)`` of shapes ``t.shape + (3,)``; ``position(t)`` and
-    ``velocity(t)`` return one of them.  ``period`` is ``inf`` unless the orbit is an ellipse.
 
     Attributes
     ----------
