@@ -135,7 +135,8 @@ def quick_two_sum(a: np.ndarray | float, b: np.ndarray | float) -> tuple[np.ndar
     return s, b - (s - a)
 
 
-def dd_add(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | float, bl: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+def dd_add(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | float,
+           bl: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """Double-double sum of ``ah + al`` and ``bh + bl``."""
     s, e = two_sum(ah, bh)
     t, f = two_sum(al, bl)
@@ -143,13 +144,15 @@ def dd_add(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | floa
     return quick_two_sum(s, e + f)
 
 
-def dd_mul(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | float, bl: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+def dd_mul(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | float,
+           bl: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """Double-double product of ``ah + al`` and ``bh + bl``."""
     p, e = two_prod(ah, bh)
     return quick_two_sum(p, e + (ah * bl + al * bh))
 
 
-def dd_div(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | float, bl: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+def dd_div(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | float,
+           bl: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """Double-double quotient ``(ah + al) / (bh + bl)`` (three float quotient digits)."""
     q1 = ah / bh
     ph, pl = dd_mul(bh, bl, q1, 0.0)
@@ -188,7 +191,8 @@ def cdd_mul(a: Sequence[np.ndarray], b: Sequence[np.ndarray]) -> tuple[np.ndarra
     return rh, rl, ih, il
 
 
-def cdd_scale(a: Sequence[np.ndarray], rh: np.ndarray | float, rl: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def cdd_scale(a: Sequence[np.ndarray], rh: np.ndarray | float,
+              rl: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Complex double-double times the real double-double ``rh + rl``."""
     return dd_mul(a[0], a[1], rh, rl) + dd_mul(a[2], a[3], rh, rl)
 

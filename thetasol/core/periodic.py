@@ -29,7 +29,8 @@ class SeriesNotConverged(ArithmeticError):
     """A Fourier series still had a large tail at the largest grid allowed (the message says which)."""
 
 
-def refined_fft(transform: Callable[[int], tuple[np.ndarray, np.ndarray | slice, float]], what: str, n0: int, nmax: int, terms: Callable[[int], object] = str) -> tuple[int, np.ndarray, np.ndarray]:
+def refined_fft(transform: Callable[[int], tuple[np.ndarray, np.ndarray | slice, float]], what: str, n0: int, nmax: int,
+                terms: Callable[[int], object] = str) -> tuple[int, np.ndarray, np.ndarray]:
     """Double the grid ``n`` from ``n0`` until the outer band of the spectrum is below ``COEF_TOL``
     times the largest coefficient or the absolute noise of the samples.
 
@@ -49,7 +50,8 @@ def refined_fft(transform: Callable[[int], tuple[np.ndarray, np.ndarray | slice,
         n *= 2
 
 
-def fit_series(fun: Callable[[np.ndarray], np.ndarray], what: str, floor: float = 0.0, nmax: int = 2 ** 12) -> np.ndarray:
+def fit_series(fun: Callable[[np.ndarray], np.ndarray], what: str, floor: float = 0.0,
+               nmax: int = 2 ** 12) -> np.ndarray:
     """Coefficients ``c_n`` (n = 0..N/2) with ``fun(x) = Re(c_0 + 2 sum c_n e^{inx})``, N doubled
     until the upper quarter of the spectrum is below ``COEF_TOL`` times the largest coefficient or
     below ``floor`` (the absolute noise of the samples)."""

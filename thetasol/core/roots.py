@@ -14,7 +14,9 @@ from numpy.typing import ArrayLike
 __all__ = ["monotone_newton", "quadratic_roots"]
 
 
-def monotone_newton(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], y: np.ndarray, x: ArrayLike, lo: ArrayLike, hi: ArrayLike, converged: Callable[[np.ndarray, np.ndarray], np.ndarray], maxiter: int, polish: int) -> np.ndarray:
+def monotone_newton(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], y: np.ndarray, x: ArrayLike,
+                    lo: ArrayLike, hi: ArrayLike, converged: Callable[[np.ndarray, np.ndarray], np.ndarray],
+                    maxiter: int, polish: int) -> np.ndarray:
     """x with fun(x)[0] = y for an increasing fun (returning value and derivative; 1-d arrays):
     Newton steps, bisection of the bracket [lo, hi] where a step leaves it, each point until
     ``converged(new, old)`` (elementwise) holds for it (the others go on alone); then ``polish``

@@ -125,7 +125,8 @@ class Place:
         """
         return expansion(self.curve, self, None, int(order), "y")
 
-    def expand(self, numerator: str | sympy.Expr, order: int = 8, differential: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    def expand(self, numerator: str | sympy.Expr, order: int = 8,
+               differential: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """Expansion of g(x, y) dx / f_y (differential=True) or of the function g(x, y) at this place.
 
         Returns (k, c) with g dx / f_y = sum c_k t^k dt (or g = sum c_k t^k) in the local parameter
@@ -413,7 +414,8 @@ class PlaneCurve:
         self._cache[key] = Pm
         return Pm.copy()
 
-    def period_matrix(self, differentials: Sequence[str | sympy.Expr] | None = None, dps: int | None = None) -> np.ndarray | mpmath.matrix:
+    def period_matrix(self, differentials: Sequence[str | sympy.Expr] | None = None,
+                      dps: int | None = None) -> np.ndarray | mpmath.matrix:
         """Periods [A | B] (g x 2g complex) of the differentials g dx / f_y over the symplectic basis.
 
         Parameters
@@ -712,7 +714,8 @@ class PlaneCurve:
         P = self.period_matrix()
         return np.linalg.inv(P[:, :g])
 
-    def abel_map(self, points: Place | Sequence | Mapping, base: Place | tuple[complex, complex] | None = None, *, normalized: bool = True) -> np.ndarray:
+    def abel_map(self, points: Place | Sequence | Mapping, base: Place | tuple[complex, complex] | None = None, *,
+                 normalized: bool = True) -> np.ndarray:
         """Abel map of points, places or divisors.
 
         Parameters
@@ -744,7 +747,8 @@ class PlaneCurve:
             raw = raw @ self.normalization().T
         return _shaped(raw, weights, shape)
 
-    def integrate(self, numerators: Sequence[str | sympy.Expr], points: Place | Sequence | Mapping, base: Place | tuple[complex, complex] | None = None) -> np.ndarray:
+    def integrate(self, numerators: Sequence[str | sympy.Expr], points: Place | Sequence | Mapping,
+                  base: Place | tuple[complex, complex] | None = None) -> np.ndarray:
         """Integrals of the differentials p dx / f_y (p polynomials) from the base to the points.
 
         Same paths as :meth:`abel_map` (use :meth:`period_matrix` with ``differentials=`` for the

@@ -227,7 +227,8 @@ def ellipf(phi: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *, dps: in
     return _out(out)
 
 
-def ellipeinc(phi: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *, dps: int | None = None) -> np.ndarray | float:
+def ellipeinc(phi: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *,
+              dps: int | None = None) -> np.ndarray | float:
     """Incomplete elliptic integral of the second kind ``E(phi | m)``.
 
     On ``|phi| <= pi/2`` the cancellation-free form DLMF 19.25.9 (in homogeneous
@@ -250,7 +251,8 @@ def ellipeinc(phi: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *, dps:
     return _out(out)
 
 
-def ellippiinc(n: ArrayLike, phi: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *, dps: int | None = None) -> np.ndarray | float:
+def ellippiinc(n: ArrayLike, phi: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *,
+               dps: int | None = None) -> np.ndarray | float:
     """Incomplete elliptic integral of the third kind ``Pi(n; phi | m)``, ``n < 1``.
 
     ``Pi = int_0^phi dtheta / ((1 - n sin^2) sqrt(1 - m sin^2))
@@ -409,7 +411,8 @@ def _ellipj_reduced(hi, lo, m, mc):
     return out_sn, out_cn, dn, out_am
 
 
-def ellipj(u: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *, dps: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def ellipj(u: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *,
+           dps: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Jacobi elliptic functions ``sn, cn, dn`` and the amplitude ``am`` for real ``u``.
 
     Parameters
