@@ -42,7 +42,7 @@ from thetasol.curves._places import (
     series_integral,
 )
 from thetasol.curves._poly import CurvePoly, parse_numerators, polynomial_roots, root_corrections
-from thetasol.curves._quad import Piece, Tracker
+from thetasol.curves._quad import Piece, Tracker, shaped_integrals
 
 if TYPE_CHECKING:
     import mpmath
@@ -51,15 +51,6 @@ if TYPE_CHECKING:
 __all__ = ["PlaneCurve", "Place"]
 
 INF = complex("inf")
-
-
-def _shaped(raw, weights, shape):
-    """Rows of integrals (N, nd) in the form the input had (see PlaneCurve._parse_targets)."""
-    if shape == "single":
-        return raw[0]
-    if shape == "divisor":
-        return weights @ raw
-    return raw
 
 
 class Place:
@@ -643,8 +634,7 @@ class PlaneCurve:
         if ld is None:
             return None
         sites, infs = self._all_places()
-        cands = [P for P in (infs if ld.kind == "infinity" else sites)
-                 if (ld.kind == "infinity" or P._site == ld.site)]
+        cands = [P for P in (infs if ld.kind == "infinity" else sites) if (ld.kind == "infinity" or P._site == ld.site)]
         best = []
         for P in cands:
             k, t0, Fy, _ = self._place_data(P, None, None)
@@ -745,7 +735,7 @@ class PlaneCurve:
             raw = raw - braw[None, :]
         if normalized:
             raw = raw @ self.normalization().T
-        return _shaped(raw, weights, shape)
+        return shaped_integrals(raw, weights, shape)
 
     def integrate(self, numerators: Sequence[str | sympy.Expr], points: Place | Sequence | Mapping,
                   base: Place | tuple[complex, complex] | None = None) -> np.ndarray:
@@ -762,7 +752,7 @@ class PlaneCurve:
         raw = self._abel_raw(targets, P, key)
         if base is not None:
             raw = raw - self._abel_raw([self._as_target(base)], P, key)[0]
-        return _shaped(raw, weights, shape)
+        return shaped_integrals(raw, weights, shape)
 
     # ------------------------------------------------------------------ Riemann constant
     def canonical_divisor(self) -> dict:
