@@ -10,12 +10,15 @@ no FMA is assumed.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 _SPLIT = 134217729.0  # 2^27 + 1
 
 
-def two_sum(a, b):
+def two_sum(a: np.ndarray | float, b: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     s = a + b
     bb = s - a
     return s, (a - (s - bb)) + (b - bb)
@@ -27,7 +30,7 @@ def _split(a):
     return hi, a - hi
 
 
-def two_prod(a, b):
+def two_prod(a: np.ndarray | float, b: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """``a*b = p + e`` exactly, for any finite a, b whose product does not overflow.
 
     Factors beyond 1e150 are first rebalanced by a power of two (``a 2^-s``, ``b 2^s``: the product
@@ -64,22 +67,22 @@ class DD:
     def __sub__(self, other):
         return self + (-other if isinstance(other, DD) else DD(-np.asarray(other, float)))
 
-    def mul(self, b):
+    def mul(self, b: ArrayLike) -> DD:
         """Product with a float array ``b`` (exact part by two-product)."""
         b = np.asarray(b, dtype=float)
         p, e = two_prod(self.hi, b)
         e = e + self.lo * b
         return DD(*two_sum(p, e))
 
-    def mul_dd(self, other: DD):
+    def mul_dd(self, other: DD) -> DD:
         return DD(*dd_mul(self.hi, self.lo, other.hi, other.lo))
 
-    def frac(self):
+    def frac(self) -> np.ndarray:
         """``self mod 1`` in [-1/2, 1/2] as a float (the rounding of hi is exact)."""
         n = np.rint(self.hi)
         return (self.hi - n) + self.lo
 
-    def value(self):
+    def value(self) -> np.ndarray:
         return self.hi + self.lo
 
 
@@ -103,19 +106,19 @@ def dd_sum(x: DD) -> DD:
     return DD(hi[0], lo[0])
 
 
-def dd_prod(a, b) -> DD:
+def dd_prod(a: ArrayLike, b: ArrayLike) -> DD:
     """Exact product of two float arrays (broadcasting) as a DD."""
     return DD(*two_prod(np.asarray(a, float), np.asarray(b, float)))
 
 
-def dd_split_mp(values) -> tuple[np.ndarray, np.ndarray]:
+def dd_split_mp(values: Sequence) -> tuple[np.ndarray, np.ndarray]:
     """Split mpmath reals (nested lists) into float hi + lo arrays."""
     hi = np.vectorize(lambda x: float(x))(values)
     lo = np.vectorize(lambda x, h: float(x - h))(values, hi)
     return hi.astype(float), lo.astype(float)
 
 
-def dd_matvec(A_hi, A_lo, x: DD) -> DD:
+def dd_matvec(A_hi: np.ndarray, A_lo: np.ndarray, x: DD) -> DD:
     """``y_i = sum_j A_ij x_j`` for A = A_hi + A_lo (g, g) and x a DD of shape (g, P)."""
     xh = DD(x.hi[:, None, :], x.lo[:, None, :])  # [j, ., p]
     prod = xh.mul(A_hi.T[:, :, None]) + DD(x.hi[:, None, :] * A_lo.T[:, :, None])  # [j, i, p]
@@ -126,13 +129,14 @@ def dd_matvec(A_hi, A_lo, x: DD) -> DD:
 # (hi, lo) float pairs and complex double-double 4-tuples (re_hi, re_lo, im_hi, im_lo); used by the
 # curve engine's vectorized fallback quadrature (:mod:`thetasol.curves._dd`).  Errors ~2^-104 of the
 # operands' magnitudes (IEEE-style addition, so cancellations stay accurate).
-def quick_two_sum(a, b):
+def quick_two_sum(a: np.ndarray | float, b: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """``a + b = s + e`` exactly when ``|a| >= |b|`` (or a = 0)."""
     s = a + b
     return s, b - (s - a)
 
 
-def dd_add(ah, al, bh, bl):
+def dd_add(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | float,
+           bl: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """Double-double sum of ``ah + al`` and ``bh + bl``."""
     s, e = two_sum(ah, bh)
     t, f = two_sum(al, bl)
@@ -140,13 +144,15 @@ def dd_add(ah, al, bh, bl):
     return quick_two_sum(s, e + f)
 
 
-def dd_mul(ah, al, bh, bl):
+def dd_mul(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | float,
+           bl: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """Double-double product of ``ah + al`` and ``bh + bl``."""
     p, e = two_prod(ah, bh)
     return quick_two_sum(p, e + (ah * bl + al * bh))
 
 
-def dd_div(ah, al, bh, bl):
+def dd_div(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | float,
+           bl: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     """Double-double quotient ``(ah + al) / (bh + bl)`` (three float quotient digits)."""
     q1 = ah / bh
     ph, pl = dd_mul(bh, bl, q1, 0.0)
@@ -159,38 +165,39 @@ def dd_div(ah, al, bh, bl):
     return dd_add(s, e, q3, 0.0)
 
 
-def cdd(z):
+def cdd(z: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Complex float array -> complex double-double 4-tuple."""
     z = np.asarray(z, dtype=complex)
     zero = np.zeros(z.shape)
     return (z.real.copy(), zero, z.imag.copy(), zero)
 
 
-def cdd_value(a):
+def cdd_value(a: Sequence[np.ndarray]) -> np.ndarray:
     """Complex double-double 4-tuple -> complex128 (rounded)."""
     return (a[0] + a[1]) + 1j * (a[2] + a[3])
 
 
-def cdd_add(a, b):
+def cdd_add(a: Sequence[np.ndarray], b: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return dd_add(a[0], a[1], b[0], b[1]) + dd_add(a[2], a[3], b[2], b[3])
 
 
-def cdd_sub(a, b):
+def cdd_sub(a: Sequence[np.ndarray], b: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     return dd_add(a[0], a[1], -b[0], -b[1]) + dd_add(a[2], a[3], -b[2], -b[3])
 
 
-def cdd_mul(a, b):
+def cdd_mul(a: Sequence[np.ndarray], b: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     rh, rl = dd_add(*dd_mul(a[0], a[1], b[0], b[1]), *(-v for v in dd_mul(a[2], a[3], b[2], b[3])))
     ih, il = dd_add(*dd_mul(a[0], a[1], b[2], b[3]), *dd_mul(a[2], a[3], b[0], b[1]))
     return rh, rl, ih, il
 
 
-def cdd_scale(a, rh, rl=0.0):
+def cdd_scale(a: Sequence[np.ndarray], rh: np.ndarray | float,
+              rl: np.ndarray | float = 0.0) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Complex double-double times the real double-double ``rh + rl``."""
     return dd_mul(a[0], a[1], rh, rl) + dd_mul(a[2], a[3], rh, rl)
 
 
-def cdd_div(a, b):
+def cdd_div(a: Sequence[np.ndarray], b: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Complex double-double quotient: float quotient, then two corrections from dd residuals."""
     bz = cdd_value(b)
     q = cdd(cdd_value(a) / bz)

@@ -14,6 +14,8 @@ A series is stored as ``c_n`` (n = 0..N) with ``f(x) = Re(c_0 + 2 sum_{n >= 1} c
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 __all__ = ["COEF_TOL", "SeriesNotConverged", "refined_fft", "fit_series", "sum_series",
@@ -27,7 +29,8 @@ class SeriesNotConverged(ArithmeticError):
     """A Fourier series still had a large tail at the largest grid allowed (the message says which)."""
 
 
-def refined_fft(transform, what: str, n0: int, nmax: int, terms=str):
+def refined_fft(transform: Callable[[int], tuple[np.ndarray, np.ndarray | slice, float]], what: str, n0: int, nmax: int,
+                terms: Callable[[int], object] = str) -> tuple[int, np.ndarray, np.ndarray]:
     """Double the grid ``n`` from ``n0`` until the outer band of the spectrum is below ``COEF_TOL``
     times the largest coefficient or the absolute noise of the samples.
 
@@ -47,7 +50,8 @@ def refined_fft(transform, what: str, n0: int, nmax: int, terms=str):
         n *= 2
 
 
-def fit_series(fun, what: str, floor: float = 0.0, nmax: int = 2 ** 12) -> np.ndarray:
+def fit_series(fun: Callable[[np.ndarray], np.ndarray], what: str, floor: float = 0.0,
+               nmax: int = 2 ** 12) -> np.ndarray:
     """Coefficients ``c_n`` (n = 0..N/2) with ``fun(x) = Re(c_0 + 2 sum c_n e^{inx})``, N doubled
     until the upper quarter of the spectrum is below ``COEF_TOL`` times the largest coefficient or
     below ``floor`` (the absolute noise of the samples)."""
@@ -60,17 +64,17 @@ def fit_series(fun, what: str, floor: float = 0.0, nmax: int = 2 ** 12) -> np.nd
     return c[:keep.max() + 1 if keep.size else 1].copy()
 
 
-def sum_series(E: np.ndarray, c: np.ndarray):
+def sum_series(E: np.ndarray, c: np.ndarray) -> np.ndarray:
     """``Re(c_0 + 2 sum c_n e^{inx})`` from the powers ``E = powers(x, >= c.size - 1)``."""
     return c[0].real + 2.0 * np.tensordot(c[1:], E[:c.size - 1], 1).real
 
 
-def sum_series_derivative(E: np.ndarray, c: np.ndarray):
+def sum_series_derivative(E: np.ndarray, c: np.ndarray) -> np.ndarray:
     """The x-derivative of :func:`sum_series`, from the same powers."""
     return 2.0 * np.tensordot(1j * np.arange(1, c.size) * c[1:], E[:c.size - 1], 1).real
 
 
-def eval_series(c: np.ndarray, x: np.ndarray, derivative: bool = False):
+def eval_series(c: np.ndarray, x: np.ndarray, derivative: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """``Re(c_0 + 2 sum c_n e^{inx})`` (and its derivative) at real ``x`` (any shape)."""
     E = powers(x, c.size - 1)
     val = sum_series(E, c)
@@ -140,7 +144,7 @@ class HermiteTable:
         mid = coef @ np.array([1.0, 0.5, 0.25, 0.125])
         return coef, float(np.abs(mid - g[1::2]).max()), h
 
-    def __call__(self, x: np.ndarray):
+    def __call__(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(g, dg/dx) at x."""
         y = np.remainder(x, 2 * np.pi) / self.h
         j = np.minimum(y.astype(np.intp), self.M - 1)

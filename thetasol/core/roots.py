@@ -6,12 +6,17 @@
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 __all__ = ["monotone_newton", "quadratic_roots"]
 
 
-def monotone_newton(fun, y, x, lo, hi, converged, maxiter: int, polish: int):
+def monotone_newton(fun: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]], y: np.ndarray, x: ArrayLike,
+                    lo: ArrayLike, hi: ArrayLike, converged: Callable[[np.ndarray, np.ndarray], np.ndarray],
+                    maxiter: int, polish: int) -> np.ndarray:
     """x with fun(x)[0] = y for an increasing fun (returning value and derivative; 1-d arrays):
     Newton steps, bisection of the bracket [lo, hi] where a step leaves it, each point until
     ``converged(new, old)`` (elementwise) holds for it (the others go on alone); then ``polish``
@@ -39,7 +44,7 @@ def monotone_newton(fun, y, x, lo, hi, converged, maxiter: int, polish: int):
     return x
 
 
-def quadratic_roots(a2: float, a1: float, a0: float):
+def quadratic_roots(a2: float, a1: float, a0: float) -> np.ndarray:
     """Real roots (ascending) of a2 z^2 + a1 z + a0 without cancellation (discriminant clipped at 0)."""
     disc = max(a1 * a1 - 4.0 * a2 * a0, 0.0)
     q = -0.5 * (a1 + np.copysign(np.sqrt(disc), a1))

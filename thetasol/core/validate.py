@@ -8,6 +8,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike, DTypeLike
 
 from thetasol.core.so3 import polar_orthonormalize
 
@@ -19,7 +20,7 @@ SYM_RTOL = 1e-12
 ORTHO_TOL = 1e-10
 
 
-def finite_array(x, name: str, shape: Sequence[int] | None = None, dtype=float) -> np.ndarray:
+def finite_array(x: ArrayLike, name: str, shape: Sequence[int] | None = None, dtype: DTypeLike = float) -> np.ndarray:
     """Convert to an array, checking dtype, shape and finiteness."""
     try:
         arr = np.asarray(x, dtype=dtype)
@@ -32,7 +33,7 @@ def finite_array(x, name: str, shape: Sequence[int] | None = None, dtype=float) 
     return arr
 
 
-def symmetric_matrix(a, name: str = "a", rtol: float = SYM_RTOL) -> np.ndarray:
+def symmetric_matrix(a: ArrayLike, name: str = "a", rtol: float = SYM_RTOL) -> np.ndarray:
     """A real symmetric 3x3 matrix; rejects asymmetry beyond ``rtol`` (relative to max |a_ij|)."""
     a = finite_array(a, name, (3, 3))
     scale = max(np.max(np.abs(a)), np.finfo(float).tiny)
@@ -42,7 +43,7 @@ def symmetric_matrix(a, name: str = "a", rtol: float = SYM_RTOL) -> np.ndarray:
     return 0.5 * (a + a.T)
 
 
-def second_moments(J, name: str = "J") -> np.ndarray:
+def second_moments(J: ArrayLike, name: str = "J") -> np.ndarray:
     """Second-moment tensor ``J = sum m r r^T`` as a 3x3 array, checked to be physical.
 
     Accepts the three principal values or a symmetric 3x3 tensor.  A physical body has
@@ -70,7 +71,7 @@ def second_moments(J, name: str = "J") -> np.ndarray:
     return arr
 
 
-def inertia_to_moments(I, name: str = "I") -> np.ndarray:
+def inertia_to_moments(I: ArrayLike, name: str = "I") -> np.ndarray:
     """Second moments ``J = tr(I)/2 1 - I`` from an inertia tensor (principal values or 3x3)."""
     arr = finite_array(I, name)
     if arr.shape == (3,):
@@ -85,7 +86,7 @@ def inertia_to_moments(I, name: str = "I") -> np.ndarray:
     return second_moments(J, f"second moments from {name}")
 
 
-def rotation_matrix(Q, name: str = "Q0", tol: float = ORTHO_TOL) -> np.ndarray:
+def rotation_matrix(Q: ArrayLike, name: str = "Q0", tol: float = ORTHO_TOL) -> np.ndarray:
     """A proper rotation; rejects ``|Q^T Q - 1| > tol`` or ``det Q < 0``, snaps round-off to SO(3)."""
     Q = finite_array(Q, name, (3, 3))
     err = np.max(np.abs(Q.T @ Q - np.eye(3)))
@@ -96,11 +97,11 @@ def rotation_matrix(Q, name: str = "Q0", tol: float = ORTHO_TOL) -> np.ndarray:
     return polar_orthonormalize(Q)
 
 
-def vector3(v, name: str) -> np.ndarray:
+def vector3(v: ArrayLike, name: str) -> np.ndarray:
     """A finite 3-vector."""
     return finite_array(v, name, (3,))
 
 
-def times(t, name: str = "t") -> np.ndarray:
+def times(t: ArrayLike, name: str = "t") -> np.ndarray:
     """Finite real times of any shape."""
     return finite_array(t, name)

@@ -756,3 +756,12 @@ class Tracked:
                 part = interval_mp(self.pieces[p], lo, hi, N, seeds, ev, nums, dps)
                 out[p] = out[p] + np.array([[complex(v) for v in row] for row in part])
         return out
+
+
+def shaped_integrals(raw: np.ndarray, weights: np.ndarray | None, shape: str) -> np.ndarray:
+    """Rows of integrals (N, nd) in the form the input had (see PlaneCurve._parse_targets)."""
+    if shape == "single":
+        return raw[0]
+    if shape == "divisor":
+        return weights @ raw
+    return raw

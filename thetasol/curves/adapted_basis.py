@@ -177,7 +177,7 @@ def symplectic_completion(W: np.ndarray) -> np.ndarray:
     return G
 
 
-def real_flow_basis(P: np.ndarray, parities: np.ndarray):
+def real_flow_basis(P: np.ndarray, parities: np.ndarray) -> tuple[np.ndarray, int]:
     """Symplectic change of basis G making the real flow direction span the first a-cycles.
 
     Parameters

@@ -20,7 +20,11 @@ degenerate curves.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.curves._homology import LiftedGraph, symplectic_basis
 from thetasol.curves._paths import CellGraph
@@ -38,20 +42,15 @@ from thetasol.curves._places import (
     series_integral,
 )
 from thetasol.curves._poly import CurvePoly, parse_numerators, polynomial_roots, root_corrections
-from thetasol.curves._quad import Piece, Tracker
+from thetasol.curves._quad import Piece, Tracker, shaped_integrals
+
+if TYPE_CHECKING:
+    import mpmath
+    import sympy
 
 __all__ = ["PlaneCurve", "Place"]
 
 INF = complex("inf")
-
-
-def _shaped(raw, weights, shape):
-    """Rows of integrals (N, nd) in the form the input had (see PlaneCurve._parse_targets)."""
-    if shape == "single":
-        return raw[0]
-    if shape == "divisor":
-        return weights @ raw
-    return raw
 
 
 class Place:
@@ -82,7 +81,7 @@ class Place:
         self._y = y
 
     @property
-    def y(self):
+    def y(self) -> complex:
         if self._y is None and self.kind != "regular":
             self.curve._place_limits([self])
         return self._y
@@ -107,7 +106,7 @@ class Place:
         ys = "?" if self._y is None else ("oo" if np.isinf(abs(self._y)) else f"{self._y:.6g}")
         return f"Place(x={xs}, y={ys}, e={self.e}, kind={self.kind!r})"
 
-    def series(self, order: int = 8):
+    def series(self, order: int = 8) -> tuple[np.ndarray, np.ndarray]:
         """Laurent-Puiseux expansion of y at this place in the local parameter t.
 
         Returns (k, c): integer exponents (from the lowest significant one, negative at a pole of y)
@@ -117,7 +116,8 @@ class Place:
         """
         return expansion(self.curve, self, None, int(order), "y")
 
-    def expand(self, numerator, order: int = 8, differential: bool = True):
+    def expand(self, numerator: str | sympy.Expr, order: int = 8,
+               differential: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """Expansion of g(x, y) dx / f_y (differential=True) or of the function g(x, y) at this place.
 
         Returns (k, c) with g dx / f_y = sum c_k t^k dt (or g = sum c_k t^k) in the local parameter
@@ -240,17 +240,17 @@ class PlaneCurve:
         return self._sites.copy()
 
     @property
-    def base_point(self):
+    def base_point(self) -> tuple[complex, complex]:
         """The default base point (x0, y0) of the Abel map: lower-left corner of the path box, sheet 0."""
         G = self._graph
         return complex(G.V[G.base]), complex(self._vroots[G.base][0])
 
-    def sheets(self):
+    def sheets(self) -> tuple[complex, np.ndarray]:
         """The base x0 and the n values of y over it, in the order used by :meth:`monodromy`."""
         G = self._graph
         return complex(G.V[G.base]), self._vroots[G.base].copy()
 
-    def monodromy(self):
+    def monodromy(self) -> tuple[complex, np.ndarray, list[tuple[complex, np.ndarray]]]:
         """Local monodromy of every critical value, on the sheets of :meth:`sheets`.
 
         Returns (x0, y0, [(b, perm)]) with b a branch point (``inf`` last) and perm[i] = j when
@@ -296,11 +296,11 @@ class PlaneCurve:
     def _numerators(self, exprs):
         return parse_numerators(exprs, self.x, self.y)
 
-    def polynomial(self):
+    def polynomial(self) -> sympy.Expr:
         """The curve's polynomial f(x, y) as an exact sympy expression (rational coefficients)."""
         return self._poly.sympy_expr()
 
-    def differential_values(self, numerators, x, y) -> np.ndarray:
+    def differential_values(self, numerators: Sequence[str | sympy.Expr], x: ArrayLike, y: ArrayLike) -> np.ndarray:
         """Values ``g_d(x, y) / f_y(x, y)`` of the differentials ``g_d dx / f_y`` at points of the curve.
 
         Parameters
@@ -368,12 +368,12 @@ class PlaneCurve:
             self._cache["hom"] = (a, b, G)
         return self._cache["hom"]
 
-    def homology_basis(self):
+    def homology_basis(self) -> tuple[np.ndarray, np.ndarray]:
         """The symplectic basis as integer vectors over the lifted edges: (a, b), each (g, n_edges * n)."""
         a, b, _ = self._homology()
         return a.copy(), b.copy()
 
-    def intersection_matrix(self):
+    def intersection_matrix(self) -> np.ndarray:
         """Intersection matrix of (a_1..a_g, b_1..b_g): the standard [[0, 1], [-1, 0]] by construction."""
         a, b, G = self._homology()
         C = np.vstack([a, b])
@@ -405,7 +405,8 @@ class PlaneCurve:
         self._cache[key] = Pm
         return Pm.copy()
 
-    def period_matrix(self, differentials=None, dps: int | None = None):
+    def period_matrix(self, differentials: Sequence[str | sympy.Expr] | None = None,
+                      dps: int | None = None) -> np.ndarray | mpmath.matrix:
         """Periods [A | B] (g x 2g complex) of the differentials g dx / f_y over the symplectic basis.
 
         Parameters
@@ -432,7 +433,7 @@ class PlaneCurve:
             self._cache[key] = np.hstack([PA, PB])
         return self._cache[key].copy()
 
-    def riemann_matrix(self, dps: int | None = None):
+    def riemann_matrix(self, dps: int | None = None) -> np.ndarray | mpmath.matrix:
         """tau = A^-1 B for the default holomorphic differentials; symmetric with Im tau > 0.
 
         With ``dps``: an ``mpmath.matrix`` at that precision.
@@ -489,7 +490,7 @@ class PlaneCurve:
         """The places over x = infinity (one per cycle of the monodromy at infinity)."""
         return list(self._all_places()[1])
 
-    def places_over(self, x0) -> list:
+    def places_over(self, x0: complex) -> list:
         """All places over x = x0 (a complex number or ``inf``)."""
         x0 = complex(x0)
         if not np.isfinite(x0):
@@ -508,7 +509,7 @@ class PlaneCurve:
         scale = max(abs(self._sites[k]), self._graph.min_sep, 1e-300)
         return k if d[k] <= rtol * scale else -1
 
-    def place(self, x0, y0=None) -> Place:
+    def place(self, x0: complex, y0: complex | None = None) -> Place:
         """The place over x0 (finite or ``inf``) with y-limit y0 (optional if it is unique)."""
         cands = self.places_over(x0)
         if y0 is None:
@@ -633,8 +634,7 @@ class PlaneCurve:
         if ld is None:
             return None
         sites, infs = self._all_places()
-        cands = [P for P in (infs if ld.kind == "infinity" else sites)
-                 if (ld.kind == "infinity" or P._site == ld.site)]
+        cands = [P for P in (infs if ld.kind == "infinity" else sites) if (ld.kind == "infinity" or P._site == ld.site)]
         best = []
         for P in cands:
             k, t0, Fy, _ = self._place_data(P, None, None)
@@ -704,7 +704,8 @@ class PlaneCurve:
         P = self.period_matrix()
         return np.linalg.inv(P[:, :g])
 
-    def abel_map(self, points, base=None, *, normalized: bool = True) -> np.ndarray:
+    def abel_map(self, points: Place | Sequence | Mapping, base: Place | tuple[complex, complex] | None = None, *,
+                 normalized: bool = True) -> np.ndarray:
         """Abel map of points, places or divisors.
 
         Parameters
@@ -734,9 +735,10 @@ class PlaneCurve:
             raw = raw - braw[None, :]
         if normalized:
             raw = raw @ self.normalization().T
-        return _shaped(raw, weights, shape)
+        return shaped_integrals(raw, weights, shape)
 
-    def integrate(self, numerators, points, base=None) -> np.ndarray:
+    def integrate(self, numerators: Sequence[str | sympy.Expr], points: Place | Sequence | Mapping,
+                  base: Place | tuple[complex, complex] | None = None) -> np.ndarray:
         """Integrals of the differentials p dx / f_y (p polynomials) from the base to the points.
 
         Same paths as :meth:`abel_map` (use :meth:`period_matrix` with ``differentials=`` for the
@@ -750,7 +752,7 @@ class PlaneCurve:
         raw = self._abel_raw(targets, P, key)
         if base is not None:
             raw = raw - self._abel_raw([self._as_target(base)], P, key)[0]
-        return _shaped(raw, weights, shape)
+        return shaped_integrals(raw, weights, shape)
 
     # ------------------------------------------------------------------ Riemann constant
     def canonical_divisor(self) -> dict:
@@ -774,7 +776,7 @@ class PlaneCurve:
             pts.append((x0, R[0, rng.integers(self.n)]))
         return pts
 
-    def riemann_constant(self, base=None) -> np.ndarray:
+    def riemann_constant(self, base: Place | tuple[complex, complex] | None = None) -> np.ndarray:
         """Vector of Riemann constants K (normalized coordinates, same base and paths as abel_map).
 
         For a generic effective divisor D of degree g, theta(A(P) - A(D) - K) vanishes exactly at

@@ -13,12 +13,13 @@ ellipsoid pi (n + c)^T Y (n + c) <= R^2.  The zero tests on single points use th
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.theta.lattice import lll_gram
 from thetasol.theta.riemann import riemann_theta_separated
 
 
-def ellipsoid_points(Y, center, R2):
+def ellipsoid_points(Y: np.ndarray, center: np.ndarray, R2: float) -> np.ndarray:
     """Integer points n with (n + center)^T Y (n + center) <= R2 (Fincke-Pohst, breadth first).
 
     Y symmetric positive definite (g x g); returns an int array (K, g).
@@ -50,14 +51,14 @@ def ellipsoid_points(Y, center, R2):
     return pts
 
 
-def theta_normalized_abs(z, tau, tol=1e-14):
+def theta_normalized_abs(z: ArrayLike, tau: np.ndarray, tol: float = 1e-14) -> np.ndarray:
     """|theta(z)| exp(-pi y^T Y^-1 y) for z of shape (N, g): lattice periodic, bounded; for zero tests."""
     tau = np.asarray(tau, dtype=complex)
     return np.abs(riemann_theta_separated(np.atleast_2d(np.asarray(z, dtype=complex)), 0.5 * (tau + tau.T),
                                           tol=tol)[1])
 
 
-def half_period_scan(z0, tau, tol=1e-9):
+def half_period_scan(z0: np.ndarray, tau: np.ndarray, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """|theta| exp(-pi y^T Y^-1 y) at all 4^g points z0 + (a + tau b)/2, a, b in {0, 1}^g.
 
     One lattice sum per b (grouped by n mod 2, then a sign transform over a) instead of 4^g sums.

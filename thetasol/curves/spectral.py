@@ -32,6 +32,7 @@ from fractions import Fraction
 from math import comb
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core.validate import finite_array, second_moments
 from thetasol.curves._poly import CurvePoly
@@ -106,7 +107,7 @@ def _exact_coefficients(J, M, u) -> list:
     return C
 
 
-def farthest_branch_point(J, M, u) -> float:
+def farthest_branch_point(J: ArrayLike, M: ArrayLike, u: ArrayLike) -> float:
     """max ``|E|`` over the finite branch points of (4.12) for exactly these ``J, M, u``, without the curve.
 
     The roots of the critical polynomial (the square-free part of ``disc_w(f) lc_w(f)``) of the exact
@@ -139,7 +140,7 @@ def farthest_branch_point(J, M, u) -> float:
     return float(np.abs(np.roots(cf)).max()) if len(cf) > 1 else 0.0
 
 
-def spectral_curve(J, M, u, *, tol: float = 1e-9) -> SpectralCurve:
+def spectral_curve(J: ArrayLike, M: ArrayLike, u: ArrayLike, *, tol: float = 1e-9) -> SpectralCurve:
     """The spectral curve (4.12) ``det(J^2 E^2 + M E + u - w 1) = 0`` as a :class:`SpectralCurve`.
 
     Parameters
@@ -293,7 +294,7 @@ class SpectralCurve(PlaneCurve):
             raise
 
     # ------------------------------------------------------------------ involution
-    def involution(self, p):
+    def involution(self, p: Place | tuple[complex, complex]) -> tuple[complex, complex] | Place:
         """The involution sigma: (E, w) -> (-E, w), on points or places."""
         if isinstance(p, Place):
             return self._involution_place(p)

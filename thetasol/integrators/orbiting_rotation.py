@@ -31,6 +31,7 @@ on time through the orbit.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
@@ -40,8 +41,9 @@ from thetasol.solutions.kepler import KeplerOrbit
 __all__ = ["integrate_orbiting_rotation"]
 
 
-def integrate_orbiting_rotation(J, orbit: KeplerOrbit, Q0, omega0, t, *, rtol: float = 1e-12,
-                                atol: float | None = None, method: str = "DOP853", dtype: str = "dbl"):
+def integrate_orbiting_rotation(J: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, *,
+                                rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
+                                dtype: str = "dbl") -> tuple[np.ndarray, np.ndarray]:
     """Integrate the rotation of a rigid body about its mass centre moving on ``orbit``.
 
     Parameters

@@ -38,6 +38,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross
@@ -131,7 +132,7 @@ def _roll_yaw_roots(b: float, c: float, n: float):
     return [n * n * big, n * n * small]
 
 
-def gravity_gradient_stability(J, mean_motion: float) -> GravityGradientStability:
+def gravity_gradient_stability(J: ArrayLike, mean_motion: float) -> GravityGradientStability:
     """Linear stability of a body on a circular orbit with its principal axes along the orbit frame.
 
     Parameters

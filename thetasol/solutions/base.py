@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import hat
@@ -57,13 +58,13 @@ class Solution:
             return tuple(np.concatenate(p, axis=0) for p in zip(*parts))
         return np.concatenate(parts, axis=0)
 
-    def __call__(self, t):
+    def __call__(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
         """The state at times ``t`` (any shape): a tuple of arrays with ``t.shape`` leading."""
         tt, flat = self._times(t)
         out = self._chunked(self._evaluate, flat)
         return tuple(x.reshape(tt.shape + x.shape[1:]) for x in out)
 
-    def evaluate(self, t):
+    def evaluate(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
         """Alias of ``sol(t)`` (the name diffrax users expect)."""
         return self(t)
 
@@ -123,28 +124,28 @@ class RotationSolution(Solution):
         return self._evaluate(t)[0]
 
     # -- protocol ----------------------------------------------------------------------------
-    def __call__(self, t):
+    def __call__(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """``(omega(t), Q(t))`` with shapes ``t.shape + (3,)`` and ``t.shape + (3, 3)``."""
         return super().__call__(t)
 
-    def omega(self, t):
+    def omega(self, t: ArrayLike) -> np.ndarray:
         """Body angular velocity, shape ``t.shape + (3,)``."""
         tt, flat = self._times(t)
         return self._chunked(self._omega, flat).reshape(tt.shape + (3,))
 
-    def Q(self, t):
+    def Q(self, t: ArrayLike) -> np.ndarray:
         """Attitude (body to space), shape ``t.shape + (3, 3)``."""
         return self(t)[1]
 
-    def m(self, t):
+    def m(self, t: ArrayLike) -> np.ndarray:
         """Body angular momentum ``m = I omega``, shape ``t.shape + (3,)``."""
         return self.omega(t) @ inertia_from_moments(self.J).T
 
-    def M(self, t):
+    def M(self, t: ArrayLike) -> np.ndarray:
         """The paper's skew matrix ``M = J hat(omega) + hat(omega) J = hat(I omega)`` (4.5)."""
         return hat(self.m(t))
 
-    def u(self, t):
+    def u(self, t: ArrayLike) -> np.ndarray:
         """The paper's ``u = -Q^T a Q`` (sign of (7.13), docs/conventions.md), ``t.shape + (3, 3)``."""
         Q = self.Q(t)
         return -(np.swapaxes(Q, -1, -2) @ self.a @ Q)

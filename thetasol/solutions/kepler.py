@@ -43,6 +43,7 @@ from dataclasses import dataclass, field
 
 import mpmath
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.dd import two_prod
@@ -66,7 +67,7 @@ def _series_coeffs(k: int) -> np.ndarray:
 _COEFFS = [_series_coeffs(k) for k in range(4)]
 
 
-def stumpff_c(z) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def stumpff_c(z: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Stumpff's functions ``c0, c1, c2, c3`` of ``z`` (any sign), vectorized.
 
     ``c0 = cos s``, ``c1 = sin s / s``, ``c2 = (1 - cos s)/s^2``, ``c3 = (s - sin s)/s^3`` with
@@ -239,11 +240,11 @@ class KeplerOrbit(Solution):
         """The classical elements ``a, e, i, raan, argp, nu0`` (a copy of those diagnostics)."""
         return {k: self.diagnostics[k] for k in ("a", "e", "i", "raan", "argp", "nu0")}
 
-    def position(self, t):
+    def position(self, t: ArrayLike) -> np.ndarray:
         """Position at times ``t``, shape ``t.shape + (3,)``."""
         return self(t)[0]
 
-    def velocity(self, t):
+    def velocity(self, t: ArrayLike) -> np.ndarray:
         """Velocity at times ``t``, shape ``t.shape + (3,)``."""
         return self(t)[1]
 

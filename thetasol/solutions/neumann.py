@@ -31,10 +31,12 @@ Moser and Mumford's Tata lectures II needs the same curve and degenerates in the
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.periodic import (
@@ -70,7 +72,7 @@ _REFERENCE = "a numerical integration of qddot = -a q + lambda q, lambda = (q.aq
 
 
 @contextmanager
-def series_or_unavailable(reference: str):
+def series_or_unavailable(reference: str) -> Iterator[None]:
     """Turn a Fourier series that did not converge, or a torus refused as nearly degenerate, into
     :class:`ClosedFormUnavailable` naming ``reference``, the numerical integrator to use instead."""
     try:
@@ -109,16 +111,16 @@ class Oscillator:
         self.B = fit_series(lambda al: self._invert(al) - al, f"the inverse angle of {name}",
                             floor=2 * np.pi * _EPS)
 
-    def parts(self, th):
+    def parts(self, th: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(u - lo, hi - u, sin(th/2), cos(th/2))``, each accurate near its zero."""
         s, c = np.sin(0.5 * th), np.cos(0.5 * th)
         return self.w * s * s, self.w * c * c, s, c
 
-    def u(self, th):
+    def u(self, th: np.ndarray) -> np.ndarray:
         dlo, dhi, _, _ = self.parts(th)
         return np.where(dlo <= dhi, self.lo + dlo, self.hi - dhi)
 
-    def dists(self, th):
+    def dists(self, th: np.ndarray) -> np.ndarray:
         """|u - r| for every other root, shape th.shape + (n_roots,)."""
         dlo, dhi, _, _ = self.parts(th)
         out = [d + dlo for d in self.below] + [d + dhi for d in self.above]
@@ -127,7 +129,7 @@ class Oscillator:
             out += [np.abs(u - r) for r in self.cplx]
         return np.stack(out, -1)
 
-    def rate(self, th):
+    def rate(self, th: np.ndarray) -> np.ndarray:
         return np.sqrt(self.C * np.prod(self.dists(th), -1))
 
     def _invert(self, al):
@@ -140,10 +142,10 @@ class Oscillator:
         return monotone_newton(fun, al, al.copy(), al - span, al + span,
                                 lambda new, th: np.abs(new - th) <= 1e-9, 100, 2)
 
-    def theta(self, al):
+    def theta(self, al: np.ndarray) -> np.ndarray:
         return al + eval_series(self.B, al)
 
-    def alpha(self, th):
+    def alpha(self, th: np.ndarray) -> np.ndarray:
         return th + eval_series(self.A, th)
 
 
@@ -289,7 +291,7 @@ class NeumannTorus:
         r = np.sqrt(g + o.w * c * c)
         return r, -o.w * s * c / (2.0 * r)
 
-    def state(self, th1, th2):
+    def state(self, th1: np.ndarray, th2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """x, dx/ds and u2 - u1 at the angles (th1, th2) (broadcast: a grid costs two 1-d passes)."""
         th1, th2 = np.asarray(th1, float), np.asarray(th2, float)
         r1 = self.osc[0].rate(th1)
@@ -305,7 +307,7 @@ class NeumannTorus:
         gap = ((o2.lo - o1.hi) + o1.parts(th1)[1]) + o2.parts(th2)[0]
         return np.stack(np.broadcast_arrays(*xs), -1), np.stack(np.broadcast_arrays(*dxs), -1), gap
 
-    def motion(self, t: np.ndarray):
+    def motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(x, xdot) at the times t (1-d)."""
         _, _, th = self.s_of_t(t)
         x, dx, gap = self.state(th[0], th[1])
@@ -316,7 +318,7 @@ class NeumannTorus:
         """The two angles alpha_k(s), linear in s: shape (2, s.size)."""
         return self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
 
-    def time_of_s(self, s, angles: bool = False):
+    def time_of_s(self, s: np.ndarray, angles: bool = False) -> tuple[np.ndarray, ...]:
         """t(s) and dt/ds = u2 - u1 at s (one set of powers e^{i n alpha} per coordinate); with
         ``angles`` also theta_k(alpha_k(s)) and dtheta_k/dalpha_k."""
         al = self._alpha(s)
@@ -342,7 +344,7 @@ class NeumannTorus:
             t, dt = t + sgn * (g - self.table0[kk]), dt + sgn * dg / f
         return t, dt
 
-    def s_of_t(self, t: np.ndarray):
+    def s_of_t(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """s with t(s) = t (t(s) is increasing) and alpha(s), theta(s): safeguarded Newton on the
         tables of t(s), then one Newton step on the series; if a step is above 1e-9 / drift and the
         rounding of s (64 eps |s|), a table was poor (it stopped at its node limit) and the
@@ -446,7 +448,7 @@ class LatitudeCircle:
         self.rho0 = np.hypot(x0[ax.o1], x0[ax.o2])
         self.rate = ax.ell / self.rho0 ** 2
 
-    def motion(self, t):
+    def motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         ax = self.ax
         m1, m2, n = ax.basis()
         lam = ax.lam0 + self.rate * t
@@ -487,21 +489,21 @@ class EllipticNeumann:
         self.Pl0 = eval_series(self.P_lam, self.al0)
         self.n_pow = max(osc.B.size, self.P_lam.size) - 1
 
-    def rho2(self, th):
+    def rho2(self, th: np.ndarray) -> np.ndarray:
         """1 - z^2 without cancellation."""
         dlo, dhi, _, _ = self.osc.parts(th)
         return (self.one_minus_hi + dhi) * (self.one_plus_lo + dlo)
 
-    def series(self, g, what):
+    def series(self, g: Callable[[np.ndarray], np.ndarray], what: str) -> np.ndarray:
         """The Fourier series in alpha of g(theta(alpha)) (noise floor from ell)."""
         return fit_series(lambda al: g(self.osc.theta(al)), what, floor=4 * _EPS * (abs(self.ax.ell) + 1.0))
 
-    def angle(self, t, n_pow: int = 0):
+    def angle(self, t: np.ndarray, n_pow: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """alpha(t) and its powers e^{ij alpha}, j = 1..max(self.n_pow, n_pow) (shared by the series)."""
         al = self.al0 + t / self.fbar
         return al, powers(al, max(self.n_pow, n_pow))
 
-    def state(self, t, al, E):
+    def state(self, t: np.ndarray, al: np.ndarray, E: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(x, xdot, theta) at the times t from alpha(t) and its powers (:meth:`angle`)."""
         ax, osc = self.ax, self.osc
         m1, m2, n = ax.basis()
@@ -517,7 +519,7 @@ class EllipticNeumann:
         xd = zd[:, None] * n - (z * zd / rho)[:, None] * radial + (ax.ell / rho)[:, None] * east
         return x, xd, th
 
-    def motion(self, t):
+    def motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         al, E = self.angle(t)
         x, xd, _ = self.state(t, al, E)
         return x, xd
@@ -583,11 +585,11 @@ class PlanarNeumann:
         self.x0n = x0n / np.linalg.norm(x0n)
         self.n = n
 
-    def angle(self, t):
+    def angle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(v(t) - v0, vdot(t)): v - v0 = (psi - psi0) / 2."""
         return pendulum_angle(self.pend, t)
 
-    def state(self, dv, vdot):
+    def state(self, dv: np.ndarray, vdot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(x, xdot) at the angles dv from x0 (turned about the fixed normal: |x| = 1 at far times)."""
         x = _rotate(self.x0n, self.n, dv)
         return x, vdot[:, None] * np.cross(self.n, x)
@@ -596,7 +598,7 @@ class PlanarNeumann:
         """v turned about the normal by the angles dv, shape dv.shape + (3,)."""
         return _rotate(v, self.n, dv)
 
-    def motion(self, t):
+    def motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return self.state(*self.angle(t))
 
     def info(self) -> dict:
@@ -613,7 +615,8 @@ def _great_circle_normal(x0, y0, fallback: int):
     return normal
 
 
-def neumann_model(k: np.ndarray, x0: np.ndarray, y0: np.ndarray):
+def neumann_model(k: np.ndarray, x0: np.ndarray,
+                  y0: np.ndarray) -> NeumannTorus | EllipticNeumann | LatitudeCircle | PlanarNeumann:
     """The model of Neumann's problem ``xddot = -k x + (x.kx - |xdot|^2) x`` (k ascending, |x0| = 1,
     y0 tangent), chosen from the data: an object with ``method``, ``motion(t) -> (x, xdot)`` and
     ``info()``: :class:`NeumannTorus`, :class:`EllipticNeumann`, :class:`LatitudeCircle` or
@@ -679,7 +682,7 @@ class NeumannSolution(Solution):
     _model: object = field(default=None, repr=False)
     _units: tuple = field(default=None, repr=False)
 
-    def __call__(self, t):
+    def __call__(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """``(q(t), v(t))``, each of shape ``t.shape + (3,)``."""
         return super().__call__(t)
 
@@ -723,7 +726,7 @@ def _validated(a, q0, v0):
     return a, q0, v0, R
 
 
-def solve_neumann(a, q0, v0, *, reference: str = _REFERENCE) -> NeumannSolution:
+def solve_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, *, reference: str = _REFERENCE) -> NeumannSolution:
     """Exact motion of a point on the sphere ``|q| = |q0|`` in the potential ``phi = 1/2 q^T a q``
     (Section 6, (6.1)-(6.2); Theorem 3: the mass centre of the configuration).
 

@@ -42,6 +42,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.attitude import angle_mod_2pi, principal_frame, uniform_rotation
@@ -99,7 +100,7 @@ class OrbitingRotation(RotationSolution):
         P = c["P"]
         return wp @ P.T, Qp @ P.T
 
-    def u(self, t):
+    def u(self, t: ArrayLike) -> np.ndarray:
         """The paper's ``u = -Q^T a(t) Q`` with the tidal matrix (7.11) of the orbit at ``t``."""
         Q = self.Q(t)
         r = self.orbit.position(t)
@@ -162,7 +163,7 @@ def _pitch_setup(Ip, k, s, Qp, wp, F0, n):
     return c, "pitch/" + pend["kind"]
 
 
-def solve_orbiting_rotation(J, orbit: KeplerOrbit, Q0, omega0) -> OrbitingRotation:
+def solve_orbiting_rotation(J: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, omega0: ArrayLike) -> OrbitingRotation:
     """The closed-form rotation about the mass centre on ``orbit`` where one exists.
 
     Parameters

@@ -33,6 +33,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
@@ -130,7 +131,8 @@ def _potential_branch(J, a, Q0, omega0, dps):
 _BRANCHES: list[Callable] = [_free_branch, _pendulum_branch, _neumann_branch, _potential_branch]
 
 
-def solve_rotation(J, a, Q0, omega0, *, dps: int | None = None) -> RotationSolution:
+def solve_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *,
+                   dps: int | None = None) -> RotationSolution:
     """Exact rotation of a rigid body in the potential ``phi = 1/2 x^T a x`` (closed form).
 
     Parameters

@@ -48,6 +48,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy import special as _sp
 
 from thetasol.core.dd import two_prod, two_sum
@@ -149,7 +150,7 @@ def _Pi(n, mc):
     return np.where(n == 0, _K(mc), out)
 
 
-def ellipk(m, mc=None, *, dps: int | None = None):
+def ellipk(m: ArrayLike, mc: ArrayLike | None = None, *, dps: int | None = None) -> np.ndarray | float:
     """Complete elliptic integral of the first kind ``K(m)``.
 
     Parameters
@@ -172,7 +173,7 @@ def ellipk(m, mc=None, *, dps: int | None = None):
     return _out(_K(mc))
 
 
-def ellipe(m, mc=None, *, dps: int | None = None):
+def ellipe(m: ArrayLike, mc: ArrayLike | None = None, *, dps: int | None = None) -> np.ndarray | float:
     """Complete elliptic integral of the second kind ``E(m) = 2 R_G(0, mc, 1)`` (DLMF 19.25.1)."""
     if dps is not None:
         return _mp_apply(lambda mp, m_, mc_: mp.ellipe(m_), dps, m=m, mc=mc)
@@ -180,7 +181,7 @@ def ellipe(m, mc=None, *, dps: int | None = None):
     return _out(_E(mc))
 
 
-def ellippi(n, m, mc=None, *, dps: int | None = None):
+def ellippi(n: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *, dps: int | None = None) -> np.ndarray | float:
     """Complete elliptic integral of the third kind ``Pi(n | m)``, ``n < 1``.
 
     ``Pi(n|m) = int_0^{pi/2} dtheta / ((1 - n sin^2) sqrt(1 - m sin^2))``
@@ -210,7 +211,7 @@ def _amplitude_args(phi, m, mc, *extra):
     return (j, np.sin(r), np.cos(r), m, mc, *extra)
 
 
-def ellipf(phi, m, mc=None, *, dps: int | None = None):
+def ellipf(phi: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *, dps: int | None = None) -> np.ndarray | float:
     """Incomplete elliptic integral of the first kind ``F(phi | m)`` for real ``phi``.
 
     ``F = sin(phi) R_F(cos^2, 1 - m sin^2, 1)`` on ``|phi| <= pi/2`` (DLMF 19.25.5),
@@ -226,7 +227,8 @@ def ellipf(phi, m, mc=None, *, dps: int | None = None):
     return _out(out)
 
 
-def ellipeinc(phi, m, mc=None, *, dps: int | None = None):
+def ellipeinc(phi: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *,
+              dps: int | None = None) -> np.ndarray | float:
     """Incomplete elliptic integral of the second kind ``E(phi | m)``.
 
     On ``|phi| <= pi/2`` the cancellation-free form DLMF 19.25.9 (in homogeneous
@@ -249,7 +251,8 @@ def ellipeinc(phi, m, mc=None, *, dps: int | None = None):
     return _out(out)
 
 
-def ellippiinc(n, phi, m, mc=None, *, dps: int | None = None):
+def ellippiinc(n: ArrayLike, phi: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *,
+               dps: int | None = None) -> np.ndarray | float:
     """Incomplete elliptic integral of the third kind ``Pi(n; phi | m)``, ``n < 1``.
 
     ``Pi = int_0^phi dtheta / ((1 - n sin^2) sqrt(1 - m sin^2))
@@ -408,7 +411,8 @@ def _ellipj_reduced(hi, lo, m, mc):
     return out_sn, out_cn, dn, out_am
 
 
-def ellipj(u, m, mc=None, *, dps: int | None = None):
+def ellipj(u: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *,
+           dps: int | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Jacobi elliptic functions ``sn, cn, dn`` and the amplitude ``am`` for real ``u``.
 
     Parameters

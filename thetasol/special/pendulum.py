@@ -6,6 +6,8 @@ about a fixed principal axis and by the planar motion of Neumann's problem.
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
+
 import numpy as np
 
 from thetasol.special.elliptic import ellipf, ellipj
@@ -13,7 +15,7 @@ from thetasol.special.elliptic import ellipf, ellipj
 __all__ = ["pendulum_angle", "pendulum_params"]
 
 
-def pendulum_angle(c, t):
+def pendulum_angle(c: Mapping[str, float | str], t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """phi(t), phidot(t) from the closed form chosen at set-up."""
     kind = c["kind"]
     if kind == "uniform":
@@ -36,7 +38,7 @@ def pendulum_angle(c, t):
     return 0.5 * (psi - c["psi0"]), 0.5 * psidot
 
 
-def pendulum_params(psi0: float, psidot0: float, nu: float):
+def pendulum_params(psi0: float, psidot0: float, nu: float) -> tuple[dict[str, float | str], float]:
     """Constants of :func:`pendulum_angle` for ``psi'' = -nu^2 sin psi`` (``nu > 0``) from ``psi0``
     in (-pi, pi] and ``psidot0``: libration, circulation (parameter 1/m) or the separatrix.
 

@@ -65,7 +65,7 @@ class FlowTheta:
         self.u = u
         self.r = r
 
-    def __call__(self, t: np.ndarray, derivative: bool = True):
+    def __call__(self, t: np.ndarray, derivative: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv."""
         t = np.asarray(t, float)
         phi = np.multiply.outer(t, self.u)

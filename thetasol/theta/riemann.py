@@ -52,6 +52,7 @@ import math
 from collections.abc import Sequence
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core.dd import DD, dd_matvec, dd_prod, dd_split_mp, dd_sum
 from thetasol.theta._checks import (
@@ -73,7 +74,7 @@ _PI_LO = 1.2246467991473532e-16
 # ----------------------------------------------------------------------------------------
 # Public API
 # ----------------------------------------------------------------------------------------
-def siegel_reduce(tau) -> tuple[np.ndarray, np.ndarray]:
+def siegel_reduce(tau: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """Siegel reduction of a Riemann matrix (Frauendiener, Jaber, Klein 2019).
 
     Parameters
@@ -345,7 +346,8 @@ class RiemannTheta:
                 "use separated=True to get theta = exp(e) * v")
         return res[()] if res.ndim == 0 else res
 
-    def __call__(self, z, char=None, derivs: Sequence = (), separated: bool = False):
+    def __call__(self, z: ArrayLike, char: str | tuple[ArrayLike, ArrayLike] | None = None, derivs: Sequence = (),
+                 separated: bool = False) -> np.ndarray | complex | tuple[np.ndarray, np.ndarray]:
         """``theta[alpha; beta](z | tau)`` or its directional derivative ``D_{v_1} .. D_{v_k} theta``.
 
         Parameters
@@ -365,11 +367,13 @@ class RiemannTheta:
         shape, e, J, jet, is_all = self._run(z, char, V, len(V))
         return self._finish(shape, e, J[:, :, -1] if len(V) else J[:, :, 0], is_all, (), separated)
 
-    def separated(self, z, char=None, derivs: Sequence = ()):
+    def separated(self, z: ArrayLike, char: str | tuple[ArrayLike, ArrayLike] | None = None,
+                  derivs: Sequence = ()) -> tuple[np.ndarray, np.ndarray]:
         """Exponent-separated evaluation ``(e, v)``: ``theta = exp(e) v``, ``e = pi y.(Im tau)^{-1}.y``."""
         return self(z, char, derivs, separated=True)
 
-    def jet(self, z, char=None, order: int = 1, separated: bool = False):
+    def jet(self, z: ArrayLike, char: str | tuple[ArrayLike, ArrayLike] | None = None, order: int = 1,
+            separated: bool = False) -> tuple[np.ndarray, ...]:
         """Value, gradient (order >= 1) and Hessian (order 2) in one pass over the lattice.
 
         Returns a tuple ``(value, gradient[, hessian])`` with shapes ``s``, ``s + (g,)``,
@@ -394,18 +398,21 @@ class RiemannTheta:
             return (ee[()] if ee.ndim == 0 else ee, *outs)
         return tuple(self._finish(shape, e, p, is_all, (), False) for p in parts)
 
-    def gradient(self, z, char=None, separated: bool = False):
+    def gradient(self, z: ArrayLike, char: str | tuple[ArrayLike, ArrayLike] | None = None,
+                 separated: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """Gradient ``d theta / d z_j``, shape ``z.shape[:-1] + (g,)`` (one pass over the lattice)."""
         res = self.jet(z, char, 1, separated)
         return (res[0], res[2]) if separated else res[1]
 
-    def hessian(self, z, char=None, separated: bool = False):
+    def hessian(self, z: ArrayLike, char: str | tuple[ArrayLike, ArrayLike] | None = None,
+                separated: bool = False) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """Hessian ``d^2 theta / d z_i d z_j``, shape ``z.shape[:-1] + (g, g)``."""
         res = self.jet(z, char, 2, separated)
         return (res[0], res[3]) if separated else res[2]
 
 
-def riemann_theta(z, tau, char=None, derivs: Sequence = (), tol: float = 1e-14, dps: int | None = None):
+def riemann_theta(z: ArrayLike, tau: ArrayLike, char: str | tuple[ArrayLike, ArrayLike] | None = None,
+                  derivs: Sequence = (), tol: float = 1e-14, dps: int | None = None) -> np.ndarray | complex:
     """Riemann theta function ``theta[alpha; beta](z | tau)`` (DLMF 21.2.5) or a derivative.
 
     Parameters
@@ -442,8 +449,9 @@ def riemann_theta(z, tau, char=None, derivs: Sequence = (), tol: float = 1e-14, 
     return RiemannTheta(tau, tol)(z, char, derivs)
 
 
-def riemann_theta_separated(z, tau, char=None, derivs: Sequence = (), tol: float = 1e-14,
-                            dps: int | None = None):
+def riemann_theta_separated(z: ArrayLike, tau: ArrayLike, char: str | tuple[ArrayLike, ArrayLike] | None = None,
+                            derivs: Sequence = (), tol: float = 1e-14,
+                            dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Exponent-separated theta: ``(e, v)`` with ``theta = exp(e) * v``.
 
     ``e = pi y.(Im tau)^{-1}.y`` (real, ``y = Im z``) and ``|v|`` is bounded by a constant

@@ -47,7 +47,7 @@ class CauchyMeans:
     nu: np.ndarray
 
 
-def circle_data(sd: SpectralData, s_: int, radius: float):
+def circle_data(sd: SpectralData, s_: int, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Points on a circle |E| = radius around the place P_s (over E = 0), their w, and the local
     Abel integrals from the place along the radii (Gauss-Legendre)."""
     curve, place, slope = sd.curve, sd.P0[s_], sd.slopes[s_]
@@ -63,7 +63,8 @@ def circle_data(sd: SpectralData, s_: int, radius: float):
     return Ec, wc, local
 
 
-def cauchy_means(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts, theta_d, radius: float) -> CauchyMeans:
+def cauchy_means(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
+                 theta_d: tuple[np.ndarray, np.ndarray, np.ndarray], radius: float) -> CauchyMeans:
     """X0, rho and the exponents' constants at the places over E = 0 (module docstring).
 
     ``theta_d = (ed, vd, dlog_d)``: theta at ``d_k`` (exponent, value) and its log-derivative along U.
@@ -91,7 +92,8 @@ def cauchy_means(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts, the
     return CauchyMeans(X0=X0, rho=rho, nu=cst)
 
 
-def auxiliary_rows(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts, dlog_d: np.ndarray):
+def auxiliary_rows(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
+                   dlog_d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Exponent constants nu(P, k) at points P where eigenvectors mix (near branch points).
 
     Returns (nu (n, 3), relative component sizes |psi_k| / |psi| (n, 3)).

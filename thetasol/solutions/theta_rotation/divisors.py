@@ -17,12 +17,16 @@ vanishes (a base point): on the normalization it cancels in ``psi_k = v_k / <alp
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from thetasol.mechanics.lax import eigenvector_poles, polish_eigenvector_poles, right_eigenvector
 from thetasol.solutions.theta_rotation.lattice import reduce_lattice
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
+
+if TYPE_CHECKING:
+    from thetasol.curves.spectral import SpectralCurve
 
 __all__ = ["EigenvectorDivisors", "eigenvector_divisors"]
 
@@ -67,7 +71,8 @@ def choose_alpha(X: np.ndarray) -> np.ndarray:
     return best
 
 
-def abel_friendly_divisor(Jp, M, u, alpha, bp, degree):
+def abel_friendly_divisor(Jp: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.ndarray, bp: np.ndarray,
+                          degree: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pole divisor (E, w, alpha') of the eigenvector for the normalization vector alpha', among alpha
     and random ones, whose points are farthest from the branch points and all within 10 |bp|max of E = 0."""
     R = float(np.abs(bp).max())
@@ -85,7 +90,7 @@ def abel_friendly_divisor(Jp, M, u, alpha, bp, degree):
     return best
 
 
-def drop_node_point(Ez: np.ndarray, wz: np.ndarray):
+def drop_node_point(Ez: np.ndarray, wz: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The points of an eigenvector divisor on the normalization: the one at the node E = 0 removed."""
     k = int(np.argmin(np.abs(Ez)))
     if abs(Ez[k]) > 1e-8 * (1 + np.abs(Ez).max()):
@@ -93,7 +98,7 @@ def drop_node_point(Ez: np.ndarray, wz: np.ndarray):
     return np.delete(Ez, k), np.delete(wz, k)
 
 
-def circle_radius(curve, E_poles: np.ndarray, E_zeros: np.ndarray) -> float:
+def circle_radius(curve: SpectralCurve, E_poles: np.ndarray, E_zeros: np.ndarray) -> float:
     """Radius of the Cauchy circles around E = 0.
 
     The poles of rho_k (the divisor D0) and the branch points must lie outside, with margin 3

@@ -65,7 +65,7 @@ class FlowEvaluator:
     spin: float
     axis: int | None
 
-    def phi0(self, t: np.ndarray, derivative: bool):
+    def phi0(self, t: np.ndarray, derivative: bool) -> tuple[np.ndarray, np.ndarray | None]:
         """Phi(0, t) (n, 3, 3) = Q'(t)^T Q'0 in the principal frame and, if asked, its derivative."""
         _, v, dv = self.flow(t, derivative)
         vb, vd = v[:, :9].reshape(-1, 3, 3), v[:, 9:]          # [n, s, k], [n, k]
@@ -78,7 +78,7 @@ class FlowEvaluator:
         rate = 1j * self.nu[None] + dv[:, :9].reshape(-1, 3, 3) / vb - (dv[:, 9:] / vd)[:, None, :]
         return Phi, B @ np.einsum("nsk,si->nki", Psi * rate, self.X0inv)
 
-    def evaluate(self, t: np.ndarray):
+    def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(omega, Q)`` at the flat times ``t``: shapes (n, 3), (n, 3, 3) in the body frame given."""
         Phi, Phidot = self.phi0(t, derivative=True)
         Phi_r = Phi.real
@@ -100,7 +100,8 @@ class FlowEvaluator:
         return np.abs(Phi.imag).max(axis=(-1, -2))
 
 
-def corrected_shifts(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts, ex: Exponents):
+def corrected_shifts(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
+                     ex: Exponents) -> tuple[np.ndarray, float]:
     """The shifts b_sk moved onto the initial data (module docstring): (b (9, g), size of the move)."""
     th, U, B, g = sd.theta, sd.U, sd.B, sd.genus
     X0, rho = ex.means.X0, ex.means.rho
@@ -127,7 +128,8 @@ def corrected_shifts(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
     return b + db, shift_correction
 
 
-def flow_evaluator(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts, ex: Exponents):
+def flow_evaluator(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
+                   ex: Exponents) -> tuple[FlowEvaluator, float]:
     """Stage 5: the evaluator, and the size of the shift correction (module docstring)."""
     b, shift_correction = corrected_shifts(sd, dv, ts, ex)
     flow = FlowTheta(sd.tau, sd.U[:sd.rdim], np.concatenate([b, ts.d]))

@@ -7,13 +7,20 @@ At the place ``inf_j`` (``w / E^2 -> J_j^2``) the Baker-Akhiezer function has it
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 import sympy as sp
+
+if TYPE_CHECKING:
+    from thetasol.curves.plane_curve import Place
+    from thetasol.curves.spectral import SpectralCurve
 
 __all__ = ["infinity_data", "velocity_at_infinity"]
 
 
-def infinity_data(curve, J2, M):
+def infinity_data(curve: SpectralCurve, J2: np.ndarray, M: np.ndarray) -> tuple[list[Place], np.ndarray, np.ndarray]:
     """The places over E = infinity with J_j (w / E^2 -> J_j^2) and the eigenvector b_j of L there.
 
     b_j spans the eigenspace of J^2 for J_j^2 when it is simple (a coordinate axis); for a symmetric
@@ -51,7 +58,7 @@ def infinity_data(curve, J2, M):
     return places, np.array(Js), B
 
 
-def velocity_at_infinity(curve, nums) -> np.ndarray:
+def velocity_at_infinity(curve: SpectralCurve, nums: Sequence[sp.Expr]) -> np.ndarray:
     """sum_j J_j omega_i / ds at the places over E = infinity (s = 1/E), omega_i = g_i dE / f_w.
 
     Distinct J_j: in closed form.  f = lc prod_l (w - w_l) with w_l = x_l E^2 + O(E), x_l = J_l^2, so

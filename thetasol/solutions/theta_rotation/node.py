@@ -8,14 +8,21 @@ eigenproblem accurate to eps instead.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
 import numpy as np
 
 from thetasol.mechanics.lax import lax_matrix, right_eigenvector
 
+if TYPE_CHECKING:
+    from thetasol.curves.plane_curve import Place
+    from thetasol.curves.spectral import SpectralCurve
+
 __all__ = ["node_branch", "nearest_eigenvalue", "node_slopes", "local_branch", "node_branch_slopes"]
 
 
-def node_branch(curve, slope, Es: np.ndarray):
+def node_branch(curve: SpectralCurve, slope: complex, Es: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(w, unit right eigenvector) on the node branch of slope ``slope`` at the small values Es.
 
     There L(E) - w = (u - lam) + E (M - (w - lam) / E) + E^2 J^2 has two rows parallel to O(E): its
@@ -54,14 +61,14 @@ def node_branch(curve, slope, Es: np.ndarray):
     return lb + Ev * x, v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
-def nearest_eigenvalue(curve, Es: np.ndarray, target: np.ndarray) -> np.ndarray:
+def nearest_eigenvalue(curve: SpectralCurve, Es: np.ndarray, target: np.ndarray) -> np.ndarray:
     """The eigenvalue of L(Es) nearest to ``target`` (float64; same shape as Es)."""
     W = np.linalg.eigvals(lax_matrix(np.sqrt(curve.J2), curve.M, curve.u, Es))
     idx = np.argmin(np.abs(W - target[..., None]), axis=-1)
     return np.take_along_axis(W, idx[..., None], axis=-1)[..., 0]
 
 
-def node_slopes(curve):
+def node_slopes(curve: SpectralCurve) -> np.ndarray:
     """dw/dE on the node's two branches: the eigenvalues of M compressed to the 2D eigenspace of u."""
     lam, V = np.linalg.eigh(curve.u)
     lb = curve.node[1]
@@ -71,7 +78,7 @@ def node_slopes(curve):
     return mu
 
 
-def local_branch(curve, place, slope, Es: np.ndarray) -> np.ndarray:
+def local_branch(curve: SpectralCurve, place: Place, slope: complex | None, Es: np.ndarray) -> np.ndarray:
     """w on the branch of ``place`` (over E = 0) at the small values Es (same shape).
 
     ``slope`` is dw/dE at a node's branch (:func:`node_slopes`; the scaled eigenproblem of
@@ -82,7 +89,7 @@ def local_branch(curve, place, slope, Es: np.ndarray) -> np.ndarray:
     return nearest_eigenvalue(curve, Es, np.full(np.shape(Es), complex(place.y)))
 
 
-def node_branch_slopes(curve, places) -> tuple:
+def node_branch_slopes(curve: SpectralCurve, places: Sequence[Place]) -> tuple:
     """dw/dE for each of ``places`` (over E = 0): the slope at a branch of the node, None elsewhere.
 
     The node's two branches are told apart by the first-order coefficient of their series

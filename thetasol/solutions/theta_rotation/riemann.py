@@ -15,6 +15,7 @@ vanishing theorem choosing among the half-period candidates.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -22,6 +23,11 @@ from thetasol.mechanics.lax import lax_matrix
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.lattice import reduce_lattice
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
+
+if TYPE_CHECKING:
+    import sympy as sp
+
+    from thetasol.curves.plane_curve import Place
 
 __all__ = ["ThetaShifts", "theta_shifts"]
 
@@ -48,7 +54,7 @@ class ThetaShifts:
     d: np.ndarray
 
 
-def zero_order(Pl, numerator) -> int:
+def zero_order(Pl: Place, numerator: sp.Expr) -> int:
     """Order of vanishing of numerator dE / f_w at the place (from its expansion).
 
     A coefficient is significant against the largest term c_k t0^k on the sampling circle

@@ -13,9 +13,12 @@ each a function returning a frozen dataclass:
 from __future__ import annotations
 
 import warnings
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.mechanics.equations import invariants as first_integrals
 from thetasol.solutions._symmetry import sorted_principal_frame, symmetry_axis
@@ -26,6 +29,9 @@ from thetasol.solutions.theta_rotation.exponents import exponents
 from thetasol.solutions.theta_rotation.frame import body_frame
 from thetasol.solutions.theta_rotation.riemann import theta_shifts
 from thetasol.solutions.theta_rotation.spectral_data import spectral_data
+
+if TYPE_CHECKING:
+    from thetasol.curves.plane_curve import Place
 
 __all__ = ["ThetaRotation"]
 
@@ -86,7 +92,7 @@ class ThetaRotation(RotationSolution):
         modes = int(self.evaluator.flow.modes.shape[0])
         return max(1, min(CHUNK, MEMORY_PER_CHUNK // (48 * max(modes, 1))))
 
-    def abel_map(self, points) -> np.ndarray:
+    def abel_map(self, points: Place | Sequence | Mapping) -> np.ndarray:
         """Abel map in the coordinates of :attr:`riemann_matrix` and :attr:`U`.
 
         ``points`` as for :meth:`thetasol.PlaneCurve.abel_map` (points (E, w) of the spectral curve
@@ -94,7 +100,7 @@ class ThetaRotation(RotationSolution):
         """
         return self.curve.abel_map(points, normalized=False) @ self.normalization.T
 
-    def imaginary_residual(self, t) -> np.ndarray:
+    def imaginary_residual(self, t: ArrayLike) -> np.ndarray:
         """max |Im Phi(0, t)|: the theta quotients are complex, their combination is real; the
         imaginary part left over measures the float64 error of the evaluation (shape ``t.shape``)."""
         tt, flat = self._times(t)

@@ -10,7 +10,9 @@ symmetric body).  Theta along the trajectory is then a Fourier series in those p
 """
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import sympy as sp
@@ -22,6 +24,10 @@ from thetasol.solutions.theta_rotation.frame import BodyFrame
 from thetasol.solutions.theta_rotation.infinity import infinity_data, velocity_at_infinity
 from thetasol.solutions.theta_rotation.node import node_branch_slopes
 from thetasol.theta.riemann import RiemannTheta
+
+if TYPE_CHECKING:
+    from thetasol.curves.plane_curve import Place
+    from thetasol.curves.spectral import SpectralCurve
 
 __all__ = ["SpectralData", "spectral_data"]
 
@@ -86,12 +92,12 @@ class SpectralData:
         """conj(B): eigenvector -> components of the Baker-Akhiezer function (``psi @ Bc``)."""
         return self.B.conj()
 
-    def abel(self, points) -> np.ndarray:
+    def abel(self, points: Place | Sequence | Mapping) -> np.ndarray:
         """Abel map in the adapted normalized coordinates (see :meth:`thetasol.PlaneCurve.abel_map`)."""
         return self.curve.abel_map(points, normalized=False) @ self.Ainv.T
 
 
-def parities(curve, nums) -> np.ndarray:
+def parities(curve: SpectralCurve, nums: Sequence[sp.Expr]) -> np.ndarray:
     """Parity of each differential g dE / f_w under sigma: E^i w^j -> (-1)^(i+1)."""
     out = []
     for gn in nums:
@@ -103,7 +109,7 @@ def parities(curve, nums) -> np.ndarray:
     return np.array(out, float)
 
 
-def adapted_periods(curve, nums):
+def adapted_periods(curve: SpectralCurve, nums: Sequence[sp.Expr]) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
     """(G, rdim, Ainv, tau): the basis adapted to the real torus, its normalization and Riemann matrix."""
     g = curve.genus
     Pm = curve.period_matrix()
@@ -114,7 +120,7 @@ def adapted_periods(curve, nums):
     return G, rdim, Ainv, 0.5 * (tau + tau.T)
 
 
-def flow_velocity(curve, nums, Ainv, rdim) -> np.ndarray:
+def flow_velocity(curve: SpectralCurve, nums: Sequence[sp.Expr], Ainv: np.ndarray, rdim: int) -> np.ndarray:
     """U = A^-1 sum_j J_j omega(inf_j) / ds, checked real and zero beyond the torus (else inaccurate periods)."""
     g = curve.genus
     U = Ainv @ velocity_at_infinity(curve, nums)
