@@ -48,7 +48,7 @@ def _figure(table: Table):
 
 def benchmark(solver: Callable, cases: Sequence[Case] | None = None,
               rtols: Sequence[float] = (1e-4, 1e-6, 1e-8, 1e-10, 1e-12), *, n_eval: int = 101,
-              atol_factor: float = 1.0, plot: bool = True):
+              atol_factor: float = 1.0, plot: bool = True) -> tuple[Table, object | None]:
     """Run ``solver`` over the cases at each tolerance and score it against the exact solutions.
 
     Parameters

@@ -16,8 +16,10 @@ from __future__ import annotations
 
 import pytest
 
+from thetasol.reference._case import Case
 
-def pytest_addoption(parser) -> None:
+
+def pytest_addoption(parser: pytest.Parser) -> None:
     group = parser.getgroup("thetasol", "thetasol exact reference cases")
     group.addoption("--thetasol-cases", default=None,
                     help="comma-separated case names for the thetasol_case fixture (default: all)")
@@ -25,7 +27,7 @@ def pytest_addoption(parser) -> None:
                     help="only the cases of this model (e.g. 'heavy top')")
 
 
-def pytest_generate_tests(metafunc) -> None:
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
     if "thetasol_case" not in metafunc.fixturenames:
         return
     from thetasol.reference import cases
@@ -38,6 +40,6 @@ def pytest_generate_tests(metafunc) -> None:
 
 
 @pytest.fixture
-def thetasol_case(request):
+def thetasol_case(request: pytest.FixtureRequest) -> Case:
     """One :class:`thetasol.reference.Case` (the test runs once per case of the catalogue)."""
     return request.param
