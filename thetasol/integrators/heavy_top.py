@@ -24,6 +24,7 @@ from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize
+from thetasol.integrators._grid import both_ways
 from thetasol.mechanics.heavy_top import heavy_top_data
 
 __all__ = ["integrate_heavy_top"]
@@ -76,20 +77,12 @@ def integrate_heavy_top(I, center, Q0, omega0, t, *, mass: float = 1.0, gravity=
     atol = 1e-3 * rtol if atol is None else float(atol)
     F = mass * g  # the weight, space frame
     m0 = Im @ w0
-    ts, inv = np.unique(tt.ravel(), return_inverse=True)
-    m_out = np.tile(m0, (ts.size, 1))
-    Q_out = np.tile(Q0m, (ts.size, 1, 1))
-    for sel in (ts > 0, ts < 0):
-        if not sel.any():
-            continue
-        idx = np.flatnonzero(sel)
-        if ts[idx[0]] < 0:
-            idx = idx[::-1]
-        grid = ts[idx]
+    def run(grid):
         if method == "heyoka":
-            m_out[idx], Q_out[idx] = _heyoka(Im, c, F, Q0m, w0, grid, rtol, dtype)
-        else:
-            m_out[idx], Q_out[idx] = _solve_ivp(Im, c, F, Q0m, m0, grid, rtol, atol, method)
+            return _heyoka(Im, c, F, Q0m, w0, grid, rtol, dtype)
+        return _solve_ivp(Im, c, F, Q0m, m0, grid, rtol, atol, method)
+
+    m_out, Q_out, inv = both_ways(tt, m0, Q0m, run)
     Q_out = polar_orthonormalize(Q_out)
     omega = np.linalg.solve(Im, m_out[..., None])[..., 0]
     return omega[inv].reshape(tt.shape + (3,)), Q_out[inv].reshape(tt.shape + (3, 3))

@@ -36,6 +36,7 @@ from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
+from thetasol.integrators._grid import both_ways
 from thetasol.solutions.kepler import KeplerOrbit
 
 __all__ = ["integrate_orbiting_rotation"]
@@ -84,19 +85,12 @@ def integrate_orbiting_rotation(J: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike,
     mscale = max(np.linalg.norm(m0), orbit.diagnostics["mean_motion"] * np.max(np.abs(Im)),
                  np.finfo(float).tiny)
     atol = 1e-3 * rtol * mscale if atol is None else float(atol)
-    ts, inv = np.unique(tt.ravel(), return_inverse=True)
-    m_out = np.tile(m0, (ts.size, 1))
-    Q_out = np.tile(Q0, (ts.size, 1, 1))
-    for sel in (ts > 0, ts < 0):
-        if not sel.any():
-            continue
-        idx = np.flatnonzero(sel)
-        if ts[idx[0]] < 0:
-            idx = idx[::-1]
+    def run(grid):
         if method == "heyoka":
-            m_out[idx], Q_out[idx] = _heyoka(Jm, orbit, Q0, w0, ts[idx], rtol, dtype)
-        else:
-            m_out[idx], Q_out[idx] = _solve_ivp(Jm, Im, orbit, Q0, m0, ts[idx], rtol, atol, method)
+            return _heyoka(Jm, orbit, Q0, w0, grid, rtol, dtype)
+        return _solve_ivp(Jm, Im, orbit, Q0, m0, grid, rtol, atol, method)
+
+    m_out, Q_out, inv = both_ways(tt, m0, Q0, run)
     Q_out = polar_orthonormalize(Q_out)
     omega = np.linalg.solve(Im, m_out[..., None])[..., 0]
     return omega[inv].reshape(tt.shape + (3,)), Q_out[inv].reshape(tt.shape + (3, 3))

@@ -29,6 +29,7 @@ from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
+from thetasol.integrators._grid import both_ways
 from thetasol.mechanics.equations import inertia_from_moments, invariants, rotation_rhs
 from thetasol.solutions.base import RotationSolution
 
@@ -97,22 +98,14 @@ def integrate_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayL
     I_inv = np.linalg.inv(Im)
     m0 = Im @ w0
     # Integrate once over the distinct times, forward for t > 0 and backward for t < 0.
-    ts, inv = np.unique(tt.ravel(), return_inverse=True)
-    m_out = np.tile(m0, (ts.size, 1))
-    Q_out = np.tile(Q0, (ts.size, 1, 1))
-    for sel in (ts > 0, ts < 0):
-        if not sel.any():
-            continue
-        idx = np.flatnonzero(sel)
-        if ts[idx[0]] < 0:
-            idx = idx[::-1]
-        tgrid = ts[idx]
+    def run(grid):
         if method == "splitting":
-            m_out[idx], Q_out[idx] = _splitting(Jm, am, Q0, m0, tgrid, rtol, step, w0)
-        elif method == "heyoka":
-            m_out[idx], Q_out[idx] = _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0)
-        else:
-            m_out[idx], Q_out[idx] = _solve_ivp(Jm, I_inv, am, Q0, m0, tgrid, rtol, atol, method)
+            return _splitting(Jm, am, Q0, m0, grid, rtol, step, w0)
+        if method == "heyoka":
+            return _heyoka(Jm, I_inv, am, Q0, m0, grid, rtol, dtype, w0)
+        return _solve_ivp(Jm, I_inv, am, Q0, m0, grid, rtol, atol, method)
+
+    m_out, Q_out, inv = both_ways(tt, m0, Q0, run)
     Q_out = polar_orthonormalize(Q_out)
     omega = np.linalg.solve(Im, m_out[..., None])[..., 0]
     return omega[inv].reshape(tt.shape + (3,)), Q_out[inv].reshape(tt.shape + (3, 3))
