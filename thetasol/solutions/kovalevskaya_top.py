@@ -139,8 +139,23 @@ def _s_sign_derivative(frame, I, center, mass, gravity, omega, Q, h=1e-7):
     return np.sign(out[0][0] - out[1][0]), np.sign(out[0][1] - out[1][1])
 
 
-def kovalevskaya_separated_flow(I, center, Q0, omega0, mass, gravity) -> SeparatedFlow:
-    """Set up :class:`SeparatedFlow` from the data (the curve, its periods and Abel map: ~0.1 s)."""
+@dataclass(frozen=True)
+class _CurveSetup:
+    frame: KovalevskayaFrame
+    s: tuple
+    l1: float
+    l: float
+    k: float
+    curve: object
+    inf: object
+    theta: object
+    z0: np.ndarray
+    V: np.ndarray
+    K: np.ndarray
+
+
+def _curve_setup(I, center, Q0, omega0, mass, gravity) -> _CurveSetup:
+    """The curve of the data, its theta function and the Abel image ``z0`` of the initial divisor."""
     import sympy
 
     from thetasol.curves.plane_curve import PlaneCurve
@@ -156,16 +171,134 @@ def kovalevskaya_separated_flow(I, center, Q0, omega0, mass, gravity) -> Separat
     S, Y = sympy.symbols("s y")
     curve = PlaneCurve(Y ** 2 - sum(sympy.Float(float(cf), 30) * S ** (5 - i) for i, cf in enumerate(coef)), S, Y)
     inf = curve.places_at_infinity()[0]
-    N = curve.normalization()
     z0 = curve.abel_map([(complex(s1), complex(y1)), (complex(s2), complex(y2))], base=inf).sum(axis=0)
-    K = curve.riemann_constant(base=inf)
-    flow = SeparatedFlow(RiemannTheta(curve.riemann_matrix()), z0, N / 2, K, (0.0, 0.0), (0.0, 0.0))
+    return _CurveSetup(frame, (s1, s2), l1, l, k, curve, inf, RiemannTheta(curve.riemann_matrix()), z0,
+                       curve.normalization() / 2, curve.riemann_constant(base=inf))
+
+
+def kovalevskaya_separated_flow(I, center, Q0, omega0, mass, gravity) -> SeparatedFlow:
+    """Set up :class:`SeparatedFlow` from the data (the curve, its periods and Abel map: ~0.1 s)."""
+    st = _curve_setup(I, center, Q0, omega0, mass, gravity)
+    s1, s2 = st.s
+    coef = kovalevskaya_curve(st.l1, st.l, st.k, st.frame.c0)
     roots = np.sort(np.real(np.roots(coef)[np.abs(np.imag(np.roots(coef))) < 1e-9 * np.max(np.abs(coef))]))
     lo = max([r for r in roots if r <= s1], default=-np.inf)
     hi = min([r for r in roots if r >= s1], default=np.inf)
-    V1, V2 = N[:, 0] / 2, N[:, 1] / 2
-    _, v, gr, H = flow.theta.jet(z0 + K, order=2, separated=True)
+    V1, V2 = st.V[:, 0], st.V[:, 1]
+    _, v, gr, H = st.theta.jet(st.z0 + st.K, order=2, separated=True)
     Hl = H / v - np.outer(gr, gr) / v ** 2
     c22 = s1 + s2 - V2 @ Hl @ V2
     c12 = s1 * s2 + V1 @ Hl @ V2
-    return SeparatedFlow(flow.theta, z0, N / 2, K, (c12, c22), (lo, hi))
+    return SeparatedFlow(st.theta, st.z0, st.V, st.K, (c12, c22), (lo, hi))
+
+
+# -- stage 3: (omega, gamma) from theta quotients -------------------------------------------------
+
+def _state_taylor(x, c0):
+    """Taylor coefficients of orders 0, 1, 2 of the memoir's state ``(p, q, r, g1, g2, g3)`` (exact jvp: f is quadratic)."""
+    def f(x):
+        p, q, r, g1, g2, g3 = x
+        return np.array([q * r / 2, -(p * r + c0 * g3) / 2, c0 * g2, r * g2 - q * g3, p * g3 - r * g1, q * g1 - p * g2])
+    x1 = f(x)
+    return np.stack([x, x1, (f(x + x1) - f(x - x1)) / 4])
+
+
+def _series_div(a, b):
+    c0 = a[0] / b[0]
+    c1 = (a[1] - c0 * b[1]) / b[0]
+    return np.stack([c0, c1, (a[2] - c0 * b[2] - c1 * b[1]) / b[0]])
+
+
+def _series_mul(a, b):
+    return np.stack([a[0] * b[0], a[0] * b[1] + a[1] * b[0], a[0] * b[2] + a[1] * b[1] + a[2] * b[0]])
+
+
+@dataclass(frozen=True)
+class KovalevskayaMotion:
+    """``(omega, gamma_up)`` of Kovalevskaya's top from genus-2 theta functions with half-period characteristics.
+
+    With ``T_chi(t) = theta[chi](z0 + K + V2 t)`` (``T_0`` without characteristic), ``chi_a`` the half
+    characteristics of the branch points ``e_a`` (the roots of ``4 s^3 - g2 s - g3``) and ``chi_ab = chi_a + chi_b``:
+    ``T_a/T_0 = kappa_a sqrt((s1 - e_a)(s2 - e_a))`` (the memoir's ``P_a``) and, in the memoir's frame,
+
+        q = T_0/D,  p = N_p/D,  r = N_r/D,  g3 = N_3/D,  D = sum lambda_a T_a,  N_p = sum nu_a T_a,
+        N_r = sum mu_ab T_ab,  N_3 = sum rho_ab T_ab,  g2 = rdot/c0,  2 c0 g1 = 2 (p^2 + q^2) + r^2 - 6 l1
+
+    (memoir section 5: ``q = E/Delta``, ``p = -i (L1 P1 + ...)/Delta``, ``r = -i (L P23 + ...)/Delta``,
+    ``c0 g3 = (L1 P23 + ...)/Delta``; the four constant triples are fitted to the Taylor coefficients of
+    orders 0, 1, 2 of the state at ``t = 0``, which replaces the memoir's sigma constants and misprints).
+    Every quantity is a quotient of entire functions: no square root, no sign to choose.
+    """
+
+    theta: object
+    z0: np.ndarray
+    V2: np.ndarray
+    chars1: tuple
+    chars2: tuple
+    coef: np.ndarray    # (4, 3): lambda, nu, mu, rho
+    c0: float
+    l1: float
+    P: np.ndarray
+
+    def _jets(self, z, chars):
+        out = []
+        for ch in chars:
+            e, v, gr = self.theta.jet(z, char=ch, order=1, separated=True)
+            out.append((e, v, gr @ self.V2))
+        return out
+
+    def __call__(self, t):
+        t = np.asarray(t, float)
+        z = self.z0 + t[..., None] * self.V2
+        jets = self._jets(z, (None,) + self.chars1 + self.chars2)
+        e = jets[0][0]
+        val = np.stack([np.exp(j[0] - e) * j[1] for j in jets], -1)
+        der = np.stack([np.exp(j[0] - e) * j[2] for j in jets], -1)
+        lam, nu, mu, rho = self.coef
+        D, Dd = val[..., 1:4] @ lam, der[..., 1:4] @ lam
+        Nr, Nrd = val[..., 4:7] @ mu, der[..., 4:7] @ mu
+        q = np.real(val[..., 0] / D)
+        p = np.real(val[..., 1:4] @ nu / D)
+        r = np.real(Nr / D)
+        g3 = np.real(val[..., 4:7] @ rho / D)
+        g2 = np.real((Nrd * D - Nr * Dd) / (D * D)) / self.c0
+        g1 = (2 * (p * p + q * q) + r * r - 6 * self.l1) / (2 * self.c0)
+        omega = np.stack([p, q, r], -1) @ self.P.T
+        gamma_up = -np.stack([g1, g2, g3], -1) @ self.P.T
+        return omega, gamma_up
+
+
+def _half_characteristic(curve, base, tau, x):
+    A = curve.abel_map([curve.places_over(complex(x))[0]], base=base).sum(axis=0)
+    al = np.linalg.solve(tau.imag, A.imag)
+    be = np.real(A - tau @ al)
+    return np.round(2 * al) / 2 % 1, np.round(2 * be) / 2 % 1
+
+
+def _theta_taylor(theta, z, V, ch):
+    e, v, gr, H = theta.jet(z, char=ch, order=2, separated=True)
+    return e, np.array([v, gr @ V, V @ H @ V / 2])
+
+
+def kovalevskaya_motion(I, center, Q0, omega0, mass, gravity) -> KovalevskayaMotion:
+    """Set up :class:`KovalevskayaMotion` from the data (the curve, its periods and Abel map)."""
+    setup = _curve_setup(I, center, Q0, omega0, mass, gravity)
+    curve, inf, tau = setup.curve, setup.inf, setup.theta.tau
+    c0, l1, l, k = setup.frame.c0, setup.l1, setup.l, setup.k
+    cub = np.roots([4.0, 0.0, -(k * k - c0 * c0 + 3 * l1 * l1), -(l1 * (k * k - c0 * c0 - l1 * l1) + l * l * c0 * c0)])
+    ch1 = tuple(_half_characteristic(curve, inf, tau, x) for x in cub)
+    ch2 = tuple(((ch1[a][0] + ch1[b][0]) % 1, (ch1[a][1] + ch1[b][1]) % 1) for a, b in ((1, 2), (0, 2), (0, 1)))
+    z0 = setup.z0 + setup.K
+    V2 = setup.V[:, 1]
+    taylor = [_theta_taylor(setup.theta, z0, V2, ch) for ch in (None,) + ch1 + ch2]
+    e = taylor[0][0]
+    T = [np.exp(tt[0] - e) * tt[1] for tt in taylor]
+    g = np.asarray(gravity, float)
+    x = np.concatenate([np.asarray(omega0, float) @ setup.frame.P,
+                        (np.asarray(Q0, float).T @ (g / np.linalg.norm(g))) @ setup.frame.P])
+    X = _state_taylor(x, c0)
+    qB = [_series_mul(X[:, 1], _series_div(Tj, T[0])) for Tj in T[1:]]
+    A1, A2 = np.stack(qB[:3], -1), np.stack(qB[3:], -1)
+    coef = np.stack([np.linalg.solve(A1, np.array([1.0, 0.0, 0.0], complex)), np.linalg.solve(A1, X[:, 0] + 0j),
+                     np.linalg.solve(A2, X[:, 2] + 0j), np.linalg.solve(A2, X[:, 5] + 0j)])
+    return KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, coef, c0, l1, setup.frame.P)
