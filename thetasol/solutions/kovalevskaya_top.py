@@ -194,23 +194,35 @@ def kovalevskaya_separated_flow(I, center, Q0, omega0, mass, gravity) -> Separat
 
 # -- stage 3: (omega, gamma) from theta quotients -------------------------------------------------
 
-def _state_taylor(x, c0):
-    """Taylor coefficients of orders 0, 1, 2 of the memoir's state ``(p, q, r, g1, g2, g3)`` (exact jvp: f is quadratic)."""
-    def f(x):
-        p, q, r, g1, g2, g3 = x
-        return np.array([q * r / 2, -(p * r + c0 * g3) / 2, c0 * g2, r * g2 - q * g3, p * g3 - r * g1, q * g1 - p * g2])
-    x1 = f(x)
-    return np.stack([x, x1, (f(x + x1) - f(x - x1)) / 4])
+TAYLOR_ORDER = 2   # Taylor coefficients at t = 0 matched by the fit of the constants
+
+
+def _conv(a, b, n):
+    return sum(a[i] * b[n - i] for i in range(n + 1))
+
+
+def _state_taylor(x, c0, order=TAYLOR_ORDER):
+    """Taylor coefficients ``(order + 1, 6)`` of the memoir's state ``(p, q, r, g1, g2, g3)`` at one instant
+    (the equations are quadratic: Cauchy products)."""
+    X = [np.asarray(x, float)]
+    for n in range(order):
+        p, q, r, g1, g2, g3 = (np.array([X[i][j] for i in range(n + 1)]) for j in range(6))
+        f = np.array([_conv(q, r, n) / 2, -(_conv(p, r, n) + c0 * g3[n]) / 2, c0 * g2[n],
+                      _conv(r, g2, n) - _conv(q, g3, n), _conv(p, g3, n) - _conv(r, g1, n),
+                      _conv(q, g1, n) - _conv(p, g2, n)])
+        X.append(f / (n + 1))
+    return np.stack(X)
 
 
 def _series_div(a, b):
-    c0 = a[0] / b[0]
-    c1 = (a[1] - c0 * b[1]) / b[0]
-    return np.stack([c0, c1, (a[2] - c0 * b[2] - c1 * b[1]) / b[0]])
+    c = []
+    for n in range(len(a)):
+        c.append((a[n] - sum(c[i] * b[n - i] for i in range(n))) / b[0])
+    return np.stack(c)
 
 
 def _series_mul(a, b):
-    return np.stack([a[0] * b[0], a[0] * b[1] + a[1] * b[0], a[0] * b[2] + a[1] * b[1] + a[2] * b[0]])
+    return np.stack([_conv(a, b, n) for n in range(len(a))])
 
 
 @dataclass(frozen=True)
@@ -239,6 +251,7 @@ class KovalevskayaMotion:
     c0: float
     l1: float
     P: np.ndarray
+    fit_residual: float = 0.0
 
     def _jets(self, z, chars):
         out = []
@@ -247,25 +260,64 @@ class KovalevskayaMotion:
             out.append((e, v, gr @ self.V2))
         return out
 
-    def __call__(self, t):
-        t = np.asarray(t, float)
-        z = self.z0 + t[..., None] * self.V2
+    def _values(self, t, order=0):
+        """The seven theta values (and their t-derivatives) in a common unit."""
+        z = self.z0 + np.asarray(t, float)[..., None] * self.V2
         jets = self._jets(z, (None,) + self.chars1 + self.chars2)
         e = jets[0][0]
         val = np.stack([np.exp(j[0] - e) * j[1] for j in jets], -1)
-        der = np.stack([np.exp(j[0] - e) * j[2] for j in jets], -1)
-        lam, nu, mu, rho = self.coef
-        D, Dd = val[..., 1:4] @ lam, der[..., 1:4] @ lam
-        Nr, Nrd = val[..., 4:7] @ mu, der[..., 4:7] @ mu
-        q = np.real(val[..., 0] / D)
-        p = np.real(val[..., 1:4] @ nu / D)
-        r = np.real(Nr / D)
-        g3 = np.real(val[..., 4:7] @ rho / D)
-        g2 = np.real((Nrd * D - Nr * Dd) / (D * D)) / self.c0
-        g1 = (2 * (p * p + q * q) + r * r - 6 * self.l1) / (2 * self.c0)
+        if order == 0:
+            return val
+        return val, np.stack([np.exp(j[0] - e) * j[2] for j in jets], -1)
+
+    def memoir_state(self, t):
+        """``(p, q, r, g1, g2, g3)`` in the memoir's frame and normalization (downward ``g``)."""
+        return _memoir_state(*self._values(t, 1), self.coef, self.c0, self.l1)
+
+    def __call__(self, t):
+        p, q, r, g1, g2, g3 = (np.real(x) for x in self.memoir_state(t))
         omega = np.stack([p, q, r], -1) @ self.P.T
         gamma_up = -np.stack([g1, g2, g3], -1) @ self.P.T
         return omega, gamma_up
+
+
+def _memoir_state(val, der, coef, c0, l1, with_pdot=False):
+    lam, nu, mu, rho = coef
+    D, Dd = val[..., 1:4] @ lam, der[..., 1:4] @ lam
+    Nr, Nrd = val[..., 4:7] @ mu, der[..., 4:7] @ mu
+    Np = val[..., 1:4] @ nu
+    q, p, r = val[..., 0] / D, Np / D, Nr / D
+    g3 = val[..., 4:7] @ rho / D
+    g2 = (Nrd * D - Nr * Dd) / (D * D) / c0
+    g1 = (2 * (p * p + q * q) + r * r - 6 * l1) / (2 * c0)
+    if not with_pdot:
+        return p, q, r, g1, g2, g3
+    pd = (der[..., 1:4] @ nu * D - Np * Dd) / (D * D)
+    qd = (der[..., 0] * D - val[..., 0] * Dd) / (D * D)
+    return p, q, r, g1, g2, g3, pd, qd
+
+
+def _refine(coef, val, der, rows, c0, l1, l, k):
+    """Gauss-Newton on the constants: Taylor rows at ``t = 0`` plus, at the sample points, reality, the
+    integrals and the two equations of motion not used in the construction (``2 pdot = q r``,
+    ``2 qdot = -p r - c0 g3``); the Taylor fit alone leaves ~1e-11 in the constants."""
+    from scipy.optimize import least_squares
+
+    def res(u):
+        cf = (u[:12] + 1j * u[12:]).reshape(4, 3)
+        p, q, r, g1, g2, g3, pd, qd = _memoir_state(val, der, cf, c0, l1, True)
+        out = [np.imag(np.stack([p, q, r, g2, g3])).ravel(),
+               np.real(2 * (p * g1 + q * g2) + r * g3 - 2 * l), np.real(g1 * g1 + g2 * g2 + g3 * g3 - 1),
+               np.real((p * p - q * q + c0 * g1) ** 2 + (2 * p * q + c0 * g2) ** 2 - k * k) / max(k * k, c0 * c0),
+               np.real(2 * pd - q * r), np.imag(2 * pd - q * r), np.real(2 * qd + p * r + c0 * g3), np.imag(2 * qd + p * r + c0 * g3)]
+        for (A, b), x in zip(rows, cf, strict=True):
+            w = 1 / np.linalg.norm(A, axis=1)
+            out += [np.real(A @ x - b) * w, np.imag(A @ x - b) * w]
+        return np.concatenate(out)
+
+    u0 = np.concatenate([coef.real.ravel(), coef.imag.ravel()])
+    sol = least_squares(res, u0, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    return (sol.x[:12] + 1j * sol.x[12:]).reshape(4, 3), float(np.max(np.abs(res(sol.x))))
 
 
 def _half_characteristic(curve, base, tau, x):
@@ -275,9 +327,12 @@ def _half_characteristic(curve, base, tau, x):
     return np.round(2 * al) / 2 % 1, np.round(2 * be) / 2 % 1
 
 
-def _theta_taylor(theta, z, V, ch):
-    e, v, gr, H = theta.jet(z, char=ch, order=2, separated=True)
-    return e, np.array([v, gr @ V, V @ H @ V / 2])
+def _theta_taylor(theta, z, V, ch, order=TAYLOR_ORDER):
+    """Taylor coefficients of ``theta[ch](z + V t)`` at ``t = 0`` in units of ``exp(e)``."""
+    from math import factorial
+    out = [theta(z, ch, [V] * n, separated=True) for n in range(order + 1)]
+    e = out[0][0]
+    return e, np.array([np.exp(o[0] - e) * o[1] / factorial(n) for n, o in enumerate(out)])
 
 
 def kovalevskaya_motion(I, center, Q0, omega0, mass, gravity) -> KovalevskayaMotion:
@@ -299,6 +354,10 @@ def kovalevskaya_motion(I, center, Q0, omega0, mass, gravity) -> KovalevskayaMot
     X = _state_taylor(x, c0)
     qB = [_series_mul(X[:, 1], _series_div(Tj, T[0])) for Tj in T[1:]]
     A1, A2 = np.stack(qB[:3], -1), np.stack(qB[3:], -1)
-    coef = np.stack([np.linalg.solve(A1, np.array([1.0, 0.0, 0.0], complex)), np.linalg.solve(A1, X[:, 0] + 0j),
-                     np.linalg.solve(A2, X[:, 2] + 0j), np.linalg.solve(A2, X[:, 5] + 0j)])
-    return KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, coef, c0, l1, setup.frame.P)
+    motion = KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, np.zeros((4, 3), complex), c0, l1, setup.frame.P)
+    tj = np.arange(1, 41) * (0.61803398875 / np.max(np.abs(V2)))
+    val, der = motion._values(tj, 1)
+    rows = [(A1, np.eye(TAYLOR_ORDER + 1)[0]), (A1, X[:, 0]), (A2, X[:, 2]), (A2, X[:, 5])]
+    coef = np.stack([np.linalg.solve(A, b + 0j) for A, b in rows])
+    coef, resid = _refine(coef, val, der, rows, c0, l1, setup.l, k)
+    return KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, coef, c0, l1, setup.frame.P, resid)
