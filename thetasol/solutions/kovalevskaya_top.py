@@ -32,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from thetasol.core.dd import dd_mul, dd_split_mp
 from thetasol.core.so3 import cross, rodrigues
 
 __all__ = ["KovalevskayaFrame", "kovalevskaya_frame", "kovalevskaya_variables", "kovalevskaya_curve",
@@ -251,6 +252,7 @@ class KovalevskayaMotion:
     c0: float
     l1: float
     P: np.ndarray
+    w: tuple = None     # (hi, lo): V2 = w_m + tau w_n in lattice coordinates, two words
     fit_residual: float = 0.0
 
     def _jets(self, z, chars):
@@ -261,14 +263,30 @@ class KovalevskayaMotion:
         return out
 
     def _values(self, t, order=0):
-        """The seven theta values (and their t-derivatives) in a common unit."""
-        z = self.z0 + np.asarray(t, float)[..., None] * self.V2
-        jets = self._jets(z, (None,) + self.chars1 + self.chars2)
+        """The seven theta values (and their t-derivatives) in a common unit.
+
+        ``V2 t`` is reduced modulo the lattice in lattice coordinates with two-word products (the
+        characteristics give each value the sign ``(-1)^(2 alpha.m + 2 beta.n)`` under a shift by ``m + tau n``)."""
+        t = np.asarray(t, float)
+        chars = (None,) + self.chars1 + self.chars2
+        if self.w is None:
+            z, par = self.z0 + t[..., None] * self.V2, None
+        else:
+            h, lo = dd_mul(t[..., None], 0.0, self.w[0], self.w[1])
+            k = np.round(h)
+            x = (h - k) + lo
+            z = self.z0 + x[..., :2] + x[..., 2:] @ self.theta.tau.T
+            par = np.mod(k, 2.0)
+        jets = self._jets(z, chars)
         e = jets[0][0]
-        val = np.stack([np.exp(j[0] - e) * j[1] for j in jets], -1)
+        sg = np.ones(t.shape + (7,))
+        if par is not None:
+            for i, ch in enumerate(chars[1:], 1):
+                sg[..., i] = 1 - 2 * np.mod(np.rint(par[..., :2] @ (2 * ch[0]) + par[..., 2:] @ (2 * ch[1])), 2)
+        val = np.stack([np.exp(j[0] - e) * j[1] for j in jets], -1) * sg
         if order == 0:
             return val
-        return val, np.stack([np.exp(j[0] - e) * j[2] for j in jets], -1)
+        return val, np.stack([np.exp(j[0] - e) * j[2] for j in jets], -1) * sg
 
     def memoir_state(self, t):
         """``(p, q, r, g1, g2, g3)`` in the memoir's frame and normalization (downward ``g``)."""
@@ -360,4 +378,22 @@ def kovalevskaya_motion(I, center, Q0, omega0, mass, gravity) -> KovalevskayaMot
     rows = [(A1, np.eye(TAYLOR_ORDER + 1)[0]), (A1, X[:, 0]), (A2, X[:, 2]), (A2, X[:, 5])]
     coef = np.stack([np.linalg.solve(A, b + 0j) for A, b in rows])
     coef, resid = _refine(coef, val, der, rows, c0, l1, setup.l, k)
-    return KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, coef, c0, l1, setup.frame.P, resid)
+    return KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, coef, c0, l1, setup.frame.P,
+                              _lattice_frequency(setup.curve), resid)
+
+
+def _lattice_frequency(curve, dps=34):
+    """``V2 = w_m + tau w_n`` (``V2 = A^-1 e_2/2``, the time direction) from periods at ``dps`` digits, as two words."""
+    import mpmath
+    P = curve.period_matrix(dps=dps)
+    with mpmath.workdps(dps):
+        A = mpmath.matrix([[P[i, j] for j in range(2)] for i in range(2)])
+        B = mpmath.matrix([[P[i, 2 + j] for j in range(2)] for i in range(2)])
+        Ai = mpmath.inverse(A)
+        tau = Ai * B
+        tau = (tau + tau.T) / 2
+        V = Ai * mpmath.matrix([0, 1]) / 2
+        Yi = mpmath.inverse(tau.apply(mpmath.im))
+        wn = Yi * V.apply(mpmath.im)
+        wm = V.apply(mpmath.re) - tau.apply(mpmath.re) * wn
+        return dd_split_mp([wm[0], wm[1], wn[0], wn[1]])
