@@ -254,6 +254,7 @@ class KovalevskayaMotion:
     P: np.ndarray
     w: tuple = None     # (hi, lo): V2 = w_m + tau w_n in lattice coordinates, two words
     fit_residual: float = 0.0
+    V1: np.ndarray = None   # the other real flow of the torus (``sum_i ds_i/y_i``)
 
     def _jets(self, z, chars):
         out = []
@@ -268,19 +269,35 @@ class KovalevskayaMotion:
         ``V2 t`` is reduced modulo the lattice in lattice coordinates with two-word products (the
         characteristics give each value the sign ``(-1)^(2 alpha.m + 2 beta.n)`` under a shift by ``m + tau n``)."""
         t = np.asarray(t, float)
-        chars = (None,) + self.chars1 + self.chars2
         if self.w is None:
-            z, par = self.z0 + t[..., None] * self.V2, None
-        else:
-            h, lo = dd_mul(t[..., None], 0.0, self.w[0], self.w[1])
-            k = np.round(h)
-            x = (h - k) + lo
-            z = self.z0 + x[..., :2] + x[..., 2:] @ self.theta.tau.T
-            par = np.mod(k, 2.0)
+            return self.values_at(t[..., None] * self.lattice_velocity(), order, reduce=False)
+        h, lo = dd_mul(t[..., None], 0.0, self.w[0], self.w[1])
+        k = np.round(h)
+        return self.values_at((h - k) + lo, order, k)
+
+    def lattice_velocity(self):
+        """``w`` with ``V2 = w_m + tau w_n`` (``w`` real, lattice coordinates)."""
+        if self.w is not None:
+            return self.w[0]
+        tau = self.theta.tau
+        wn = np.linalg.solve(tau.imag, self.V2.imag)
+        return np.concatenate([self.V2.real - tau.real @ wn, wn])
+
+    def values_at(self, x, order=0, shift=None, reduce=True):
+        """The seven theta values at ``z0 + x_m + tau x_n`` (``x`` real lattice coordinates, ``(..., 4)``), plus
+        ``shift`` (integers, tracked only through the characteristics' signs)."""
+        x = np.asarray(x, float)
+        if reduce:
+            k = np.round(x)
+            x = x - k
+            shift = k if shift is None else shift + k
+        z = self.z0 + x[..., :2] + x[..., 2:] @ self.theta.tau.T
+        chars = (None,) + self.chars1 + self.chars2
         jets = self._jets(z, chars)
         e = jets[0][0]
-        sg = np.ones(t.shape + (7,))
-        if par is not None:
+        sg = np.ones(x.shape[:-1] + (7,))
+        if shift is not None:
+            par = np.mod(shift, 2.0)
             for i, ch in enumerate(chars[1:], 1):
                 sg[..., i] = 1 - 2 * np.mod(np.rint(par[..., :2] @ (2 * ch[0]) + par[..., 2:] @ (2 * ch[1])), 2)
         val = np.stack([np.exp(j[0] - e) * j[1] for j in jets], -1) * sg
@@ -379,7 +396,7 @@ def kovalevskaya_motion(I, center, Q0, omega0, mass, gravity) -> KovalevskayaMot
     coef = np.stack([np.linalg.solve(A, b + 0j) for A, b in rows])
     coef, resid = _refine(coef, val, der, rows, c0, l1, setup.l, k)
     return KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, coef, c0, l1, setup.frame.P,
-                              _lattice_frequency(setup.curve), resid)
+                              _lattice_frequency(setup.curve), resid, setup.V[:, 0])
 
 
 def _lattice_frequency(curve, dps=34):
