@@ -328,7 +328,12 @@ def test_tensor_frames_and_shapes():
 def test_refusals():
     with pytest.raises(ClosedFormUnavailable, match="integrate_heavy_top"):
         solve_heavy_top([1.0, 2.0, 2.5], [0, 0, 1.0], np.eye(3), [1, 2, 3.0])
-    assert solve_heavy_top([2.0, 2.0, 1.0], [0.3, 0.4, 0], np.eye(3), [1, 2, 3.0]).method == "kovalevskaya/genus-2"
+    assert solve_heavy_top([2.0, 2.0, 1.0], [0.3, 0.4, 0], _rx(0.3), [1, 2, 3.0]).method == "kovalevskaya/genus-2"
+    # started with the vertical along the axis e3: k2 = (l1 - k)/2 is a root of the cubic (a degenerate torus)
+    with pytest.raises(ClosedFormUnavailable, match="Kovalevskaya.*degenerate.*integrate_heavy_top"):
+        solve_heavy_top([2.0, 2.0, 1.0], [0.3, 0.4, 0], np.eye(3), [1, 2, 3.0])
+    with pytest.raises(ClosedFormUnavailable, match="Kovalevskaya.*integrate_heavy_top"):   # from rest: q(0) = 0
+        solve_heavy_top([2.0, 2.0, 1.0], [0.3, 0.4, 0], _rx(0.3), [0, 0, 0.0])
     with pytest.raises(ClosedFormUnavailable, match="integrate_heavy_top"):   # symmetric, centre off the axis
         solve_heavy_top([2.0, 2.0, 1.5], [0.3, 0, 0.4], np.eye(3), [1, 2, 3.0])
     # symmetric only to 1e-10: another body, refused (the tolerance is a few ulps)

@@ -186,7 +186,7 @@ def build_kovalevskaya_top(I, center, Q0, omega0, mass, gravity):
     """
     from thetasol.solutions.kovalevskaya_top import kovalevskaya_motion
 
-    with np.errstate(all="raise"):
+    with np.errstate(divide="raise", invalid="raise", over="raise"):
         motion = kovalevskaya_motion(I, center, Q0, omega0, mass, gravity)
     att = kovalevskaya_attitude(motion, I, center, Q0, omega0, mass, gravity)
     tau = motion.theta.tau

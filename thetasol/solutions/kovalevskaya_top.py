@@ -140,6 +140,9 @@ def _s_sign_derivative(frame, I, center, mass, gravity, omega, Q, h=1e-7):
     return np.sign(out[0][0] - out[1][0]), np.sign(out[0][1] - out[1][1])
 
 
+DEGENERATE_GAP = 1e-5   # branch points closer than this (relative): a degenerate torus, refused
+
+
 @dataclass(frozen=True)
 class _CurveSetup:
     frame: KovalevskayaFrame
@@ -166,6 +169,11 @@ def _curve_setup(I, center, Q0, omega0, mass, gravity) -> _CurveSetup:
     Q0, omega0 = np.asarray(Q0, float), np.asarray(omega0, float)
     s1, s2, l1, l, k = (float(x) for x in kovalevskaya_variables(frame, gravity, omega0, Q0))
     coef = kovalevskaya_curve(l1, l, k, frame.c0)
+    roots = np.roots(coef)
+    gap = np.min(np.where(np.eye(5, dtype=bool), np.inf, np.abs(roots[:, None] - roots[None, :])))
+    if not np.isfinite(s1 * s2) or gap <= DEGENERATE_GAP * np.max(np.abs(roots)):
+        raise RuntimeError(f"the curve is degenerate or the divisor at infinity (branch points {gap:.2g} apart, "
+                           f"s = {s1:.6g}, {s2:.6g})")
     d1, d2 = _s_sign_derivative(frame, I, center, mass, gravity, omega0, Q0)
     y1 = d1 * np.sign(s1 - s2) * np.sqrt(max(np.polyval(coef, s1), 0.0))   # y = (s1 - s2) s1'
     y2 = -d2 * np.sign(s1 - s2) * np.sqrt(max(np.polyval(coef, s2), 0.0))
