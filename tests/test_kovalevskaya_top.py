@@ -78,3 +78,39 @@ def test_integrals_at_far_times():
     assert np.max(np.abs(np.einsum("ti,ti->t", ga, ga) - 1)) < 1e-13
     assert np.ptp(k2) / k2[0] < 3e-13
     assert np.max(np.abs(ga[0] - Q0.T @ up)) < 1e-12 and np.max(np.abs(om[0] - w0)) < 1e-12
+
+
+@pytest.mark.parametrize("seed, bound", [(4, 3e-13), (17, 3e-13), (14, 3e-13)])
+def test_solve_heavy_top_against_heyoka(seed, bound):
+    # (omega, Q) from solve_heavy_top (the azimuth about the vertical as a Fourier series on the torus):
+    # measured at t in {0.5, 1, 2, 10, 100}: <= 1.4e-13 (4), 4.6e-14 (17), 8.0e-14 (14); heyoka conditioning
+    # at t = 100 1e-14
+    pytest.importorskip("heyoka")
+    from thetasol.solutions.heavy_top import solve_heavy_top
+
+    I, c, Q0, w0 = _top(seed)
+    sol = solve_heavy_top(I, c, Q0, w0, **G)
+    assert sol.method == "kovalevskaya/genus-2" and sol.diagnostics["phase_tail"] < 1e-15
+    w, Q = integrate_heavy_top(I, c, Q0, w0, TS, method="heyoka", dtype="ldbl", rtol=1e-19, **G)
+    om, QQ = sol(TS)
+    err = np.maximum(np.abs(om - w).max(-1) / np.maximum(1.0, np.abs(w).max(-1)), np.abs(QQ - Q).max((-1, -2)))
+    assert np.all(err < bound), err
+
+
+def test_solution_integrals_at_far_times():
+    # sol.invariants (energy, vertical momentum, k^2) along sol(t) over 401 times in [0, 1e6] and Q orthogonal
+    from thetasol.mechanics.heavy_top import heavy_top_invariants, kovalevskaya_integral
+    from thetasol.solutions.heavy_top import solve_heavy_top
+
+    I, c, Q0, w0 = _top(17)
+    sol = solve_heavy_top(I, c, Q0, w0, **G)
+    t = np.concatenate([[0.0], np.geomspace(1e-3, 1e6, 400)])
+    om, Q = sol(t)
+    inv = heavy_top_invariants(I, c, G["mass"], G["gravity"], om, Q)
+    k2 = kovalevskaya_integral(I, c, G["mass"], G["gravity"], om, Q)
+    scale = 0.5 * w0 @ I @ w0 + 9.81 * np.linalg.norm(c)
+    e = [np.max(np.abs(inv["energy"] - sol.invariants["energy"])) / scale,
+         np.max(np.abs(inv["vertical_momentum"] - sol.invariants["vertical_momentum"])) / np.linalg.norm(I @ w0),
+         np.max(np.abs(k2 - sol.invariants["kovalevskaya_k2"])) / sol.invariants["kovalevskaya_k2"],
+         np.max(np.abs(np.swapaxes(Q, -1, -2) @ Q - np.eye(3)))]
+    assert max(e) < 1e-13, e
