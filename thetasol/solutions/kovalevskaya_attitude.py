@@ -25,7 +25,7 @@ import numpy as np
 from thetasol.core.dd import dd_mul
 from thetasol.solutions.kovalevskaya_top import KovalevskayaMotion, _memoir_state
 
-__all__ = ["KovalevskayaAttitude", "kovalevskaya_attitude"]
+__all__ = ["KovalevskayaAttitude", "kovalevskaya_attitude", "build_kovalevskaya_top"]
 
 
 def _lattice_coords(motion, V):

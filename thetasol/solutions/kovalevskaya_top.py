@@ -1,9 +1,8 @@
-"""Kovalevskaya's top, stages 1 and 2 of its closed form: the separating variables, the genus-2 curve
-and their motion by Jacobi inversion in theta functions.
-
-Not yet a solution of the motion: :func:`thetasol.solutions.heavy_top.solve_heavy_top` recognizes
-the top and raises ``ClosedFormUnavailable``; ``(omega, Q)`` from ``s1, s2`` is what is left
-(docs/heavy_top.md).  What is here is checked along 80-bit heyoka trajectories (tests/test_heavy_top.py).
+"""Kovalevskaya's top: the separating variables, the genus-2 curve, their motion by Jacobi inversion in theta
+functions (:class:`SeparatedFlow`) and ``(omega, gamma)`` as quotients of theta functions with half-period
+characteristics (:class:`KovalevskayaMotion`).  The attitude is :mod:`thetasol.solutions.kovalevskaya_attitude`;
+:func:`thetasol.solutions.heavy_top.solve_heavy_top` puts them together (docs/heavy_top.md).  Checked along
+80-bit heyoka trajectories (tests/test_heavy_top.py, tests/test_kovalevskaya_top.py).
 
 Normalization of Kowalevski's memoir (Acta Math. 12 (1889) 177-232; transcribed in
 /work/shared/SECTIONS_5_8.md A.5): principal frame with ``I = diag(2, 2, 1) I3``, the mass centre
@@ -36,7 +35,7 @@ from thetasol.core.dd import dd_mul, dd_split_mp
 from thetasol.core.so3 import cross, rodrigues
 
 __all__ = ["KovalevskayaFrame", "kovalevskaya_frame", "kovalevskaya_variables", "kovalevskaya_curve",
-           "SeparatedFlow", "kovalevskaya_separated_flow"]
+           "SeparatedFlow", "kovalevskaya_separated_flow", "KovalevskayaMotion", "kovalevskaya_motion"]
 
 
 @dataclass(frozen=True)
