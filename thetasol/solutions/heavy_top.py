@@ -8,8 +8,10 @@
   ``J = tr(I)/2 1 - I``); its ``method`` starts with ``"euler-top"``;
 * Lagrange's top, ``I`` symmetric about the axis through the mass centre: the closed form of
   :mod:`thetasol.solutions.lagrange_top` (``method = "lagrange/elliptic"``);
-* anything else, including Kovalevskaya's top (``I1 = I2 = 2 I3``, centre in the equatorial plane,
-  not implemented yet): :class:`~thetasol.solutions.base.ClosedFormUnavailable` naming
+* Kovalevskaya's top (``I1 = I2 = 2 I3``, centre in the equatorial plane, any body frame): genus-2 theta
+  functions, :mod:`thetasol.solutions.kovalevskaya_top` and :mod:`thetasol.solutions.kovalevskaya_attitude`
+  (``method = "kovalevskaya/genus-2"``);
+* anything else: :class:`~thetasol.solutions.base.ClosedFormUnavailable` naming
   :func:`thetasol.integrators.heavy_top.integrate_heavy_top`.
 
 Conventions (:mod:`thetasol.mechanics.heavy_top`): ``I`` the inertia about the fixed point, ``center`` the
@@ -22,13 +24,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from thetasol.core.attitude import uniform_rotation
-from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
+from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants, kovalevskaya_integral
 from thetasol.solutions.base import ClosedFormUnavailable
 from thetasol.solutions.heavy_top_base import HeavyTopSolution
 from thetasol.solutions.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame, lagrange_state
 from thetasol.solutions.rotation import solve_rotation
 
-__all__ = ["solve_heavy_top", "LagrangeTopSolution", "SteadyRotationSolution"]
+__all__ = ["solve_heavy_top", "LagrangeTopSolution", "SteadyRotationSolution", "KovalevskayaTopSolution"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -47,6 +49,31 @@ class SteadyRotationSolution(HeavyTopSolution):
 
     def _evaluate(self, t):
         return uniform_rotation(self.Q0, self.omega0, t)
+
+
+@dataclass(frozen=True, eq=False)
+class KovalevskayaTopSolution(HeavyTopSolution):
+    """Kovalevskaya's top in genus-2 theta functions (:mod:`thetasol.solutions.kovalevskaya_attitude`)."""
+
+    constants: object = field(default=None, repr=False)
+
+    def _evaluate(self, t):
+        return self.constants(t)
+
+
+def _kovalevskaya(Im, c, Q0m, w0, mass, g):
+    from thetasol.solutions.kovalevskaya_attitude import build_kovalevskaya_top
+
+    try:
+        att, diag = build_kovalevskaya_top(Im, c, Q0m, w0, mass, g)
+    except (FloatingPointError, RuntimeError, ValueError, np.linalg.LinAlgError) as exc:
+        raise ClosedFormUnavailable(f"heavy top: a Kovalevskaya top whose genus-2 construction does not apply "
+                                    f"to these data ({exc}); use thetasol.integrators.heavy_top.integrate_heavy_top"
+                                    ) from exc
+    inv = heavy_top_invariants(Im, c, mass, g, w0, Q0m)
+    inv = {"energy": float(inv["energy"]), "vertical_momentum": float(inv["vertical_momentum"]),
+           "kovalevskaya_k2": float(kovalevskaya_integral(Im, c, mass, g, w0, Q0m))}
+    return KovalevskayaTopSolution(Im, c, mass, g, Q0m, w0, "kovalevskaya/genus-2", inv, diag, att)
 
 
 def _is_kovalevskaya(I, center, rtol=SYMMETRY_RTOL):
@@ -105,9 +132,10 @@ def solve_heavy_top(I, center, Q0, omega0, *, mass: float = 1.0, gravity=(0.0, 0
         return solve_rotation(J, np.zeros((3, 3)), Q0m, w0)
     frame = lagrange_frame(Im, c)
     if frame is None:
-        kind = "a Kovalevskaya top (its genus-2 closed form is not implemented)" if _is_kovalevskaya(Im, c) \
-            else "not an integrable case (Euler, Lagrange, Kovalevskaya)"
-        raise ClosedFormUnavailable(f"heavy top: {kind}; use thetasol.integrators.heavy_top.integrate_heavy_top")
+        if _is_kovalevskaya(Im, c):
+            return _kovalevskaya(Im, c, Q0m, w0, mass, g)
+        raise ClosedFormUnavailable("heavy top: not an integrable case (Euler, Lagrange, Kovalevskaya); "
+                                    "use thetasol.integrators.heavy_top.integrate_heavy_top")
     inv = {k: float(v) for k, v in heavy_top_invariants(Im, c, mass, g, w0, Q0m).items()}
     up = -g / gn
     axis = Q0m @ (c / cn)

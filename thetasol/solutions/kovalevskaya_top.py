@@ -1,9 +1,8 @@
-"""Kovalevskaya's top, stages 1 and 2 of its closed form: the separating variables, the genus-2 curve
-and their motion by Jacobi inversion in theta functions.
-
-Not yet a solution of the motion: :func:`thetasol.solutions.heavy_top.solve_heavy_top` recognizes
-the top and raises ``ClosedFormUnavailable``; ``(omega, Q)`` from ``s1, s2`` is what is left
-(docs/heavy_top.md).  What is here is checked along 80-bit heyoka trajectories (tests/test_heavy_top.py).
+"""Kovalevskaya's top: the separating variables, the genus-2 curve, their motion by Jacobi inversion in theta
+functions (:class:`SeparatedFlow`) and ``(omega, gamma)`` as quotients of theta functions with half-period
+characteristics (:class:`KovalevskayaMotion`).  The attitude is :mod:`thetasol.solutions.kovalevskaya_attitude`;
+:func:`thetasol.solutions.heavy_top.solve_heavy_top` puts them together (docs/heavy_top.md).  Checked along
+80-bit heyoka trajectories (tests/test_heavy_top.py, tests/test_kovalevskaya_top.py).
 
 Normalization of Kowalevski's memoir (Acta Math. 12 (1889) 177-232; transcribed in
 /work/shared/SECTIONS_5_8.md A.5): principal frame with ``I = diag(2, 2, 1) I3``, the mass centre
@@ -32,10 +31,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from thetasol.core.dd import dd_mul, dd_split_mp
 from thetasol.core.so3 import cross, rodrigues
 
 __all__ = ["KovalevskayaFrame", "kovalevskaya_frame", "kovalevskaya_variables", "kovalevskaya_curve",
-           "SeparatedFlow", "kovalevskaya_separated_flow"]
+           "SeparatedFlow", "kovalevskaya_separated_flow", "KovalevskayaMotion", "kovalevskaya_motion"]
 
 
 @dataclass(frozen=True)
@@ -139,8 +139,26 @@ def _s_sign_derivative(frame, I, center, mass, gravity, omega, Q, h=1e-7):
     return np.sign(out[0][0] - out[1][0]), np.sign(out[0][1] - out[1][1])
 
 
-def kovalevskaya_separated_flow(I, center, Q0, omega0, mass, gravity) -> SeparatedFlow:
-    """Set up :class:`SeparatedFlow` from the data (the curve, its periods and Abel map: ~0.1 s)."""
+DEGENERATE_GAP = 1e-5   # branch points closer than this (relative): a degenerate torus, refused
+
+
+@dataclass(frozen=True)
+class _CurveSetup:
+    frame: KovalevskayaFrame
+    s: tuple
+    l1: float
+    l: float
+    k: float
+    curve: object
+    inf: object
+    theta: object
+    z0: np.ndarray
+    V: np.ndarray
+    K: np.ndarray
+
+
+def _curve_setup(I, center, Q0, omega0, mass, gravity) -> _CurveSetup:
+    """The curve of the data, its theta function and the Abel image ``z0`` of the initial divisor."""
     import sympy
 
     from thetasol.curves.plane_curve import PlaneCurve
@@ -150,22 +168,256 @@ def kovalevskaya_separated_flow(I, center, Q0, omega0, mass, gravity) -> Separat
     Q0, omega0 = np.asarray(Q0, float), np.asarray(omega0, float)
     s1, s2, l1, l, k = (float(x) for x in kovalevskaya_variables(frame, gravity, omega0, Q0))
     coef = kovalevskaya_curve(l1, l, k, frame.c0)
+    roots = np.roots(coef)
+    gap = np.min(np.where(np.eye(5, dtype=bool), np.inf, np.abs(roots[:, None] - roots[None, :])))
+    if not np.isfinite(s1 * s2) or gap <= DEGENERATE_GAP * np.max(np.abs(roots)):
+        raise RuntimeError(f"the curve is degenerate or the divisor at infinity (branch points {gap:.2g} apart, "
+                           f"s = {s1:.6g}, {s2:.6g})")
     d1, d2 = _s_sign_derivative(frame, I, center, mass, gravity, omega0, Q0)
     y1 = d1 * np.sign(s1 - s2) * np.sqrt(max(np.polyval(coef, s1), 0.0))   # y = (s1 - s2) s1'
     y2 = -d2 * np.sign(s1 - s2) * np.sqrt(max(np.polyval(coef, s2), 0.0))
     S, Y = sympy.symbols("s y")
     curve = PlaneCurve(Y ** 2 - sum(sympy.Float(float(cf), 30) * S ** (5 - i) for i, cf in enumerate(coef)), S, Y)
     inf = curve.places_at_infinity()[0]
-    N = curve.normalization()
     z0 = curve.abel_map([(complex(s1), complex(y1)), (complex(s2), complex(y2))], base=inf).sum(axis=0)
-    K = curve.riemann_constant(base=inf)
-    flow = SeparatedFlow(RiemannTheta(curve.riemann_matrix()), z0, N / 2, K, (0.0, 0.0), (0.0, 0.0))
+    return _CurveSetup(frame, (s1, s2), l1, l, k, curve, inf, RiemannTheta(curve.riemann_matrix()), z0,
+                       curve.normalization() / 2, curve.riemann_constant(base=inf))
+
+
+def kovalevskaya_separated_flow(I, center, Q0, omega0, mass, gravity) -> SeparatedFlow:
+    """Set up :class:`SeparatedFlow` from the data (the curve, its periods and Abel map: ~0.1 s)."""
+    st = _curve_setup(I, center, Q0, omega0, mass, gravity)
+    s1, s2 = st.s
+    coef = kovalevskaya_curve(st.l1, st.l, st.k, st.frame.c0)
     roots = np.sort(np.real(np.roots(coef)[np.abs(np.imag(np.roots(coef))) < 1e-9 * np.max(np.abs(coef))]))
     lo = max([r for r in roots if r <= s1], default=-np.inf)
     hi = min([r for r in roots if r >= s1], default=np.inf)
-    V1, V2 = N[:, 0] / 2, N[:, 1] / 2
-    _, v, gr, H = flow.theta.jet(z0 + K, order=2, separated=True)
+    V1, V2 = st.V[:, 0], st.V[:, 1]
+    _, v, gr, H = st.theta.jet(st.z0 + st.K, order=2, separated=True)
     Hl = H / v - np.outer(gr, gr) / v ** 2
     c22 = s1 + s2 - V2 @ Hl @ V2
     c12 = s1 * s2 + V1 @ Hl @ V2
-    return SeparatedFlow(flow.theta, z0, N / 2, K, (c12, c22), (lo, hi))
+    return SeparatedFlow(st.theta, st.z0, st.V, st.K, (c12, c22), (lo, hi))
+
+
+# -- stage 3: (omega, gamma) from theta quotients -------------------------------------------------
+
+TAYLOR_ORDER = 2   # Taylor coefficients at t = 0 matched by the fit of the constants
+
+
+def _conv(a, b, n):
+    return sum(a[i] * b[n - i] for i in range(n + 1))
+
+
+def _state_taylor(x, c0, order=TAYLOR_ORDER):
+    """Taylor coefficients ``(order + 1, 6)`` of the memoir's state ``(p, q, r, g1, g2, g3)`` at one instant
+    (the equations are quadratic: Cauchy products)."""
+    X = [np.asarray(x, float)]
+    for n in range(order):
+        p, q, r, g1, g2, g3 = (np.array([X[i][j] for i in range(n + 1)]) for j in range(6))
+        f = np.array([_conv(q, r, n) / 2, -(_conv(p, r, n) + c0 * g3[n]) / 2, c0 * g2[n],
+                      _conv(r, g2, n) - _conv(q, g3, n), _conv(p, g3, n) - _conv(r, g1, n),
+                      _conv(q, g1, n) - _conv(p, g2, n)])
+        X.append(f / (n + 1))
+    return np.stack(X)
+
+
+def _series_div(a, b):
+    c = []
+    for n in range(len(a)):
+        c.append((a[n] - sum(c[i] * b[n - i] for i in range(n))) / b[0])
+    return np.stack(c)
+
+
+def _series_mul(a, b):
+    return np.stack([_conv(a, b, n) for n in range(len(a))])
+
+
+@dataclass(frozen=True)
+class KovalevskayaMotion:
+    """``(omega, gamma_up)`` of Kovalevskaya's top from genus-2 theta functions with half-period characteristics.
+
+    With ``T_chi(t) = theta[chi](z0 + K + V2 t)`` (``T_0`` without characteristic), ``chi_a`` the half
+    characteristics of the branch points ``e_a`` (the roots of ``4 s^3 - g2 s - g3``) and ``chi_ab = chi_a + chi_b``:
+    ``T_a/T_0 = kappa_a sqrt((s1 - e_a)(s2 - e_a))`` (the memoir's ``P_a``) and, in the memoir's frame,
+
+        q = T_0/D,  p = N_p/D,  r = N_r/D,  g3 = N_3/D,  D = sum lambda_a T_a,  N_p = sum nu_a T_a,
+        N_r = sum mu_ab T_ab,  N_3 = sum rho_ab T_ab,  g2 = rdot/c0,  2 c0 g1 = 2 (p^2 + q^2) + r^2 - 6 l1
+
+    (memoir section 5: ``q = E/Delta``, ``p = -i (L1 P1 + ...)/Delta``, ``r = -i (L P23 + ...)/Delta``,
+    ``c0 g3 = (L1 P23 + ...)/Delta``; the four constant triples are fitted to the Taylor coefficients of
+    orders 0, 1, 2 of the state at ``t = 0``, which replaces the memoir's sigma constants and misprints).
+    Every quantity is a quotient of entire functions: no square root, no sign to choose.
+    """
+
+    theta: object
+    z0: np.ndarray
+    V2: np.ndarray
+    chars1: tuple
+    chars2: tuple
+    coef: np.ndarray    # (4, 3): lambda, nu, mu, rho
+    c0: float
+    l1: float
+    P: np.ndarray
+    w: tuple = None     # (hi, lo): V2 = w_m + tau w_n in lattice coordinates, two words
+    fit_residual: float = 0.0
+    V1: np.ndarray = None   # the other real flow of the torus (``sum_i ds_i/y_i``)
+
+    def _jets(self, z, chars):
+        out = []
+        for ch in chars:
+            e, v, gr = self.theta.jet(z, char=ch, order=1, separated=True)
+            out.append((e, v, gr @ self.V2))
+        return out
+
+    def _values(self, t, order=0):
+        """The seven theta values (and their t-derivatives) in a common unit.
+
+        ``V2 t`` is reduced modulo the lattice in lattice coordinates with two-word products (the
+        characteristics give each value the sign ``(-1)^(2 alpha.m + 2 beta.n)`` under a shift by ``m + tau n``)."""
+        t = np.asarray(t, float)
+        if self.w is None:
+            return self.values_at(t[..., None] * self.lattice_velocity(), order, reduce=False)
+        h, lo = dd_mul(t[..., None], 0.0, self.w[0], self.w[1])
+        k = np.round(h)
+        return self.values_at((h - k) + lo, order, k)
+
+    def lattice_velocity(self):
+        """``w`` with ``V2 = w_m + tau w_n`` (``w`` real, lattice coordinates)."""
+        if self.w is not None:
+            return self.w[0]
+        tau = self.theta.tau
+        wn = np.linalg.solve(tau.imag, self.V2.imag)
+        return np.concatenate([self.V2.real - tau.real @ wn, wn])
+
+    def values_at(self, x, order=0, shift=None, reduce=True):
+        """The seven theta values at ``z0 + x_m + tau x_n`` (``x`` real lattice coordinates, ``(..., 4)``), plus
+        ``shift`` (integers, tracked only through the characteristics' signs)."""
+        x = np.asarray(x, float)
+        if reduce:
+            k = np.round(x)
+            x = x - k
+            shift = k if shift is None else shift + k
+        z = self.z0 + x[..., :2] + x[..., 2:] @ self.theta.tau.T
+        chars = (None,) + self.chars1 + self.chars2
+        jets = self._jets(z, chars)
+        e = jets[0][0]
+        sg = np.ones(x.shape[:-1] + (7,))
+        if shift is not None:
+            par = np.mod(shift, 2.0)
+            for i, ch in enumerate(chars[1:], 1):
+                sg[..., i] = 1 - 2 * np.mod(np.rint(par[..., :2] @ (2 * ch[0]) + par[..., 2:] @ (2 * ch[1])), 2)
+        val = np.stack([np.exp(j[0] - e) * j[1] for j in jets], -1) * sg
+        if order == 0:
+            return val
+        return val, np.stack([np.exp(j[0] - e) * j[2] for j in jets], -1) * sg
+
+    def memoir_state(self, t):
+        """``(p, q, r, g1, g2, g3)`` in the memoir's frame and normalization (downward ``g``)."""
+        return _memoir_state(*self._values(t, 1), self.coef, self.c0, self.l1)
+
+    def __call__(self, t):
+        p, q, r, g1, g2, g3 = (np.real(x) for x in self.memoir_state(t))
+        omega = np.stack([p, q, r], -1) @ self.P.T
+        gamma_up = -np.stack([g1, g2, g3], -1) @ self.P.T
+        return omega, gamma_up
+
+
+def _memoir_state(val, der, coef, c0, l1, with_pdot=False):
+    lam, nu, mu, rho = coef
+    D, Dd = val[..., 1:4] @ lam, der[..., 1:4] @ lam
+    Nr, Nrd = val[..., 4:7] @ mu, der[..., 4:7] @ mu
+    Np = val[..., 1:4] @ nu
+    q, p, r = val[..., 0] / D, Np / D, Nr / D
+    g3 = val[..., 4:7] @ rho / D
+    g2 = (Nrd * D - Nr * Dd) / (D * D) / c0
+    g1 = (2 * (p * p + q * q) + r * r - 6 * l1) / (2 * c0)
+    if not with_pdot:
+        return p, q, r, g1, g2, g3
+    pd = (der[..., 1:4] @ nu * D - Np * Dd) / (D * D)
+    qd = (der[..., 0] * D - val[..., 0] * Dd) / (D * D)
+    return p, q, r, g1, g2, g3, pd, qd
+
+
+def _refine(coef, val, der, rows, c0, l1, l, k):
+    """Gauss-Newton on the constants: Taylor rows at ``t = 0`` plus, at the sample points, reality, the
+    integrals and the two equations of motion not used in the construction (``2 pdot = q r``,
+    ``2 qdot = -p r - c0 g3``); the Taylor fit alone leaves ~1e-11 in the constants."""
+    from scipy.optimize import least_squares
+
+    def res(u):
+        cf = (u[:12] + 1j * u[12:]).reshape(4, 3)
+        p, q, r, g1, g2, g3, pd, qd = _memoir_state(val, der, cf, c0, l1, True)
+        out = [np.imag(np.stack([p, q, r, g2, g3])).ravel(),
+               np.real(2 * (p * g1 + q * g2) + r * g3 - 2 * l), np.real(g1 * g1 + g2 * g2 + g3 * g3 - 1),
+               np.real((p * p - q * q + c0 * g1) ** 2 + (2 * p * q + c0 * g2) ** 2 - k * k) / max(k * k, c0 * c0),
+               np.real(2 * pd - q * r), np.imag(2 * pd - q * r), np.real(2 * qd + p * r + c0 * g3), np.imag(2 * qd + p * r + c0 * g3)]
+        for (A, b), x in zip(rows, cf, strict=True):
+            w = 1 / np.linalg.norm(A, axis=1)
+            out += [np.real(A @ x - b) * w, np.imag(A @ x - b) * w]
+        return np.concatenate(out)
+
+    u0 = np.concatenate([coef.real.ravel(), coef.imag.ravel()])
+    sol = least_squares(res, u0, method="lm", xtol=1e-15, ftol=1e-15, gtol=1e-15)
+    return (sol.x[:12] + 1j * sol.x[12:]).reshape(4, 3), float(np.max(np.abs(res(sol.x))))
+
+
+def _half_characteristic(curve, base, tau, x):
+    A = curve.abel_map([curve.places_over(complex(x))[0]], base=base).sum(axis=0)
+    al = np.linalg.solve(tau.imag, A.imag)
+    be = np.real(A - tau @ al)
+    return np.round(2 * al) / 2 % 1, np.round(2 * be) / 2 % 1
+
+
+def _theta_taylor(theta, z, V, ch, order=TAYLOR_ORDER):
+    """Taylor coefficients of ``theta[ch](z + V t)`` at ``t = 0`` in units of ``exp(e)``."""
+    from math import factorial
+    out = [theta(z, ch, [V] * n, separated=True) for n in range(order + 1)]
+    e = out[0][0]
+    return e, np.array([np.exp(o[0] - e) * o[1] / factorial(n) for n, o in enumerate(out)])
+
+
+def kovalevskaya_motion(I, center, Q0, omega0, mass, gravity) -> KovalevskayaMotion:
+    """Set up :class:`KovalevskayaMotion` from the data (the curve, its periods and Abel map)."""
+    setup = _curve_setup(I, center, Q0, omega0, mass, gravity)
+    curve, inf, tau = setup.curve, setup.inf, setup.theta.tau
+    c0, l1, l, k = setup.frame.c0, setup.l1, setup.l, setup.k
+    cub = np.roots([4.0, 0.0, -(k * k - c0 * c0 + 3 * l1 * l1), -(l1 * (k * k - c0 * c0 - l1 * l1) + l * l * c0 * c0)])
+    ch1 = tuple(_half_characteristic(curve, inf, tau, x) for x in cub)
+    ch2 = tuple(((ch1[a][0] + ch1[b][0]) % 1, (ch1[a][1] + ch1[b][1]) % 1) for a, b in ((1, 2), (0, 2), (0, 1)))
+    z0 = setup.z0 + setup.K
+    V2 = setup.V[:, 1]
+    taylor = [_theta_taylor(setup.theta, z0, V2, ch) for ch in (None,) + ch1 + ch2]
+    e = taylor[0][0]
+    T = [np.exp(tt[0] - e) * tt[1] for tt in taylor]
+    g = np.asarray(gravity, float)
+    x = np.concatenate([np.asarray(omega0, float) @ setup.frame.P,
+                        (np.asarray(Q0, float).T @ (g / np.linalg.norm(g))) @ setup.frame.P])
+    X = _state_taylor(x, c0)
+    qB = [_series_mul(X[:, 1], _series_div(Tj, T[0])) for Tj in T[1:]]
+    A1, A2 = np.stack(qB[:3], -1), np.stack(qB[3:], -1)
+    motion = KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, np.zeros((4, 3), complex), c0, l1, setup.frame.P)
+    tj = np.arange(1, 41) * (0.61803398875 / np.max(np.abs(V2)))
+    val, der = motion._values(tj, 1)
+    rows = [(A1, np.eye(TAYLOR_ORDER + 1)[0]), (A1, X[:, 0]), (A2, X[:, 2]), (A2, X[:, 5])]
+    coef = np.stack([np.linalg.solve(A, b + 0j) for A, b in rows])
+    coef, resid = _refine(coef, val, der, rows, c0, l1, setup.l, k)
+    return KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, coef, c0, l1, setup.frame.P,
+                              _lattice_frequency(setup.curve), resid, setup.V[:, 0])
+
+
+def _lattice_frequency(curve, dps=34):
+    """``V2 = w_m + tau w_n`` (``V2 = A^-1 e_2/2``, the time direction) from periods at ``dps`` digits, as two words."""
+    import mpmath
+    P = curve.period_matrix(dps=dps)
+    with mpmath.workdps(dps):
+        A = mpmath.matrix([[P[i, j] for j in range(2)] for i in range(2)])
+        B = mpmath.matrix([[P[i, 2 + j] for j in range(2)] for i in range(2)])
+        Ai = mpmath.inverse(A)
+        tau = Ai * B
+        tau = (tau + tau.T) / 2
+        V = Ai * mpmath.matrix([0, 1]) / 2
+        Yi = mpmath.inverse(tau.apply(mpmath.im))
+        wn = Yi * V.apply(mpmath.im)
+        wm = V.apply(mpmath.re) - tau.apply(mpmath.re) * wn
+        return dd_split_mp([wm[0], wm[1], wn[0], wn[1]])

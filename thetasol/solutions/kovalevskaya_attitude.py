@@ -1,0 +1,198 @@
+"""Kovalevskaya's top, the attitude: the angle about the vertical as a Fourier series on the invariant torus.
+
+Given ``(omega, gamma)`` of :class:`thetasol.solutions.kovalevskaya_top.KovalevskayaMotion`, the attitude is
+``Q = E S(phi) B^T`` with ``B = [u_b, gamma x u_b, gamma]`` (body frame), ``u_b`` the unit horizontal part of a
+reference vector ``b`` (the angular momentum ``M = I omega`` or a body axis, whichever stays farthest from the
+vertical on the torus), ``E`` a space frame with third axis up and ``S(phi)`` the rotation by ``phi`` about it.
+The azimuth of ``Q b`` obeys
+
+    phidot = (b x bdot_space) . gamma / (|b|^2 - (b . gamma)^2),   bdot_space = omega x b (body axis),
+    = (M x tau) . gamma / (|M|^2 - (M . gamma)^2),  tau = mass |g| gamma x center   (b = M),
+
+a function on the real torus ``z0 + a V1 + b V2`` (an abelian integral of the third kind along the flow).  It is
+sampled on an ``N x N`` grid of the torus angles, its Fourier coefficients taken by FFT, and integrated term by
+term: ``phi(t) = phi0 + c_00 t + sum c_jk (exp(2 pi i (j nu1 + k nu2) t) - 1)/(2 pi i (j nu1 + k nu2))``, the
+torus angles ``nu t`` reduced modulo 1 and ``c_00 t`` modulo ``2 pi`` with two-word products.  The truncation
+(the largest dropped coefficient over its divisor) is ``diagnostics["phase_tail"]``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from itertools import product
+
+import numpy as np
+
+from thetasol.core.dd import dd_mul
+from thetasol.solutions.kovalevskaya_top import KovalevskayaMotion, _memoir_state
+
+__all__ = ["KovalevskayaAttitude", "kovalevskaya_attitude", "build_kovalevskaya_top"]
+
+
+def _lattice_coords(motion, V):
+    tau = motion.theta.tau
+    wn = np.linalg.solve(tau.imag, V.imag)
+    return np.concatenate([V.real - tau.real @ wn, wn])
+
+
+def _torus_lattice(motion, box=4):
+    """Two integer vectors ``k1, k2`` (lattice coordinates) spanning the periods of the state on the real torus."""
+    W = np.stack([_lattice_coords(motion, motion.V1), motion.lattice_velocity()], 1)   # (4, 2)
+    Qw, _ = np.linalg.qr(W)
+    chars = motion.chars1 + motion.chars2
+    cands = []
+    for k in product(range(-box, box + 1), repeat=4):
+        k = np.array(k, float)
+        if not k.any() or np.linalg.norm(k - Qw @ (Qw.T @ k)) > 1e-6 * np.linalg.norm(k):
+            continue
+        if any(np.rint(k[:2] @ (2 * a) + k[2:] @ (2 * b)) % 2 for a, b in chars):
+            continue
+        cands.append(k)
+    if len(cands) < 2:
+        raise RuntimeError("no period lattice of the real torus found")
+    cands.sort(key=lambda k: np.linalg.norm(np.linalg.lstsq(W, k, rcond=None)[0]))
+    k1 = cands[0]
+    ab1 = np.linalg.lstsq(W, k1, rcond=None)[0]
+    for k in cands[1:]:
+        ab = np.linalg.lstsq(W, k, rcond=None)[0]
+        if abs(ab1[0] * ab[1] - ab1[1] * ab[0]) > 1e-6 * np.linalg.norm(ab1) * np.linalg.norm(ab):
+            return k1, k
+    raise RuntimeError("the real torus has no two independent periods in the search box")
+
+
+@dataclass(frozen=True)
+class KovalevskayaAttitude:
+    """``(omega, Q)`` of Kovalevskaya's top; see the module docstring."""
+
+    motion: KovalevskayaMotion
+    I: np.ndarray
+    center: np.ndarray
+    mg: float
+    E: np.ndarray        # space frame, third column up
+    ref: int             # -1: angular momentum; 0, 1, 2: body axis of the memoir's frame
+    nu: tuple            # torus frequencies (hi, lo)
+    modes: np.ndarray    # (n, 2) integer modes
+    coef: np.ndarray     # their coefficients divided by 2 pi i (j nu1 + k nu2)
+    rate: tuple          # c_00 (hi, lo)
+    phi0: float
+    tail: float
+    grid: int
+
+    def _ref(self, omega, gamma):
+        if self.ref < 0:
+            return omega @ self.I.T
+        return np.broadcast_to(self.motion.P[:, self.ref], omega.shape)
+
+    def phase(self, t):
+        t = np.asarray(t, float)
+        h, lo = dd_mul(t[..., None], 0.0, self.nu[0], self.nu[1])
+        th = (h - np.round(h)) + lo
+        arg = 2 * np.pi * (th @ self.modes.T)
+        per = np.real((np.exp(1j * arg) - 1) @ self.coef)
+        rh, rl = dd_mul(t, 0.0, self.rate[0], self.rate[1])
+        lin = np.mod(rh, 2 * np.pi) + rl
+        return self.phi0 + lin + per
+
+    def __call__(self, t):
+        t = np.asarray(t, float)
+        omega, gamma = self.motion(t)
+        b = self._ref(omega, gamma)
+        u = b - np.sum(b * gamma, -1)[..., None] * gamma
+        u /= np.linalg.norm(u, axis=-1)[..., None]
+        B = np.stack([u, np.cross(gamma, u), gamma], -1)
+        phi = self.phase(t)
+        c, s = np.cos(phi), np.sin(phi)
+        S = np.zeros(t.shape + (3, 3))
+        S[..., 0, 0], S[..., 0, 1], S[..., 1, 0], S[..., 1, 1], S[..., 2, 2] = c, -s, s, c, 1.0
+        return omega, self.E @ S @ np.swapaxes(B, -1, -2)
+
+
+def _rate_on_grid(motion, I, center, mg, x, ref):
+    """``phidot`` and ``|b x gamma|^2/|b|^2`` at lattice coordinates ``x``."""
+    val, der = motion.values_at(x, 1)
+    p, q, r, g1, g2, g3 = (np.real(v) for v in _memoir_state(val, der, motion.coef, motion.c0, motion.l1))
+    omega = np.stack([p, q, r], -1) @ motion.P.T
+    gamma = -np.stack([g1, g2, g3], -1) @ motion.P.T
+    out = []
+    for rf in ref:
+        if rf < 0:
+            b = omega @ I.T
+            bdot = mg * np.cross(gamma, center)
+            bdot = np.cross(b, bdot)
+        else:
+            b = np.broadcast_to(motion.P[:, rf], omega.shape)
+            bdot = np.cross(b, np.cross(omega, b))
+        bb = np.sum(b * b, -1)
+        den = bb - np.sum(b * gamma, -1) ** 2
+        out.append((np.sum(bdot * gamma, -1) / den, den / bb))
+    return out
+
+
+def _phase_series(rate, nu, n):
+    """Modes, their integrated coefficients and the largest integrated coefficient on the grid's edge."""
+    F = np.fft.fft2(rate) / n ** 2
+    j = np.fft.fftfreq(n, 1 / n)
+    J = np.stack(np.meshgrid(j, j, indexing="ij"), -1)
+    div = 2j * np.pi * (J @ nu)
+    div[0, 0] = 1.0
+    C = F / div
+    C[0, 0] = 0.0
+    edge = (np.abs(J[..., 0]) >= n // 2 - 1) | (np.abs(J[..., 1]) >= n // 2 - 1)
+    keep = np.abs(C) > PHASE_CUT
+    return J[keep], C[keep], float(np.max(np.abs(C[edge]))), float(np.real(F[0, 0]))
+
+
+PHASE_CUT = 1e-18      # radians: integrated Fourier coefficients below are dropped
+PHASE_TOL = 1e-15      # the grid doubles (64 .. 512) until the coefficients on its edge are below
+
+
+def kovalevskaya_attitude(motion: KovalevskayaMotion, I, center, Q0, omega0, mass, gravity):
+    """Set up :class:`KovalevskayaAttitude` (the torus lattice, the FFT of the precession rate)."""
+    I, center, Q0 = np.asarray(I, float), np.asarray(center, float), np.asarray(Q0, float)
+    g = np.asarray(gravity, float)
+    mg = mass * np.linalg.norm(g)
+    k1, k2 = _torus_lattice(motion)
+    nu = np.linalg.lstsq(np.stack([k1, k2], 1), motion.lattice_velocity(), rcond=None)[0]
+    ref = None
+    for n in (64, 128, 256, 512):
+        th = np.arange(n) / n
+        T1, T2 = np.meshgrid(th, th, indexing="ij")
+        x = T1[..., None] * k1 + T2[..., None] * k2
+        if ref is None:
+            rates = _rate_on_grid(motion, I, center, mg, x, (-1, 0, 1, 2))
+            ref = int(np.argmax([np.min(d) for _, d in rates])) - 1
+            rate = rates[ref + 1][0]
+        else:
+            rate = _rate_on_grid(motion, I, center, mg, x, (ref,))[0][0]
+        modes, coef, tail, mean = _phase_series(rate, nu, n)
+        if tail < PHASE_TOL:
+            break
+    up = -g / np.linalg.norm(g)
+    e1 = np.cross(up, [1.0, 0.0, 0.0]) if abs(up[0]) < 0.9 else np.cross(up, [0.0, 1.0, 0.0])
+    e1 /= np.linalg.norm(e1)
+    E = np.stack([e1, np.cross(up, e1), up], 1)
+    b0 = (I @ omega0) if ref < 0 else motion.P[:, ref]
+    gam0 = Q0.T @ up
+    u0 = b0 - (b0 @ gam0) * gam0
+    us = E.T @ (Q0 @ (u0 / np.linalg.norm(u0)))
+    return KovalevskayaAttitude(motion, I, center, mg, E, ref, (nu, np.zeros(2)), modes, coef, (mean, 0.0),
+                                float(np.arctan2(us[1], us[0])), tail, n)
+
+
+def build_kovalevskaya_top(I, center, Q0, omega0, mass, gravity):
+    """The closed form of Kovalevskaya's top: ``(KovalevskayaAttitude, diagnostics)``.
+
+    Raises ``FloatingPointError`` or ``RuntimeError`` when the construction does not apply to the data
+    (an initial state on the curve's branch point at infinity, ``q(0) = 0``; a degenerate curve).
+    """
+    from thetasol.solutions.kovalevskaya_top import kovalevskaya_motion
+
+    with np.errstate(divide="raise", invalid="raise", over="raise"):
+        motion = kovalevskaya_motion(I, center, Q0, omega0, mass, gravity)
+    att = kovalevskaya_attitude(motion, I, center, Q0, omega0, mass, gravity)
+    tau = motion.theta.tau
+    diag = {"riemann_matrix": tau.copy(), "flow_direction": motion.V2.copy(), "torus_frequencies": att.nu[0].copy(),
+            "fit_residual": motion.fit_residual, "phase_tail": att.tail, "phase_grid": att.grid,
+            "phase_modes": len(att.modes), "precession_rate": att.rate[0],
+            "phase_reference": "angular momentum" if att.ref < 0 else f"body axis e{att.ref + 1}",
+            "c0": motion.c0, "l1": motion.l1}
+    return att, diag
