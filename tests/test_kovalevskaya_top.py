@@ -12,8 +12,12 @@ import pytest
 
 from thetasol.core.so3 import rodrigues
 from thetasol.integrators.heavy_top import integrate_heavy_top
-from thetasol.solutions.kovalevskaya_top import kovalevskaya_curve, kovalevskaya_frame, kovalevskaya_motion, \
-    kovalevskaya_variables
+from thetasol.solutions.kovalevskaya_top import (
+    kovalevskaya_curve,
+    kovalevskaya_frame,
+    kovalevskaya_motion,
+    kovalevskaya_variables,
+)
 
 G = dict(mass=1.0, gravity=(0.0, 0.0, -9.81))
 TS = np.array([0.5, 1.0, 2.0, 10.0, 100.0])
