@@ -20,6 +20,7 @@ Two methods, as in :mod:`thetasol.integrators.rotation`:
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
@@ -30,9 +31,10 @@ from thetasol.mechanics.heavy_top import heavy_top_data
 __all__ = ["integrate_heavy_top"]
 
 
-def integrate_heavy_top(I, center, Q0, omega0, t, *, mass: float = 1.0, gravity=(0.0, 0.0, -9.81),
+def integrate_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, *,
+                        mass: float = 1.0, gravity: ArrayLike = (0.0, 0.0, -9.81),
                         rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
-                        dtype: str = "dbl"):
+                        dtype: str = "dbl") -> tuple[np.ndarray, np.ndarray]:
     """Integrate the heavy top (Section 5) numerically.
 
     Parameters

@@ -13,13 +13,16 @@ with ``gamma = -Q^T gravity / |gravity|`` the UPWARD vertical in the body frame 
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 
 __all__ = ["heavy_top_data", "heavy_top_invariants", "kovalevskaya_integral"]
 
 
-def heavy_top_data(I, center, Q0, omega0, mass=1.0, gravity=(0.0, 0.0, -9.81)):
+def heavy_top_data(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, mass: float = 1.0,
+                   gravity: ArrayLike = (0.0, 0.0, -9.81)
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, float, np.ndarray]:
     """Checked heavy-top data ``(I, center, Q0, omega0, mass, gravity)`` as float arrays.
 
     ``I`` (3 principal values or a symmetric 3x3 tensor) must be positive definite and satisfy the
@@ -39,7 +42,8 @@ def heavy_top_data(I, center, Q0, omega0, mass=1.0, gravity=(0.0, 0.0, -9.81)):
     return Im, c, Q0m, w0, mass, g
 
 
-def heavy_top_invariants(I, center, mass, gravity, omega, Q) -> dict:
+def heavy_top_invariants(I: ArrayLike, center: ArrayLike, mass: float, gravity: ArrayLike, omega: ArrayLike,
+                         Q: ArrayLike) -> dict:
     """First integrals along ``(omega, Q)`` (leading axes broadcast).
 
     Returns ``energy = 1/2 omega.I omega - mass gravity.(Q center)``, ``vertical_momentum = (Q I omega).up``
@@ -60,7 +64,8 @@ def heavy_top_invariants(I, center, mass, gravity, omega, Q) -> dict:
     return {"energy": energy, "vertical_momentum": vert, "axial_momentum": axial}
 
 
-def kovalevskaya_integral(I, center, mass, gravity, omega, Q):
+def kovalevskaya_integral(I: ArrayLike, center: ArrayLike, mass: float, gravity: ArrayLike, omega: ArrayLike,
+                          Q: ArrayLike) -> np.ndarray:
     """Kovalevskaya's integral ``k^2 = |(p + i q)^2 + c0 (g1 + i g2)|^2`` (leading axes broadcast).
 
     For ``I = diag(2, 2, 1) I3`` in a principal frame ``(e1, e2, e3)`` with the mass centre

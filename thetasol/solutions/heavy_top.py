@@ -22,10 +22,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core.attitude import uniform_rotation
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants, kovalevskaya_integral
-from thetasol.solutions.base import ClosedFormUnavailable
+from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.heavy_top_base import HeavyTopSolution
 from thetasol.solutions.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame, lagrange_state
 from thetasol.solutions.rotation import solve_rotation
@@ -86,7 +87,8 @@ def _is_kovalevskaya(I, center, rtol=SYMMETRY_RTOL):
     return False
 
 
-def solve_heavy_top(I, center, Q0, omega0, *, mass: float = 1.0, gravity=(0.0, 0.0, -9.81)):
+def solve_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *, mass: float = 1.0,
+                    gravity: ArrayLike = (0.0, 0.0, -9.81)) -> HeavyTopSolution | RotationSolution:
     """Exact motion of a heavy top (Section 5) when a closed form is known.
 
     Parameters

@@ -9,6 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.solutions.base import Solution
 
@@ -53,14 +54,14 @@ class HeavyTopSolution(Solution):
     def _evaluate(self, t: np.ndarray):  # pragma: no cover - abstract
         raise NotImplementedError
 
-    def omega(self, t):
+    def omega(self, t: ArrayLike) -> np.ndarray:
         """Body angular velocity, shape ``t.shape + (3,)``."""
         return self(t)[0]
 
-    def Q(self, t):
+    def Q(self, t: ArrayLike) -> np.ndarray:
         """Attitude (body to space), shape ``t.shape + (3, 3)``."""
         return self(t)[1]
 
-    def m(self, t):
+    def m(self, t: ArrayLike) -> np.ndarray:
         """Body angular momentum about the fixed point ``I omega``, shape ``t.shape + (3,)``."""
         return self.omega(t) @ self.I.T

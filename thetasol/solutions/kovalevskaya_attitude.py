@@ -21,6 +21,7 @@ from dataclasses import dataclass
 from itertools import product
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core.dd import dd_mul
 from thetasol.solutions.kovalevskaya_top import KovalevskayaMotion, _memoir_state
@@ -82,7 +83,7 @@ class KovalevskayaAttitude:
             return omega @ self.I.T
         return np.broadcast_to(self.motion.P[:, self.ref], omega.shape)
 
-    def phase(self, t):
+    def phase(self, t: ArrayLike) -> np.ndarray:
         t = np.asarray(t, float)
         h, lo = dd_mul(t[..., None], 0.0, self.nu[0], self.nu[1])
         th = (h - np.round(h)) + lo
@@ -92,7 +93,7 @@ class KovalevskayaAttitude:
         lin = np.mod(rh, 2 * np.pi) + rl
         return self.phi0 + lin + per
 
-    def __call__(self, t):
+    def __call__(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t, float)
         omega, gamma = self.motion(t)
         b = self._ref(omega, gamma)
@@ -145,7 +146,8 @@ PHASE_CUT = 1e-18      # radians: integrated Fourier coefficients below are drop
 PHASE_TOL = 1e-15      # the grid doubles (64 .. 512) until the coefficients on its edge are below
 
 
-def kovalevskaya_attitude(motion: KovalevskayaMotion, I, center, Q0, omega0, mass, gravity):
+def kovalevskaya_attitude(motion: KovalevskayaMotion, I: ArrayLike, center: ArrayLike, Q0: ArrayLike,
+                          omega0: ArrayLike, mass: float, gravity: ArrayLike) -> KovalevskayaAttitude:
     """Set up :class:`KovalevskayaAttitude` (the torus lattice, the FFT of the precession rate)."""
     I, center, Q0 = np.asarray(I, float), np.asarray(center, float), np.asarray(Q0, float)
     g = np.asarray(gravity, float)
@@ -178,7 +180,8 @@ def kovalevskaya_attitude(motion: KovalevskayaMotion, I, center, Q0, omega0, mas
                                 float(np.arctan2(us[1], us[0])), tail, n)
 
 
-def build_kovalevskaya_top(I, center, Q0, omega0, mass, gravity):
+def build_kovalevskaya_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, mass: float,
+                           gravity: ArrayLike) -> tuple[KovalevskayaAttitude, dict]:
     """The closed form of Kovalevskaya's top: ``(KovalevskayaAttitude, diagnostics)``.
 
     Raises ``FloatingPointError`` or ``RuntimeError`` when the construction does not apply to the data

@@ -30,6 +30,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core.dd import dd_mul, dd_split_mp
 from thetasol.core.so3 import cross, rodrigues
@@ -47,7 +48,7 @@ class KovalevskayaFrame:
     c0: float
 
 
-def kovalevskaya_frame(I, center, mass, gravity) -> KovalevskayaFrame:
+def kovalevskaya_frame(I: ArrayLike, center: ArrayLike, mass: float, gravity: ArrayLike) -> KovalevskayaFrame:
     """The frame ``e1 = center/|center|``, ``e3`` the axis of the smallest moment, ``e2 = e3 x e1``."""
     I = np.asarray(I, float)
     ev, vec = np.linalg.eigh(I)
@@ -60,7 +61,8 @@ def kovalevskaya_frame(I, center, mass, gravity) -> KovalevskayaFrame:
     return KovalevskayaFrame(P, float(ev[0]), mass * float(np.linalg.norm(gravity)) * x0 / float(ev[0]))
 
 
-def kovalevskaya_variables(frame: KovalevskayaFrame, gravity, omega, Q):
+def kovalevskaya_variables(frame: KovalevskayaFrame, gravity: ArrayLike, omega: ArrayLike, Q: ArrayLike
+                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """``(s1, s2, l1, l, k)`` along states ``(omega, Q)`` (leading axes broadcast)."""
     g = np.asarray(gravity, float)
     pqr = omega @ frame.P
@@ -82,7 +84,7 @@ def kovalevskaya_variables(frame: KovalevskayaFrame, gravity, omega, Q):
     return s1, s2, l1, l, k
 
 
-def kovalevskaya_curve(l1, l, k, c0):
+def kovalevskaya_curve(l1: float, l: float, k: float, c0: float) -> np.ndarray:
     """Coefficients (highest first) of ``R1(s) = -(4 s^3 - g2 s - g3)(s - k1)(s - k2)``."""
     g2 = k * k - c0 * c0 + 3 * l1 * l1
     g3 = l1 * (k * k - c0 * c0 - l1 * l1) + l * l * c0 * c0
@@ -110,7 +112,7 @@ class SeparatedFlow:
     c: tuple            # (c12, c22)
     interval1: tuple    # the s-interval of s1 (s2 has the other one)
 
-    def __call__(self, t):
+    def __call__(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t, float)
         V1, V2 = self.V[:, 0], self.V[:, 1]
         z = self.z0 + t[..., None] * V2 + self.K
@@ -184,7 +186,8 @@ def _curve_setup(I, center, Q0, omega0, mass, gravity) -> _CurveSetup:
                        curve.normalization() / 2, curve.riemann_constant(base=inf))
 
 
-def kovalevskaya_separated_flow(I, center, Q0, omega0, mass, gravity) -> SeparatedFlow:
+def kovalevskaya_separated_flow(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, mass: float,
+                                gravity: ArrayLike) -> SeparatedFlow:
     """Set up :class:`SeparatedFlow` from the data (the curve, its periods and Abel map: ~0.1 s)."""
     st = _curve_setup(I, center, Q0, omega0, mass, gravity)
     s1, s2 = st.s
@@ -282,7 +285,7 @@ class KovalevskayaMotion:
         k = np.round(h)
         return self.values_at((h - k) + lo, order, k)
 
-    def lattice_velocity(self):
+    def lattice_velocity(self) -> np.ndarray:
         """``w`` with ``V2 = w_m + tau w_n`` (``w`` real, lattice coordinates)."""
         if self.w is not None:
             return self.w[0]
@@ -290,7 +293,8 @@ class KovalevskayaMotion:
         wn = np.linalg.solve(tau.imag, self.V2.imag)
         return np.concatenate([self.V2.real - tau.real @ wn, wn])
 
-    def values_at(self, x, order=0, shift=None, reduce=True):
+    def values_at(self, x: ArrayLike, order: int = 0, shift: np.ndarray | None = None, reduce: bool = True
+                  ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
         """The seven theta values at ``z0 + x_m + tau x_n`` (``x`` real lattice coordinates, ``(..., 4)``), plus
         ``shift`` (integers, tracked only through the characteristics' signs)."""
         x = np.asarray(x, float)
@@ -312,11 +316,11 @@ class KovalevskayaMotion:
             return val
         return val, np.stack([np.exp(j[0] - e) * j[2] for j in jets], -1) * sg
 
-    def memoir_state(self, t):
+    def memoir_state(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
         """``(p, q, r, g1, g2, g3)`` in the memoir's frame and normalization (downward ``g``)."""
         return _memoir_state(*self._values(t, 1), self.coef, self.c0, self.l1)
 
-    def __call__(self, t):
+    def __call__(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         p, q, r, g1, g2, g3 = (np.real(x) for x in self.memoir_state(t))
         omega = np.stack([p, q, r], -1) @ self.P.T
         gamma_up = -np.stack([g1, g2, g3], -1) @ self.P.T
@@ -377,7 +381,8 @@ def _theta_taylor(theta, z, V, ch, order=TAYLOR_ORDER):
     return e, np.array([np.exp(o[0] - e) * o[1] / factorial(n) for n, o in enumerate(out)])
 
 
-def kovalevskaya_motion(I, center, Q0, omega0, mass, gravity) -> KovalevskayaMotion:
+def kovalevskaya_motion(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, mass: float,
+                        gravity: ArrayLike) -> KovalevskayaMotion:
     """Set up :class:`KovalevskayaMotion` from the data (the curve, its periods and Abel map)."""
     setup = _curve_setup(I, center, Q0, omega0, mass, gravity)
     curve, inf, tau = setup.curve, setup.inf, setup.theta.tau

@@ -86,7 +86,8 @@ def _complete_frame(e3):
     return np.column_stack([e1, e2, e3])
 
 
-def lagrange_frame(I: np.ndarray, center: np.ndarray, rtol: float = SYMMETRY_RTOL):
+def lagrange_frame(I: np.ndarray, center: np.ndarray, rtol: float = SYMMETRY_RTOL
+                   ) -> tuple[float, float, np.ndarray] | None:
     """``(A, C, P)`` when ``I`` is symmetric about the axis through ``center``, else None.
 
     ``P`` (columns) is a right-handed body frame whose third axis is ``center/|center|``:
@@ -437,7 +438,8 @@ def _fit_offsets(c: _Constants, Qp0, wp0, beta):
     return 0.5 * (dpsi + dphi), 0.5 * (dpsi - dphi), resid
 
 
-def build_lagrange_top(I, center, Q0, omega0, mgl, up):
+def build_lagrange_top(I: np.ndarray, center: np.ndarray, Q0: np.ndarray, omega0: np.ndarray, mgl: float,
+                       up: np.ndarray) -> tuple[_Constants, dict]:
     """The constants of the closed form (see the module docstring) for the inertia ``I`` symmetric
     about the axis of ``center`` (:func:`lagrange_frame`), ``mgl = mass |g| |center| > 0`` and ``up`` the
     upward vertical in space; the frames, moments, integrals, turning points and rates are formed in
@@ -467,7 +469,7 @@ def build_lagrange_top(I, center, Q0, omega0, mgl, up):
     return c, diag
 
 
-def lagrange_state(c: _Constants, t: np.ndarray):
+def lagrange_state(c: _Constants, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``(omega, Q)`` in the user's body and space frames at the flat times ``t``."""
     wp, Qp = _state(c, np.asarray(t, float))
     return wp @ c.P.T, c.S @ Qp @ c.P.T
