@@ -19,7 +19,9 @@ from collections.abc import Callable
 import numpy as np
 
 __all__ = ["COEF_TOL", "SeriesNotConverged", "refined_fft", "fit_series", "sum_series",
-           "sum_series_derivative", "eval_series", "powers", "integrated", "HermiteTable"]
+           "sum_series_derivative", "eval_series", "powers", "integrated", "HermiteTable", "adaptive_series"]
+
+_EPS = np.finfo(float).eps
 
 #: Fourier series are refined until their trailing coefficients fall below this (relative).
 COEF_TOL = 2e-16
@@ -151,3 +153,28 @@ class HermiteTable:
         u = y - j
         v0, d0, a2, a3 = self.coef[j].T
         return v0 + u * (d0 + u * (a2 + u * a3)), (d0 + u * (2.0 * a2 + 3.0 * u * a3)) / self.h
+
+
+def adaptive_series(coeffs: Callable[[int], np.ndarray], nmax: int, failure: str
+                    ) -> tuple[np.ndarray, float]:
+    """Spectral coefficients ``coeffs(n)`` for ``n = 64, 128, ...`` until their tail (the last
+    quarter) reaches round-off or stops decreasing (the samples' own rounding noise), at most
+    ``nmax`` samples.
+
+    Returns the coefficients and the tail relative to the largest (0 for all-zero coefficients).
+    A tail above 1e-9 raises :class:`NotImplementedError` with ``failure`` followed by the tail.
+    """
+    n, prev = 64, np.inf
+    while True:
+        c = coeffs(n)
+        scale = np.max(np.abs(c))
+        if scale == 0:
+            return c, 0.0
+        tail = np.max(np.abs(c[3 * len(c) // 4:]))
+        if tail <= 4 * _EPS * scale or (tail > 0.5 * prev and tail < 1e-11 * scale) or n >= nmax:
+            break
+        prev = tail
+        n *= 2
+    if tail / scale > 1e-9:
+        raise NotImplementedError(failure.format(tail=tail / scale))
+    return c, tail / scale

@@ -14,6 +14,7 @@ from thetasol.core.attitude import (
     norm3 as _norm,
     unit_rows as _unit,
 )
+from thetasol.core.periodic import adaptive_series
 from thetasol.solutions.gyrostat._algebra import mpq, orbit_algebra
 from thetasol.solutions.gyrostat._forms import frame_with_e3
 from thetasol.special import elliptic as _el
@@ -28,23 +29,9 @@ MIN_TORSION_RATIO = 1e-2
 # -- the generic (elliptic) motion ------------------------------------------------------------
 
 def _adaptive_series(coeffs, nmax, what, why=""):
-    """``coeffs(n)``, the series of ``psi'`` from ``n`` samples, for ``n = 64, 128, ...`` until
-    its tail (the last quarter of the coefficients) reaches round-off or stops decreasing (the
-    samples' own rounding noise), at most ``nmax`` samples.  Returns the coefficients and the
-    tail relative to the largest; a tail above 1e-9 raises :class:`NotImplementedError`."""
-    n, prev = 64, np.inf
-    while True:
-        c = coeffs(n)
-        scale = np.max(np.abs(c))
-        tail = np.max(np.abs(c[3 * len(c) // 4:]))
-        if tail <= 4 * _EPS * scale or (tail > 0.5 * prev and tail < 1e-11 * scale) or n >= nmax:
-            break
-        prev = tail
-        n *= 2
-    if tail / scale > 1e-9:
-        raise NotImplementedError(f"solve_gyrostat: the precession angle's {what} does not converge "
-                                  f"(tail {tail / scale:.1e}{why})")
-    return c, tail / scale
+    """:func:`thetasol.core.periodic.adaptive_series` for the series of ``psi'``."""
+    return adaptive_series(coeffs, nmax, f"solve_gyrostat: the precession angle's {what} does not converge "
+                                         f"(tail {{tail:.1e}}{why})")
 
 
 def _cheb_nodes(n):

@@ -26,6 +26,7 @@ import numpy as np
 
 from thetasol.core import validate as V
 from thetasol.core.attitude import angle_mod_2pi as _angle_mod_2pi
+from thetasol.core.periodic import adaptive_series
 
 __all__ = ["Rotor", "parse_rotors", "RotorAngles", "AXIS_TOL", "N_RTOL"]
 
@@ -99,24 +100,15 @@ def parse_rotors(rotors, N) -> tuple[tuple[Rotor, ...], np.ndarray]:
 
 def _fourier_series(f, T, nmax=2 ** 17):
     """Fourier coefficients of the periodic ``f(t)`` (values of shape (n, k)) on one period
-    ``T``, the number of samples doubled from 64 until the tail (the last quarter of the
-    coefficients) is at round-off or stops decreasing (the samples' own rounding); returns the
-    coefficients (n // 2 + 1, k) and the tail relative to the largest coefficient."""
-    n, prev = 64, np.inf
-    while True:
-        c = np.fft.rfft(f(np.arange(n) * (T / n)), axis=0) / n
-        scale = np.max(np.abs(c))
-        if scale == 0:
-            return c, 0.0
-        tail = np.max(np.abs(c[3 * len(c) // 4:]))
-        if tail <= 4 * _EPS * scale or (tail > 0.5 * prev and tail < 1e-11 * scale) or n >= nmax:
-            break
-        prev = tail
-        n *= 2
-    if tail / scale > 1e-9:
-        raise NotImplementedError(f"solve_gyrostat: the rotor angles' Fourier series does not converge "
-                                  f"(tail {tail / scale:.1e}; orbit too close to a separatrix)")
-    return _trim(c, scale), tail / scale
+    ``T``, the number of samples doubled from 64 until the tail is at round-off or stops
+    decreasing (:func:`thetasol.core.periodic.adaptive_series`); returns the coefficients
+    (trimmed) and the tail relative to the largest coefficient."""
+    def coeffs(n):
+        return np.fft.rfft(f(np.arange(n) * (T / n)), axis=0) / n
+
+    c, tail = adaptive_series(coeffs, nmax, "solve_gyrostat: the rotor angles' Fourier series does not converge "
+                                            "(tail {tail:.1e}; orbit too close to a separatrix)")
+    return (c, 0.0) if tail == 0 and not np.any(c) else (_trim(c, np.max(np.abs(c))), tail)
 
 
 def _trim(c, scale):
@@ -128,26 +120,18 @@ def _trim(c, scale):
 def _chebyshev_series(f, nmax=2 ** 14):
     """Chebyshev coefficients (n, k) of the interpolant of ``f(s)`` (values (n, k)) at the
     first-kind nodes, ``n`` doubled from 64 until the tail is at round-off or stops decreasing;
-    returns them and the tail relative to the largest."""
+    returns them (trimmed) and the tail relative to the largest."""
     from scipy.fft import dct
 
-    n, prev = 64, np.inf
-    while True:
+    def coeffs(n):
         x = np.cos(np.pi * (np.arange(n) + 0.5) / n)
         c = dct(f(x), type=2, axis=0) / n
         c[0] *= 0.5
-        scale = np.max(np.abs(c))
-        if scale == 0:
-            return c, 0.0
-        tail = np.max(np.abs(c[3 * len(c) // 4:]))
-        if tail <= 4 * _EPS * scale or (tail > 0.5 * prev and tail < 1e-11 * scale) or n >= nmax:
-            break
-        prev = tail
-        n *= 2
-    if tail / scale > 1e-9:
-        raise NotImplementedError(f"solve_gyrostat: the rotor angles' Chebyshev series on the separatrix "
-                                  f"does not converge (tail {tail / scale:.1e})")
-    return _trim(c, scale), tail / scale
+        return c
+
+    c, tail = adaptive_series(coeffs, nmax, "solve_gyrostat: the rotor angles' Chebyshev series on the separatrix "
+                                            "does not converge (tail {tail:.1e})")
+    return (c, 0.0) if tail == 0 and not np.any(c) else (_trim(c, np.max(np.abs(c))), tail)
 
 
 class RotorAngles:
