@@ -131,11 +131,11 @@ def test_extended_precision_references_integrate_the_body_of_the_data(dtype):
     hy = pytest.importorskip("heyoka")
     import mpmath
 
-    from thetasol.integrators.rotation import _working_precision_inertia
+    from thetasol.integrators._common import extended_inertia
 
     fp, ulp = {"ldbl": (np.longdouble, 2.0 ** -63), "f128": (hy.real128, 2.0 ** -112)}[dtype]
     J, _, _, w0 = random_case(6)
-    Iinv, m0 = _working_precision_inertia(J, w0, fp)
+    Iinv, m0 = extended_inertia(J, w0, fp, from_moments=True)
     with mpmath.workdps(60):
         Jm = mpmath.matrix(J.tolist())
         I = (Jm[0, 0] + Jm[1, 1] + Jm[2, 2]) * mpmath.eye(3) - Jm
@@ -155,7 +155,7 @@ def test_extended_precision_reference_next_to_an_unstable_equilibrium_matches_th
     """The near-unstable-equilibrium case of tests/data/rotation/refs.json at its worst time on a dense grid
     (t = 3726.8625): heyoka in extended precision against the theta-function solution, which is exact for the
     body I = tr(J) 1 - J of the float64 data.  Measured: 80-bit 5.1e-10 (5.8e-9 with the float64 I^-1, so
-    this default check sees the wiring of _working_precision_inertia); quadruple 2.7e-11 (5.5e-9 while the
+    this default check sees the wiring of extended_inertia); quadruple 2.7e-11 (5.5e-9 while the
     reference rounded I^-1 to float64)."""
     pytest.importorskip("heyoka")
     import json

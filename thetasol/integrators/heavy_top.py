@@ -21,11 +21,10 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize
-from thetasol.integrators._grid import both_ways
+from thetasol.integrators._common import both_ways, extended_inertia, solve_ivp_mQ
 from thetasol.mechanics.heavy_top import heavy_top_data
 
 __all__ = ["integrate_heavy_top"]
@@ -99,34 +98,7 @@ def _solve_ivp(Im, c, F, Q0, m0, grid, rtol, atol, method):
         mdot = cross(m, w) + cross(c, Q.T @ F)
         return np.concatenate([mdot, (Q @ hat(w)).ravel()])
 
-    y0 = np.concatenate([m0, Q0.ravel()])
-    sol = solve_ivp(rhs, (0.0, grid[-1]), y0, method=method, t_eval=grid, rtol=rtol, atol=atol)
-    if not sol.success:
-        raise RuntimeError(f"integration failed: {sol.message}")
-    y = sol.y.T
-    return y[:, :3], y[:, 3:].reshape(-1, 3, 3)
-
-
-def _extended_inertia(Im, w0, fp):
-    """``I^-1`` and ``m0 = I omega0`` of the float64 data formed in 60-digit mpmath, rounded to ``fp``.
-
-    Rounded once to the working type as the sum of the float64 triple-word split (the float64
-    inverse would be another body, one ulp away).
-    """
-    import mpmath
-
-    with mpmath.workdps(60):
-        def to_fp(x):
-            parts = []
-            for _ in range(3):
-                parts.append(float(x))
-                x = x - mpmath.mpf(parts[-1])
-            return (fp(parts[0]) + fp(parts[1])) + fp(parts[2])
-
-        Imp = mpmath.matrix([[mpmath.mpf(float(x)) for x in row] for row in Im])
-        Iinv = Imp ** -1
-        m0 = Imp * mpmath.matrix([mpmath.mpf(float(x)) for x in w0])
-        return [[to_fp(Iinv[i, k]) for k in range(3)] for i in range(3)], [to_fp(m0[i]) for i in range(3)]
+    return solve_ivp_mQ(rhs, m0, Q0, grid, rtol, atol, method)
 
 
 def _heyoka(Im, c, F, Q0, w0, grid, rtol, dtype):
@@ -145,7 +117,7 @@ def _heyoka(Im, c, F, Q0, w0, grid, rtol, dtype):
     if dtype == "dbl":
         Iw, m0w = [[float(x) for x in row] for row in np.linalg.inv(Im)], [float(x) for x in Im @ w0]
     else:
-        Iw, m0w = _extended_inertia(Im, w0, ft)
+        Iw, m0w = extended_inertia(Im, w0, ft)
     w = [sum(Iw[i][k] * m[k] for k in range(3)) for i in range(3)]
     Fb = [sum(Q[k][i] * float(F[k]) for k in range(3)) for i in range(3)]  # Q^T F
     cf = [float(x) for x in c]

@@ -32,11 +32,10 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
-from thetasol.integrators._grid import both_ways
+from thetasol.integrators._common import both_ways, solve_ivp_mQ
 from thetasol.solutions.kepler import KeplerOrbit
 
 __all__ = ["integrate_orbiting_rotation"]
@@ -97,13 +96,7 @@ def integrate_orbiting_rotation(J: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike,
 
 
 def _solve_ivp(Jm, Im, orbit, Q0, m0, tgrid, rtol, atol, method):
-    rhs = _make_rhs(Im, orbit)
-    y0 = np.concatenate([m0, Q0.ravel()])
-    sol = solve_ivp(rhs, (0.0, tgrid[-1]), y0, method=method, t_eval=tgrid, rtol=rtol, atol=atol)
-    if not sol.success:
-        raise RuntimeError(f"integration failed: {sol.message}")
-    y = sol.y.T
-    return y[:, :3], y[:, 3:].reshape(-1, 3, 3)
+    return solve_ivp_mQ(_make_rhs(Im, orbit), m0, Q0, tgrid, rtol, atol, method)
 
 
 def _make_rhs(Im, orbit):

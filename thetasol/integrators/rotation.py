@@ -25,11 +25,10 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
-from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
-from thetasol.integrators._grid import both_ways
+from thetasol.integrators._common import both_ways, extended_inertia, solve_ivp_mQ
 from thetasol.mechanics.equations import inertia_from_moments, invariants, rotation_rhs
 from thetasol.solutions.base import RotationSolution
 
@@ -179,12 +178,7 @@ def _solve_ivp(Jm, I_inv, am, Q0, m0, tgrid, rtol, atol, method):
         mdot, Qdot = rotation_rhs(Jm, I_inv, am, y[:3], y[3:].reshape(3, 3))
         return np.concatenate([mdot, Qdot.ravel()])
 
-    y0 = np.concatenate([m0, Q0.ravel()])
-    sol = solve_ivp(rhs, (0.0, tgrid[-1]), y0, method=method, t_eval=tgrid, rtol=rtol, atol=atol)
-    if not sol.success:
-        raise RuntimeError(f"integration failed: {sol.message}")
-    y = sol.y.T
-    return y[:, :3], y[:, 3:].reshape(-1, 3, 3)
+    return solve_ivp_mQ(rhs, m0, Q0, tgrid, rtol, atol, method)
 
 
 # -- symplectic Lie-Poisson splitting -------------------------------------------------------
@@ -276,32 +270,6 @@ class _SplitState:
 
 # -- heyoka ----------------------------------------------------------------------------------
 
-def _working_precision_inertia(Jm, w0, fp):
-    """I^-1 and m0 = I omega0 for I = tr(J) 1 - J of the float64 data, as lists of ``fp`` numbers.
-
-    Formed in mpmath at 60 digits and rounded to ``fp`` (np.longdouble, heyoka.real128) as the sum
-    of the float64 triple-word split, added in ``fp`` (within one ulp of ``fp``).  The float64 inverse
-    of the float64 inertia is another body, about one ulp away: next to an unstable relative
-    equilibrium it moves the trajectory by 5.8e-9 at t = 3727 (the data's own conditioning there is
-    ~1e-10; tests/test_equations.py), so an extended-precision reference must not round I^-1 to float64.
-    """
-    import mpmath
-
-    with mpmath.workdps(60):
-        def to_fp(x):
-            parts = []
-            for _ in range(3):
-                parts.append(float(x))
-                x = x - mpmath.mpf(parts[-1])
-            return (fp(parts[0]) + fp(parts[1])) + fp(parts[2])
-
-        Jmp = mpmath.matrix([[mpmath.mpf(float(x)) for x in row] for row in Jm])
-        Imp = (Jmp[0, 0] + Jmp[1, 1] + Jmp[2, 2]) * mpmath.eye(3) - Jmp
-        Iinv = Imp ** -1
-        m0 = Imp * mpmath.matrix([mpmath.mpf(float(x)) for x in w0])
-        return [[to_fp(Iinv[i, k]) for k in range(3)] for i in range(3)], [to_fp(m0[i]) for i in range(3)]
-
-
 def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0):
     try:
         import heyoka as hy
@@ -318,7 +286,7 @@ def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0):
     if dtype == "dbl":
         Iw, m0w = [[float(x) for x in row] for row in I_inv], [float(x) for x in m0]
     else:
-        Iw, m0w = _working_precision_inertia(Jm, w0, ft)
+        Iw, m0w = extended_inertia(Jm, w0, ft, from_moments=True)
     w = [sum(Iw[i][k] * m[k] for k in range(3)) for i in range(3)]
     aQ = [[sum(float(am[i, k]) * Q[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
     ap = [[sum(Q[k][i] * aQ[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
