@@ -66,9 +66,13 @@ PLANAR_TOL = 64 * _EPS
 #: Relative tolerance on q0 . v0 (the velocity must be tangent to the sphere).
 TANGENT_TOL = 1e-12
 #: The numerical reference named where no closed form is built.
-#: How a refusal inside the torus ends; the caller's context names its own reference instead.
-_INTEGRATE = "integrate numerically"
 _REFERENCE = "a numerical integration of qddot = -a q + lambda q, lambda = (q.aq - |qdot|^2) / |q|^2"
+
+
+class DegenerateTorus(ArithmeticError):
+    """The torus is too thin for the separated coordinates (the message says why); turned into
+    :class:`ClosedFormUnavailable` naming the caller's numerical reference by
+    :func:`series_or_unavailable`."""
 
 
 @contextmanager
@@ -77,11 +81,8 @@ def series_or_unavailable(reference: str) -> Iterator[None]:
     :class:`ClosedFormUnavailable` naming ``reference``, the numerical integrator to use instead."""
     try:
         yield
-    except ClosedFormUnavailable as err:
-        msg = str(err)
-        if not msg.endswith(_INTEGRATE):
-            raise
-        raise ClosedFormUnavailable(msg[: -len(_INTEGRATE)] + f"use {reference}") from None
+    except DegenerateTorus as err:
+        raise ClosedFormUnavailable(f"{err}; use {reference}") from None
     except SeriesNotConverged as err:
         raise ClosedFormUnavailable(
             f"Neumann solution: {err}: the torus is too close to a separatrix or the trajectory too close "
@@ -207,11 +208,11 @@ class NeumannTorus:
                 # the width is a difference with a root of B known to eps * scale: the angle on a
                 # thin torus is known to ~eps / width (measured 5e-12 at width 1e-10, t = 40); an
                 # interval [k_i, k_j] (nearly repeated eigenvalues) is exact and kept
-                raise ClosedFormUnavailable(
+                raise DegenerateTorus(
                     f"Neumann solution: nearly degenerate torus (a sphero-conical coordinate stays within "
                     f"{(hi - lo) / scale:.1e} of the span of k: the point within ~{np.sqrt((hi - lo) / scale):.0e} "
                     "of an invariant great circle, or of a periodic orbit); the separated coordinates lose "
-                    "accuracy there (nearly planar motion is not handled); integrate numerically")
+                    "accuracy there (nearly planar motion is not handled)")
             others = [vals[m] for m in range(5) if m not in (i_lo, i_hi)]
             self.osc.append(Oscillator(lo, hi, 4.0, below=[lo - r for r in others if r < lo],
                                        above=[r - hi for r in others if r >= hi], name=f"u{kk + 1}"))
@@ -641,8 +642,8 @@ def neumann_model(k: np.ndarray, x0: np.ndarray,
             return PlanarNeumann(k, x0, y0, np.eye(3)[i])
     T = NeumannTorus(k, x0, y0)
     if T.fit_residual > 1e-9:
-        raise ClosedFormUnavailable(f"Neumann solution: the initial state is reproduced only to "
-                                    f"{T.fit_residual:.1e} (nearly degenerate torus)")
+        raise DegenerateTorus(f"Neumann solution: the initial state is reproduced only to "
+                              f"{T.fit_residual:.1e} (nearly degenerate torus)")
     return T
 
 
