@@ -327,7 +327,7 @@ def test_bundled_example_report():
     assert "Corollary 3 (a = 0: a uniform field about the pivot): heavy top: closed form lagrange/elliptic" in report
     assert "fixed point (Section 5)" in report and "energy (5.3)" in report
     d = np.linalg.norm(traj.mass_center - sc.fixed_point.position, axis=1)
-    assert np.ptp(d) < 1e-15  # measured 2.2e-16
+    assert np.ptp(d) < 4e-15  # measured 7.8e-16 (|c - r_P| = 0.707)
 
 
 @pytest.mark.slow
