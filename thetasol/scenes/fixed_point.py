@@ -38,11 +38,10 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.integrators.fixed_point import fixed_point_energy, numerical_fixed_point
-from thetasol.integrators.rotation import numerical_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Pivot, pivot_mass_center
 from thetasol.mechanics.equations import inertia_from_moments, invariants as rotation_invariants
-from thetasol.scenes.pipeline import ConfigurationSolution, closed_form_rotation, rotation_kind
+from thetasol.scenes.pipeline import ConfigurationSolution, closed_form_rotation, effective_rotations, rotation_kind
 from thetasol.solutions.base import ClosedFormUnavailable
 
 __all__ = ["PivotedBody", "pivoted_body", "main_rotation", "FixedPointSolution", "solve_fixed_point",
@@ -242,7 +241,9 @@ def solve_fixed_point(config: Configuration, a: ArrayLike, b: ArrayLike, pivot: 
     rots = {config.root: root_sol}
     rot_diag = {config.root: {"model": model, "closed_form": closed, "reason": why,
                               "setup_seconds": time.perf_counter() - start}}
-    others, other_diag = _other_rotations(config, a, Qa, wa, rotation, rtol, method, kind)
+    # Corollary 1: the other effective bodies turn as in Theorem 2
+    others, other_diag = effective_rotations(config, a, Qa, wa, rotation, rtol, method, kind,
+                                             skip=(next(iter(config.effective_bodies())),))
     rots.update(others)
     rot_diag.update(other_diag)
     models = {"mass_center": "fixed by the pivot: q = x_P + Q (c - r_P), Q the main body's attitude",
@@ -254,26 +255,3 @@ def solve_fixed_point(config: Configuration, a: ArrayLike, b: ArrayLike, pivot: 
     return FixedPointSolution(config=config, a=a, b=b, mass_center=pb, rotations=rots, method=method_text,
                               invariants=_invariants(config, pb, a, b, pivot, Qa, wa), diagnostics=diagnostics,
                               constraint=None, pivot=pivot)
-
-
-def _other_rotations(config: Configuration, a: np.ndarray, Qa: np.ndarray, wa: np.ndarray, rotation: str,
-                     rtol: float, method: str, kind: str) -> tuple[dict, dict]:
-    """The bodies off the main one, as in Theorem 2 (Corollary 1): the stage of ``solve_configuration``
-    for every effective body but the root."""
-    sols, diag = {}, {}
-    for i, (n, e) in enumerate(config.effective_bodies().items()):
-        if i == 0:
-            continue
-        start = time.perf_counter()
-        sol, why = (None, "rotation='numerical'") if rotation == "numerical" else \
-            closed_form_rotation(e.J, a, Qa[i], wa[i])
-        closed = sol is not None
-        if closed:
-            model = f"{kind}: closed form {sol.method}"
-        else:
-            sol = numerical_rotation(e.J, a, Qa[i], wa[i], rtol=rtol, method=method)
-            model = f"{kind}: numerical fallback (integrate_rotation {method}, rtol={rtol:g})"
-        sols[n] = sol
-        diag[n] = {"model": model, "closed_form": closed, "reason": why,
-                   "setup_seconds": time.perf_counter() - start}
-    return sols, diag
