@@ -72,7 +72,7 @@ def test_body_axes_on_the_unit_sphere():
     Q = sol.Q(t)
     ax = plot.body_axes(Q, axis=1)
     x, y, z = ax.lines[0].get_data_3d()
-    assert np.allclose(np.c_[x, y, z], Q[:, :, 1], atol=0, rtol=0)
+    assert np.allclose(np.c_[x, y, z], Q[:, :, 1], atol=1e-15, rtol=0)    # divided by |Q(0) e2| = 1 to rounding
     assert np.max(np.abs(x * x + y * y + z * z - 1)) < 1e-14      # measured 4.4e-16
     with pytest.raises(ValueError, match=r"shape \(n, 3, 3\)"):
         plot.body_axes(Q[:, :2])
@@ -159,3 +159,16 @@ def test_trajectories_panels():
     angle_lines = fig.axes[3].lines
     assert np.allclose(angle_lines[0].get_ydata(), np.degrees(angle), rtol=0, atol=1e-13)
     assert np.allclose(fig.axes[2].lines[1].get_ydata(), 0.3)
+
+
+def test_on_sphere_scales_a_point_of_neumann():
+    """A point on |q| = 2 is drawn on the unit sphere; with times it is a scatter coloured by t."""
+    sol = thetasol.solve_neumann(np.diag([0.0, 1.0, 2.5]), [1.2, 0.0, 1.6], [0.0, 0.7, 0.0])
+    t = np.linspace(0.0, 5.0, 51)
+    q, _ = sol(t)
+    ax = plot.on_sphere(q)
+    assert np.allclose(np.c_[ax.lines[0].get_data_3d()], q / 2, rtol=0, atol=1e-15)
+    ax = plot.on_sphere(q, t=t)
+    assert np.array_equal(ax.collections[0].get_array(), t)
+    with pytest.raises(ValueError, match=r"shape \(n, 3\)"):
+        plot.on_sphere(q[:, :2])

@@ -8,6 +8,7 @@ into, and returns what it drew on: ``Axes`` or ``Figure``.
 ============================  =====================================================================
 :func:`time_series`           the states of any :class:`~thetasol.Solution` against time
                               (``omega`` and the body axes' vertical components for a rotation)
+:func:`on_sphere`             a path on the sphere (a point of Neumann's problem, a unit vector)
 :func:`body_axes`             a body axis seen from space, ``Q(t) e_k``, traced on the unit sphere
 :func:`trajectories`          a scene's :class:`~thetasol.Trajectories` (``python -m thetasol solve --plot``)
 :func:`error_against_time`    a :class:`thetasol.reference.Report`: error and drift of the integrals
@@ -34,7 +35,7 @@ from numpy.typing import ArrayLike
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability
 from thetasol.mechanics.trajectories import Trajectories
 
-__all__ = ["time_series", "body_axes", "trajectories", "error_against_time", "branch_points",
+__all__ = ["time_series", "on_sphere", "body_axes", "trajectories", "error_against_time", "branch_points",
            "stability_diagram", "stability_grid", "STABILITY_REGIONS"]
 
 #: The regions of :func:`stability_diagram`, in the order of its colour map, with their colours.
@@ -119,9 +120,52 @@ def time_series(sol, t: ArrayLike, *, labels: Sequence[str] | None = None, verti
     return fig
 
 
+def on_sphere(points: ArrayLike, *, t: ArrayLike | None = None, frame: ArrayLike | None = None, ax=None,
+              title: str | None = None):
+    """A path on the sphere (3-d axes, with a wire-frame unit sphere): unit vectors or a point on ``|q| = R``.
+
+    Parameters
+    ----------
+    points : array_like, shape (n, 3)
+        The path; scaled to the unit sphere by its first point's length.
+    t : array_like, shape (n,), optional
+        Times: colour the path by time (with a colour bar).
+    frame : array_like, shape (3, 3), optional
+        Rows are the space directions drawn as plot ``x, y, z`` (e.g. a frame whose third row is the
+        angular momentum); default the space axes.
+    ax : mpl_toolkits.mplot3d.Axes3D, optional
+    title : str, optional
+
+    Returns
+    -------
+    Axes3D
+        The path is its first line (``t`` not given) or collection; the start is marked by a black dot.
+    """
+    p = np.asarray(points, dtype=float)
+    if p.ndim != 2 or p.shape[1] != 3:
+        raise ValueError(f"points must have shape (n, 3), got {p.shape}")
+    F = np.eye(3) if frame is None else np.asarray(frame, dtype=float)
+    xyz = p @ F.T / np.linalg.norm(p[0])
+    if ax is None:
+        ax = plt.figure(figsize=(6, 5.5)).add_subplot(projection="3d")
+    if t is None:
+        ax.plot(*xyz.T, lw=1)
+    else:
+        pts = ax.scatter(*xyz.T, c=np.asarray(t, dtype=float).ravel(), cmap="viridis", s=1)
+        ax.figure.colorbar(pts, ax=ax, shrink=0.6, label="t")
+    u, v = np.mgrid[0:2 * np.pi:40j, 0:np.pi:20j]
+    ax.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v), color="0.85", lw=0.5)
+    ax.scatter(*xyz[0], color="k", s=15)
+    ax.set_box_aspect((1, 1, 1))
+    ax.set_axis_off()
+    if title:
+        ax.set_title(title, fontsize=10)
+    return ax
+
+
 def body_axes(Q: ArrayLike, *, axis: int = 2, t: ArrayLike | None = None, frame: ArrayLike | None = None,
               ax=None):
-    """The space image ``Q(t) e_axis`` of a body axis, traced on the unit sphere (3-d axes).
+    """The space image ``Q(t) e_axis`` of a body axis, traced on the unit sphere (:func:`on_sphere`).
 
     Parameters
     ----------
@@ -129,12 +173,8 @@ def body_axes(Q: ArrayLike, *, axis: int = 2, t: ArrayLike | None = None, frame:
         Attitudes (body to space), e.g. ``sol.Q(t)``.
     axis : int
         Which body axis (0, 1, 2).
-    t : array_like, shape (n,), optional
-        Times: colour the trace by time (with a colour bar).
-    frame : array_like, shape (3, 3), optional
-        Rows are the space directions drawn as plot ``x, y, z`` (e.g. a frame whose third row is the
-        angular momentum); default the space axes.
-    ax : mpl_toolkits.mplot3d.Axes3D, optional
+    t, frame, ax
+        As for :func:`on_sphere`.
 
     Returns
     -------
@@ -145,22 +185,8 @@ def body_axes(Q: ArrayLike, *, axis: int = 2, t: ArrayLike | None = None, frame:
         raise ValueError(f"Q must have shape (n, 3, 3), got {Qa.shape}")
     if axis not in (0, 1, 2):
         raise ValueError(f"axis must be 0, 1 or 2, got {axis}")
-    F = np.eye(3) if frame is None else np.asarray(frame, dtype=float)
-    xyz = Qa[:, :, axis] @ F.T
-    if ax is None:
-        ax = plt.figure(figsize=(6, 5.5)).add_subplot(projection="3d")
-    u, v = np.mgrid[0:2 * np.pi:40j, 0:np.pi:20j]
-    ax.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v), color="0.85", lw=0.5)
-    if t is None:
-        ax.plot(*xyz.T, lw=1)
-    else:
-        pts = ax.scatter(*xyz.T, c=np.asarray(t, dtype=float).ravel(), cmap="viridis", s=1)
-        ax.figure.colorbar(pts, ax=ax, shrink=0.6, label="t")
-    ax.scatter(*xyz[0], color="k", s=15)
-    ax.set_box_aspect((1, 1, 1))
-    ax.set_axis_off()
-    ax.set_title(f"body axis $Q(t)\\,e_{axis + 1}$ on the unit sphere", fontsize=10)
-    return ax
+    return on_sphere(Qa[:, :, axis], t=t, frame=frame, ax=ax,
+                     title=f"body axis $Q(t)\\,e_{axis + 1}$ on the unit sphere")
 
 
 # -- scenes -----------------------------------------------------------------------------------------
