@@ -173,8 +173,11 @@ def body_axes(Q: ArrayLike, *, axis: int = 2, t: ArrayLike | None = None, frame:
         Attitudes (body to space), e.g. ``sol.Q(t)``.
     axis : int
         Which body axis (0, 1, 2).
-    t, frame, ax
-        As for :func:`on_sphere`.
+    t : array_like, shape (n,), optional
+        Times: colour the trace by time (as in :func:`on_sphere`).
+    frame : array_like, shape (3, 3), optional
+        Rows are the space directions drawn as plot ``x, y, z`` (as in :func:`on_sphere`).
+    ax : mpl_toolkits.mplot3d.Axes3D, optional
 
     Returns
     -------
