@@ -147,7 +147,7 @@ def on_sphere(points: ArrayLike, *, t: ArrayLike | None = None, frame: ArrayLike
     F = np.eye(3) if frame is None else np.asarray(frame, dtype=float)
     xyz = p @ F.T / np.linalg.norm(p[0])
     if ax is None:
-        ax = plt.figure(figsize=(6, 5.5)).add_subplot(projection="3d")
+        ax = plt.figure(figsize=(5.5, 4.5)).add_subplot(projection="3d")
     if t is None:
         ax.plot(*xyz.T, lw=1)
     else:
@@ -156,7 +156,7 @@ def on_sphere(points: ArrayLike, *, t: ArrayLike | None = None, frame: ArrayLike
     u, v = np.mgrid[0:2 * np.pi:40j, 0:np.pi:20j]
     ax.plot_wireframe(np.cos(u) * np.sin(v), np.sin(u) * np.sin(v), np.cos(v), color="0.85", lw=0.5)
     ax.scatter(*xyz[0], color="k", s=15)
-    ax.set_box_aspect((1, 1, 1))
+    ax.set_box_aspect((1, 1, 1), zoom=1.3)     # the unit sphere fills the panel
     ax.set_axis_off()
     if title:
         ax.set_title(title, fontsize=10)
