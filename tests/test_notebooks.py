@@ -13,8 +13,8 @@ from pathlib import Path
 import pytest
 
 NOTEBOOKS = sorted((Path(__file__).resolve().parents[1] / "docs" / "notebooks").glob("*.md"))
-# measured execution times (kernel start included) on the CI machine: oracle 6.7 s, kovalevskaya_top 12 s;
-# the others 1.5-4.2 s
+# execution times (kernel start included) on the shared 2-core machine at load ~2: oracle 6.7 s, the others
+# 1.5-4.3 s; kovalevskaya_top 14.8 s at load ~7 (its set-up alone is 2-6 s)
 SLOW = {"oracle", "kovalevskaya_top"}
 
 
