@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import io
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TextIO
 
@@ -254,7 +255,21 @@ def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say
     return check
 
 
-def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Trajectories, str, list[Check]]:
+def _stepper(progress: Callable[[str, int, int], None] | None, multibody: bool) -> Callable[[], None]:
+    """Each call announces the next part of :func:`run` as ``progress(label, k, n)`` before part ``k``
+    of ``n`` starts; the call after the last part sends ``progress("done", n, n)``."""
+    labels = ["split solution", "numerical references"] + (["unsplit multibody reference"] if multibody else [])
+    parts = iter(range(len(labels) + 1))
+
+    def step() -> None:
+        k = next(parts)
+        if progress is not None:
+            progress(labels[k] if k < len(labels) else "done", k, len(labels))
+    return step
+
+
+def run(scene: Scene, check: bool = True, out: TextIO | None = None,
+        progress: Callable[[str, int, int], None] | None = None) -> tuple[Trajectories, str, list[Check]]:
     """Solve a scene by the split and compare its exact parts with the numerical references.
 
     Parameters
@@ -264,6 +279,9 @@ def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Tr
         Also run the unsplit multibody reference (if the scene's ``check_multibody`` allows).
     out : text stream, optional
         Where to print the report as it is produced (besides returning it).
+    progress : callable, optional
+        ``progress(label, k, n)`` is called as part ``k`` of ``n`` starts (the split solution, the
+        numerical references, the multibody reference) and as ``progress("done", n, n)`` at the end.
 
     Returns
     -------
@@ -274,7 +292,10 @@ def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Tr
         Every comparison with its tolerance; ``all(c.ok for c in checks)`` is the verdict.
     """
     say = _Text(out)
+    multibody = check and scene.solver.get("check_multibody", True)
+    step = _stepper(progress, multibody)
     _describe_scene(scene, say)
+    step()
     start = time.perf_counter()
     sol = scene.solution()
     traj = sol(scene.t)
@@ -282,14 +303,17 @@ def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Tr
     _describe_models(sol, say)
 
     say("exact parts against the numerical references (max abs deviation):")
+    step()
     checks = _reference_checks(scene, sol, traj)
     for c in checks:
         say(c.line())
     if not any(r["closed_form"] for r in traj.info["rotations"].values()):
         say("  rotations: no closed form applies to these data; they ARE the numerical reference")
     _drift(scene, traj, say)
-    if check and scene.solver.get("check_multibody", True):
+    if multibody:
+        step()
         checks.append(_multibody_check(scene, traj, split_seconds, say))
+    step()
     say()
     say(f"timings: split solution {split_seconds:.3f} s (mass centre {traj.info['mass_center_seconds'] * 1e3:.2f} ms; "
         + ", ".join(f"{n} {r['seconds'] * 1e3:.0f} ms" for n, r in traj.info["rotations"].items()) + ")")
