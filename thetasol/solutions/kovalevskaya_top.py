@@ -408,7 +408,7 @@ def kovalevskaya_motion(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: 
     coef = np.stack([np.linalg.solve(A, b + 0j) for A, b in rows])
     coef, resid = _refine(coef, val, der, rows, c0, l1, setup.l, k)
     return KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, coef, c0, l1, setup.frame.P,
-                              _lattice_frequency(setup.curve), resid, setup.V[:, 0])
+                              (motion.lattice_velocity(), np.zeros(4)), resid, setup.V[:, 0])
 
 
 def _lattice_frequency(curve, dps=34):
