@@ -39,24 +39,20 @@ def _torus_lattice(motion, box=4):
     """Two integer vectors ``k1, k2`` (lattice coordinates) spanning the periods of the state on the real torus."""
     W = np.stack([_lattice_coords(motion, motion.V1), motion.lattice_velocity()], 1)   # (4, 2)
     Qw, _ = np.linalg.qr(W)
-    chars = motion.chars1 + motion.chars2
-    cands = []
-    for k in product(range(-box, box + 1), repeat=4):
-        k = np.array(k, float)
-        if not k.any() or np.linalg.norm(k - Qw @ (Qw.T @ k)) > 1e-6 * np.linalg.norm(k):
-            continue
-        if any(np.rint(k[:2] @ (2 * a) + k[2:] @ (2 * b)) % 2 for a, b in chars):
-            continue
-        cands.append(k)
-    if len(cands) < 2:
+    k = np.array(list(product(range(-box, box + 1), repeat=4)), float)
+    k = k[np.any(k != 0, 1)]
+    k = k[np.linalg.norm(k - (k @ Qw) @ Qw.T, axis=1) <= 1e-6 * np.linalg.norm(k, axis=1)]
+    for a, b in motion.chars1 + motion.chars2:
+        k = k[np.rint(k[:, :2] @ (2 * a) + k[:, 2:] @ (2 * b)) % 2 == 0]
+    if len(k) < 2:
         raise RuntimeError("no period lattice of the real torus found")
-    cands.sort(key=lambda k: np.linalg.norm(np.linalg.lstsq(W, k, rcond=None)[0]))
-    k1 = cands[0]
-    ab1 = np.linalg.lstsq(W, k1, rcond=None)[0]
-    for k in cands[1:]:
-        ab = np.linalg.lstsq(W, k, rcond=None)[0]
-        if abs(ab1[0] * ab[1] - ab1[1] * ab[0]) > 1e-6 * np.linalg.norm(ab1) * np.linalg.norm(ab):
-            return k1, k
+    ab = np.linalg.lstsq(W, k.T, rcond=None)[0].T          # (n, 2): the periods in the flows' times
+    order = np.argsort(np.linalg.norm(ab, axis=1), kind="stable")
+    k, ab = k[order], ab[order]
+    cross = np.abs(ab[0, 0] * ab[:, 1] - ab[0, 1] * ab[:, 0])
+    indep = np.nonzero(cross > 1e-6 * np.linalg.norm(ab[0]) * np.linalg.norm(ab, axis=1))[0]
+    if len(indep):
+        return k[0], k[indep[0]]
     raise RuntimeError("the real torus has no two independent periods in the search box")
 
 
