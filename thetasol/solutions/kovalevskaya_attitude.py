@@ -10,10 +10,14 @@ The azimuth of ``Q b`` obeys
     = (M x tau) . gamma / (|M|^2 - (M . gamma)^2),  tau = mass |g| gamma x center   (b = M),
 
 a function on the real torus ``z0 + a V1 + b V2`` (an abelian integral of the third kind along the flow).  It is
-sampled on an ``N x N`` grid of the torus angles, its Fourier coefficients taken by FFT, and integrated term by
-term: ``phi(t) = phi0 + c_00 t + sum c_jk (exp(2 pi i (j nu1 + k nu2) t) - 1)/(2 pi i (j nu1 + k nu2))``, the
-torus angles ``nu t`` reduced modulo 1 and ``c_00 t`` modulo ``2 pi`` with two-word products.  The truncation
-(the largest dropped coefficient over its divisor) is ``diagnostics["phase_tail"]``.
+sampled on an ``n1 x n2`` grid of the torus angles (each axis doubled from 32 until the integrated Fourier
+coefficients on its edge are below ``PHASE_TOL``; a doubling samples only the new rows or columns), its Fourier
+coefficients taken by FFT, and integrated term by term:
+``phi(t) = phi0 + c_00 t + sum c_jk (exp(2 pi i (j nu1 + k nu2) t) - 1)/(2 pi i (j nu1 + k nu2))``, the torus
+angles ``nu t`` reduced modulo 1 and ``c_00 t`` modulo ``2 pi`` with two-word products.  The series is kept as
+a dense box of modes ``|j| <= J, |k| <= K`` (the smallest outside which the coefficients sum to at most
+``PHASE_DROP``) and evaluated as a matrix product.  The truncation (the largest coefficient on the grid's edge
+plus the dropped sum) is ``diagnostics["phase_tail"]``.
 """
 from __future__ import annotations
 
