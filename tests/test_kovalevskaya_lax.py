@@ -1,5 +1,7 @@
-"""Kovalevskaya's top against the Lax pair of Reyman, Semenov-Tian-Shansky and Bobenko (Commun. Math. Phys.
-122 (1989) 321-354): the spectral curve of the closed form is constant.
+"""Kovalevskaya's top against a Lax pair with spectral parameter of the Reyman-Semenov-Tian-Shansky type (the
+so(3, 2) twisted loop algebra of Bobenko, Reyman and Semenov-Tian-Shansky, Commun. Math. Phys. 122 (1989)
+321-354): the spectral curve of the closed form is constant.  The matrices below are written out from that
+construction and verified here as a Lax pair before they are used.
 
 In the memoir's frame and units (``I = diag(2, 2, 1) I3``, mass centre on e1, ``c0 = m |g| x0 / I3``, ``g`` the
 downward vertical, ``M = (2p, 2q, r)`` the angular momentum over ``I3``) the Euler-Poisson equations

@@ -271,7 +271,7 @@ class KovalevskayaMotion:
         # points 0.6x the time of seven passes, at one point 0.12x
         e, v, gr = self.theta.jet(z, char="all", order=1, separated=True)
         dv = gr @ self.V2
-        return [(e, v[..., i], dv[..., i]) for i in map(char_index, chars)]
+        return [(e, v[..., i], dv[..., i]) for i in map(_char_index, chars)]
 
     def _values(self, t, order=0):
         """The seven theta values (and their t-derivatives) in a common unit.
@@ -366,7 +366,7 @@ def _refine(coef, val, der, rows, c0, l1, l, k):
     return (sol.x[:12] + 1j * sol.x[12:]).reshape(4, 3), float(np.max(np.abs(res(sol.x))))
 
 
-def char_index(ch) -> int:
+def _char_index(ch) -> int:
     """Position of the half characteristic ``ch = (alpha, beta)`` (None: zero) in ``RiemannTheta(..., char="all")``."""
     if ch is None:
         return 0
@@ -385,7 +385,7 @@ def _theta_taylor(theta, z, V, chars):
     """Taylor coefficients (orders 0, 1, 2) of ``theta[ch](z + V t)`` at ``t = 0``, one row per characteristic, in a
     common unit ``exp(e)``."""
     _, v, gr, H = theta.jet(z, char="all", order=2, separated=True)
-    idx = [char_index(ch) for ch in chars]
+    idx = [_char_index(ch) for ch in chars]
     return np.stack([v[idx], gr[idx] @ V, np.einsum("i,cij,j->c", V, H[idx], V) / 2], 1)
 
 
