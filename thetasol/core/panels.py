@@ -23,6 +23,16 @@ NODES = 16
 #: Smallest Bernstein-ellipse parameter of a singularity relative to its panel.
 RHO = 4.0
 _X, _W = np.polynomial.legendre.leggauss(NODES)
+
+
+def _integration_matrix() -> np.ndarray:
+    """S with (S f)_i = int_{-1}^{X_i} p, p the polynomial through (X_j, f_j) (Legendre basis)."""
+    L = np.polynomial.legendre
+    inv = np.linalg.inv(L.legvander(_X, NODES - 1))
+    return np.stack([L.legval(_X, L.legint(inv[:, j], lbnd=-1)) for j in range(NODES)], -1)
+
+
+_S = _integration_matrix()
 _MAX_PANELS = 4096
 
 
@@ -58,9 +68,17 @@ class PeriodicIntegral:
         self.edges = np.array(edges)
         a, b = self.edges[:-1], self.edges[1:]
         h = 0.5 * (b - a)
-        vals = f((a + h)[:, None] + h[:, None] * _X)
+        nodes = (a + h)[:, None] + h[:, None] * _X
+        vals = f(nodes)
         self.cum = np.r_[0.0, np.cumsum((vals @ _W) * h)]
         self.total = float(self.cum[-1])
+        # per panel, x as a polynomial in F through the nodes and the ends: the start of the inversion
+        self._px = np.concatenate([a[:, None], nodes, b[:, None]], 1)
+        self._pF = np.concatenate([self.cum[:-1, None], self.cum[:-1, None] + (vals @ _S.T) * h[:, None],
+                                   self.cum[1:, None]], 1)
+        diff = self._pF[:, :, None] - self._pF[:, None, :]
+        np.einsum("pii->pi", diff)[...] = 1.0
+        self._pw = 1.0 / diff.prod(-1)                  # barycentric weights
 
     def __call__(self, x: ArrayLike) -> np.ndarray:
         """F(x) (any real x, any shape): the panel's running value plus Gauss-Legendre from its start."""
@@ -74,16 +92,23 @@ class PeriodicIntegral:
         return turns * self.total + self.cum[j] + part
 
     def inverse(self, y: ArrayLike) -> np.ndarray:
-        """x with F(x) = y (1-d y): Newton from the linear model of F on the panel, safeguarded by the
-        panel's ends (F is increasing), then two plain steps (quadratic convergence reaches rounding)."""
+        """x with F(x) = y (1-d y): Newton from the polynomial x(F) through the panel's nodes
+        (barycentric form), safeguarded by the panel's ends (F is increasing), then one plain step."""
         y = np.asarray(y, float)
         turns = np.floor(y / self.total)
         r = y - turns * self.total
         j = np.clip(np.searchsorted(self.cum, r, "right") - 1, 0, self.edges.size - 2)
-        a, b = self.edges[j] + 2 * np.pi * turns, self.edges[j + 1] + 2 * np.pi * turns
-        x0 = a + (b - a) * (r - self.cum[j]) / (self.cum[j + 1] - self.cum[j])
+        shift = 2 * np.pi * turns
+        a, b = self.edges[j] + shift, self.edges[j + 1] + shift
+        dF = r[:, None] - self._pF[j]
+        hit = dF == 0.0
+        dF[hit] = 1.0
+        q = self._pw[j] / dF
+        x0 = np.where(hit.any(-1), (self._px[j] * hit).sum(-1), (q * self._px[j]).sum(-1) / q.sum(-1))
+        x0 = np.clip(x0 + shift, a, b)
 
         def fun(x):
             return self(x), self.f(x)
 
-        return monotone_newton(fun, y, x0, a, b, lambda new, x: np.abs(new - x) <= 1e-9, 100, 2)
+        # the start is ~RHO^-(NODES + 2) of the panel away: one step is at rounding, one more polishes
+        return monotone_newton(fun, y, x0, a, b, lambda new, x: np.abs(new - x) <= 1e-9, 100, 1)

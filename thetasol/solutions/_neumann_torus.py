@@ -10,12 +10,11 @@ import numpy as np
 from thetasol.core.panels import PeriodicIntegral
 from thetasol.core.periodic import (
     HermiteTable,
+    TaylorTable,
     eval_series,
     fit_series,
+    grid_values,
     integrated,
-    powers,
-    sum_series,
-    sum_series_derivative,
 )
 from thetasol.core.roots import monotone_newton, quadratic_roots
 from thetasol.solutions.base import ClosedFormUnavailable
@@ -48,8 +47,8 @@ class Oscillator:
     a strip of width ~``1 / log(w / g)``: tens to hundreds of terms).
     """
 
-    def __init__(self, lo, hi, C, below=(), above=(), complex_roots=(), name="u"):
-        self.lo, self.hi, self.w = float(lo), float(hi), float(hi - lo)
+    def __init__(self, lo, hi, C, below=(), above=(), complex_roots=(), name="u", w=None):
+        self.lo, self.hi, self.w = float(lo), float(hi), float(hi - lo if w is None else w)
         self.C = float(C)
         self.below = np.asarray(below, float)
         self.above = np.asarray(above, float)
@@ -93,6 +92,10 @@ class Oscillator:
     def theta(self, al: np.ndarray) -> np.ndarray:
         return al + eval_series(self.B, al)
 
+    def theta_grid(self, n: int) -> np.ndarray:
+        """theta at alpha = 2 pi j / n, j < n (the grid of :func:`thetasol.core.periodic.fit_series`)."""
+        return 2 * np.pi * np.arange(n) / n + grid_values(self.B, n)
+
     def alpha(self, th: np.ndarray) -> np.ndarray:
         return self.F(th) / self.fbar
 
@@ -100,6 +103,24 @@ class Oscillator:
 # -- the genus-2 torus (distinct eigenvalues) ------------------------------------------------------
 
 _JL = [(1, 2), (0, 2), (0, 1)]                      # the other two indices of each eigenvalue
+
+
+def _anchored(d, x2, L2, a2, z):
+    """The roots z of ``N(z) + sum_m L2_m (z - d_m)`` (``N = sum_i x2_i prod_{j != i} (z - d_j)``) as
+    ``(i, offset)``, ``z = d_i + offset`` for the nearest d_i: the offset is a root of the polynomial
+    shifted to d_i, whose coefficients ``N(d_i) + ...`` and ``N'(d_i) + ...`` are sums of products of
+    the data with differences of the d (no cancellation against d_i: near an equilibrium the gaps are
+    ~x_i^2, known to their relative rounding, not to eps (k3 - k1))."""
+    out = []
+    for zz in z:
+        i = int(np.argmin(np.abs(zz - d)))
+        j, l = _JL[i]
+        dj, dl = d[i] - d[j], d[i] - d[l]
+        p0 = x2[i] * dj * dl + L2[j] * dj + L2[l] * dl
+        p1 = x2[i] * (dj + dl) + x2[j] * dl + x2[l] * dj + L2.sum()
+        zeta = quadratic_roots(a2, p1, p0)
+        out.append((i, float(zeta[np.argmin(np.abs(zeta - (zz - d[i])))])))
+    return out
 
 
 class NeumannTorus:
@@ -114,86 +135,97 @@ class NeumannTorus:
     method = "neumann/genus-2"
 
     def __init__(self, k: np.ndarray, x0: np.ndarray, y0: np.ndarray):
-        zu, a2, a1 = self._separation(k, x0, y0)
+        self._separation(k, x0, y0)
         self._oscillators()
         self._roles()
-        self._initial_angles(x0, y0, zu, a2, a1)
+        self._initial_angles(x0, y0)
         self._signs(x0, y0)
         self._time_series()
 
     # -- set-up stages -----------------------------------------------------------------------------
     def _separation(self, k, x0, y0):
-        """The sphero-conical coordinates zu = (u1, u2) and the roots of A B, shifted to k2 (exact)."""
+        """The sphero-conical coordinates (u1, u2) and the roots of A B, shifted to k2, each also as
+        ``(i, offset)`` from its nearest k_i (:func:`_anchored`): their differences are accurate."""
         d = k - k[1]
-        L = np.cross(x0, y0)
         x2 = x0 * x0
         a2 = x2.sum()
         a1 = -sum(x2[i] * (d[j] + d[l]) for i, (j, l) in enumerate(_JL))
         a0 = sum(x2[i] * d[j] * d[l] for i, (j, l) in enumerate(_JL))
         zu = quadratic_roots(a2, a1, a0)              # u1 <= k2 <= u2 (shifted)
-        L2 = L * L
+        L2 = np.cross(x0, y0) ** 2
         zb = quadratic_roots(a2, a1 + L2.sum(), a0 - (L2 * d).sum())
-        roots = sorted([(d[i], "k", i) for i in range(3)] + [(zb[j], "b", j) for j in range(2)],
-                       key=lambda r: r[0])
+        self.d = d
+        self.zu = _anchored(d, x2, np.zeros(3), a2, zu)
+        zb_a = _anchored(d, x2, L2, a2, zb)
+        roots = sorted([(d[i], "k", i, (i, 0.0)) for i in range(3)]
+                       + [(d[p[0]] + p[1], "b", j, p) for j, p in enumerate(zb_a)], key=lambda r: r[0])
         vals = np.array([r[0] for r in roots])
         scale = max(abs(d[0]), abs(d[2]))
         tol = 1e-9 * scale
         if not (vals[1] - tol <= zu[0] <= vals[2] + tol and vals[3] - tol <= zu[1] <= vals[4] + tol):
             raise ClosedFormUnavailable(f"Neumann solution: the sphero-conical coordinates {zu} are not in "
                                         f"their oscillation intervals {vals} (internal inconsistency)")
-        self.d, self.zb, self.roots, self.vals, self.scale = d, zb, roots, vals, scale
+        self.zb, self.roots, self.vals, self.scale = zb, roots, vals, scale
+        self.anc = [r[3] for r in roots]
         self.ivals = [(1, 2), (3, 4)]
-        return zu, a2, a1
+        self.gap12 = self._gap(self.anc[3], self.anc[2])
+
+    def _gap(self, p, q):
+        """p - q for anchored values ``(i, offset)`` (value ``d_i + offset``)."""
+        return (self.d[p[0]] - self.d[q[0]]) + (p[1] - q[1])
 
     def _oscillators(self):
         """One :class:`Oscillator` per coordinate; thin intervals bounded by a root of B are refused."""
-        vals, roots, scale = self.vals, self.roots, self.scale
+        vals, roots, scale, anc = self.vals, self.roots, self.scale, self.anc
         self.osc = []
         for kk, (i_lo, i_hi) in enumerate(self.ivals):
-            lo, hi = vals[i_lo], vals[i_hi]
-            if hi - lo <= MIN_WIDTH * scale and "b" in (roots[i_lo][1], roots[i_hi][1]):
+            w = self._gap(anc[i_hi], anc[i_lo])
+            if w <= MIN_WIDTH * scale and "b" in (roots[i_lo][1], roots[i_hi][1]):
                 # the width is a difference with a root of B known to eps * scale: the angle on a
                 # thin torus is known to ~eps / width (measured 5e-12 at width 1e-10, t = 40); an
                 # interval [k_i, k_j] (nearly repeated eigenvalues) is exact and kept
                 raise DegenerateTorus(
                     f"Neumann solution: nearly degenerate torus (a sphero-conical coordinate stays within "
-                    f"{(hi - lo) / scale:.1e} of the span of k: the point within ~{np.sqrt((hi - lo) / scale):.0e} "
+                    f"{w / scale:.1e} of the span of k: the point within ~{np.sqrt(w / scale):.0e} "
                     "of an invariant great circle, or of a periodic orbit); the separated coordinates lose "
                     "accuracy there (nearly planar motion is not handled)")
-            others = [vals[m] for m in range(5) if m not in (i_lo, i_hi)]
-            self.osc.append(Oscillator(lo, hi, 4.0, below=[lo - r for r in others if r < lo],
-                                       above=[r - hi for r in others if r >= hi], name=f"u{kk + 1}"))
+            self.osc.append(Oscillator(vals[i_lo], vals[i_hi], 4.0,
+                                       below=[self._gap(anc[i_lo], anc[m]) for m in range(i_lo)],
+                                       above=[self._gap(anc[m], anc[i_hi]) for m in range(i_hi + 1, 5)],
+                                       name=f"u{kk + 1}", w=w))
 
     def _roles(self):
         """The role of each k_i in each interval: 'lo', 'hi' endpoint or a gap to the nearer endpoint."""
-        d, vals, roots = self.d, self.vals, self.roots
+        d, vals, roots, anc = self.d, self.vals, self.roots, self.anc
         self.role = []
         for i in range(3):
             row = []
             for i_lo, i_hi in self.ivals:
-                if roots[i_lo][1:] == ("k", i):
+                if roots[i_lo][1:3] == ("k", i):
                     row.append(("lo", 0.0))
-                elif roots[i_hi][1:] == ("k", i):
+                elif roots[i_hi][1:3] == ("k", i):
                     row.append(("hi", 0.0))
                 elif d[i] < vals[i_lo]:
-                    row.append(("below", vals[i_lo] - d[i]))
+                    row.append(("below", self._gap(anc[i_lo], (i, 0.0))))
                 else:
-                    row.append(("above", d[i] - vals[i_hi]))
+                    row.append(("above", self._gap((i, 0.0), anc[i_hi])))
             self.role.append(row)
         self.norm = np.array([np.sqrt(abs((d[i] - d[j]) * (d[i] - d[l]))) for i, (j, l) in enumerate(_JL)])
 
-    def _initial_angles(self, x0, y0, zu, a2, a1):
+    def _initial_angles(self, x0, y0):
         """theta_k at t = 0: cos from the position, sin from the velocity (both absolutely accurate):
-        du/ds = (u2 - u1) du/dt = (w/2) sin(theta) dtheta/ds = w sin(theta) sqrt(prod_others |u - r|)."""
-        d, vals = self.d, self.vals
+        du/ds = (u2 - u1) du/dt = (w/2) sin(theta) dtheta/ds = w sin(theta) sqrt(prod_others |u - r|),
+        du/dt from N_t(u) + N'(u) du/dt = 0, N'(u_k) = a2 (u_k - u_other)."""
+        gap0 = self._gap(self.zu[1], self.zu[0])
+        a2 = (x0 * x0).sum()
         th0 = []
-        gap0 = zu[1] - zu[0]
         for kk, o in enumerate(self.osc):
-            z = zu[kk]
-            udot = -sum(2.0 * x0[i] * y0[i] * (z - d[j]) * (z - d[l])
-                        for i, (j, l) in enumerate(_JL)) / (2.0 * a2 * z + a1)
-            cos_th = ((o.hi - z) - (z - o.lo)) / o.w
-            dist = [abs(z - vals[m]) for m in range(5) if m not in self.ivals[kk]]
+            z = self.zu[kk]
+            i_lo, i_hi = self.ivals[kk]
+            udot = -sum(2.0 * x0[i] * y0[i] * self._gap(z, (j, 0.0)) * self._gap(z, (l, 0.0))
+                        for i, (j, l) in enumerate(_JL)) / (a2 * (gap0 if kk else -gap0))
+            cos_th = (self._gap(self.anc[i_hi], z) - self._gap(z, self.anc[i_lo])) / o.w
+            dist = [abs(self._gap(z, self.anc[m])) for m in range(5) if m not in self.ivals[kk]]
             sin_th = gap0 * udot / (o.w * np.sqrt(np.prod(dist)))
             th0.append(np.arctan2(sin_th, cos_th))
         self.th0 = np.array(th0)
@@ -208,17 +240,19 @@ class NeumannTorus:
         self.fit_residual = float(max(np.abs(xm - x0).max(), np.sqrt(tau2) * np.abs(dxm / gm - y0).max()))
 
     def _time_series(self):
-        """The time along the torus, t(s) = <u2 - u1> s + bounded, and cheap tables of the bounded
-        parts (to 1e-12 of the time scale 1/drift) for the first Newton steps."""
+        """The time along the torus, t(s) = <u2 - u1> s + bounded: Taylor tables of the bounded parts
+        and of theta(alpha) (to the rounding of their series), and cheaper Hermite tables of the
+        bounded parts (to 1e-12 of the time scale 1/drift) for the first Newton steps."""
         self.alpha0 = np.array([o.alpha(th) for o, th in zip(self.osc, self.th0, strict=True)])
-        self.cu = [fit_series(lambda al, o=o: o.u(o.theta(al)), f"u{kk + 1}(alpha)",
+        self.cu = [fit_series(lambda al, o=o: o.u(o.theta_grid(al.size)), f"u{kk + 1}(alpha)",
                               floor=4 * _EPS * self.scale)
                    for kk, o in enumerate(self.osc)]
         self.P = [integrated(c) for c in self.cu]
         self.fbar = np.array([o.fbar for o in self.osc])
         self.drift = self.cu[1][0].real - self.cu[0][0].real
-        self.P0 = np.array([eval_series(P, a) for P, a in zip(self.P, self.alpha0, strict=True)])
         self.Pspan = sum(2 * f * np.abs(P).sum() for f, P in zip(self.fbar, self.P, strict=True)) * 2
+        self.taylor = [(TaylorTable(P), TaylorTable(o.B)) for o, P in zip(self.osc, self.P, strict=True)]
+        self.P0 = np.array([tab[0](self.alpha0[kk:kk + 1])[0][0] for kk, tab in enumerate(self.taylor)])
         self.tables = [HermiteTable(f * P, 1e-12 / self.drift) for f, P in zip(self.fbar, self.P, strict=True)]
         self.table0 = [tab(a)[0] for tab, a in zip(self.tables, self.alpha0, strict=True)]
 
@@ -252,7 +286,7 @@ class NeumannTorus:
             dxs.append(self.sigma[i] / self.norm[i] * ((q1 * r1) * p2 + p1 * (q2 * r2)))
         o1, o2 = self.osc
         # u2 - u1 from the gap between the intervals (no cancellation)
-        gap = ((o2.lo - o1.hi) + o1.parts(th1)[1]) + o2.parts(th2)[0]
+        gap = (self.gap12 + o1.parts(th1)[1]) + o2.parts(th2)[0]
         return np.stack(np.broadcast_arrays(*xs), -1), np.stack(np.broadcast_arrays(*dxs), -1), gap
 
     def motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -267,18 +301,17 @@ class NeumannTorus:
         return self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
 
     def time_of_s(self, s: np.ndarray, angles: bool = False) -> tuple[np.ndarray, ...]:
-        """t(s) and dt/ds = u2 - u1 at s (one set of powers e^{i n alpha} per coordinate); with
-        ``angles`` also theta_k(alpha_k(s)) and dtheta_k/dalpha_k."""
+        """t(s) and dt/ds = u2 - u1 at s (the series of t and theta from their Taylor tables, to
+        rounding); with ``angles`` also theta_k(alpha_k(s)) and dtheta_k/dalpha_k."""
         al = self._alpha(s)
         t = self.drift * s
         u, th, dth = [], [], []
-        for kk, (o, P) in enumerate(zip(self.osc, self.P, strict=True)):
-            E = powers(al[kk], max(P.size, o.B.size) - 1)
-            t = t + (1 if kk else -1) * self.fbar[kk] * (sum_series(E, P) - self.P0[kk])
-            th.append(al[kk] + sum_series(E, o.B))
+        for kk, (o, (tab_P, tab_B)) in enumerate(zip(self.osc, self.taylor, strict=True)):
+            t = t + (1 if kk else -1) * self.fbar[kk] * (tab_P(al[kk])[0] - self.P0[kk])
+            b, db = tab_B(al[kk])
+            th.append(al[kk] + b)
             u.append(o.u(th[-1]))
-            if angles:
-                dth.append(1.0 + sum_series_derivative(E, o.B))
+            dth.append(1.0 + db)
         if angles:
             return t, u[1] - u[0], np.array(th), np.array(dth)
         return t, u[1] - u[0]

@@ -203,7 +203,7 @@ class EllipticNeumann:
 
     def series(self, g: Callable[[np.ndarray], np.ndarray], what: str) -> np.ndarray:
         """The Fourier series in alpha of g(theta(alpha)) (noise floor from ell)."""
-        return fit_series(lambda al: g(self.osc.theta(al)), what, floor=4 * _EPS * (abs(self.ax.ell) + 1.0))
+        return fit_series(lambda al: g(self.osc.theta_grid(al.size)), what, floor=4 * _EPS * (abs(self.ax.ell) + 1.0))
 
     def angle(self, t: np.ndarray, n_pow: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """alpha(t) and its powers e^{ij alpha}, j = 1..max(self.n_pow, n_pow) (shared by the series)."""
