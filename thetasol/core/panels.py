@@ -49,7 +49,8 @@ class PeriodicIntegral:
     ``singularities`` (complex; their periodic images are added here), for any real x:
     ``F(x + 2 pi) = F(x) + total``.
 
-    Attributes: ``edges`` (panel ends in ``[0, 2 pi]``), ``cum`` (F at the edges), ``total``.
+    Attributes: ``edges`` (panel ends in ``[0, 2 pi]``), ``cum`` (F at the edges), ``total``, ``nodes``
+    (the quadrature nodes, dense where f varies fast).
     """
 
     def __init__(self, f: Callable[[np.ndarray], np.ndarray], singularities: ArrayLike):
@@ -73,6 +74,7 @@ class PeriodicIntegral:
         self.cum = np.r_[0.0, np.cumsum((vals @ _W) * h)]
         self.total = float(self.cum[-1])
         # per panel, x as a polynomial in F through the nodes and the ends: the start of the inversion
+        self.nodes = nodes.ravel()
         self._px = np.concatenate([a[:, None], nodes, b[:, None]], 1)
         self._pF = np.concatenate([self.cum[:-1, None], self.cum[:-1, None] + (vals @ _S.T) * h[:, None],
                                    self.cum[1:, None]], 1)

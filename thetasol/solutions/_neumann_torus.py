@@ -23,7 +23,7 @@ __all__ = ["MIN_WIDTH", "DegenerateTorus", "Oscillator", "NeumannTorus"]
 
 _EPS = np.finfo(float).eps
 #: Thinnest interval of a sphero-conical coordinate (relative to k3 - k1) that is accepted.
-MIN_WIDTH = 1e-8
+MIN_WIDTH = 1e-14
 
 
 class DegenerateTorus(ArithmeticError):
@@ -180,18 +180,23 @@ class NeumannTorus:
         self.osc = []
         for kk, (i_lo, i_hi) in enumerate(self.ivals):
             w = self._gap(anc[i_hi], anc[i_lo])
+            below = [self._gap(anc[i_lo], anc[m]) for m in range(i_lo)]
+            above = [self._gap(anc[m], anc[i_hi]) for m in range(i_hi + 1, 5)]
+            if min(below + above, default=1.0) <= 0.0:
+                # two roots of A B equal within rounding: the motion is on a separatrix (asymptotic to
+                # an equilibrium), the period infinite
+                raise DegenerateTorus("Neumann solution: the torus is on a separatrix within rounding "
+                                      f"(two branch points {min(below + above) / scale:.1e} apart, relative)")
             if w <= MIN_WIDTH * scale and "b" in (roots[i_lo][1], roots[i_hi][1]):
-                # the width is a difference with a root of B known to eps * scale: the angle on a
-                # thin torus is known to ~eps / width (measured 5e-12 at width 1e-10, t = 40); an
-                # interval [k_i, k_j] (nearly repeated eigenvalues) is exact and kept
+                # the widths are accurate (roots anchored at the k_i): 1e-8 rad off a great circle (width
+                # 1e-16) is still within 1e-11 at t = 1000, but released at rest 1e-7 rad from a saddle
+                # (width 1e-14 and near a separatrix) the error is ~100x the conditioning at t = 100
                 raise DegenerateTorus(
                     f"Neumann solution: nearly degenerate torus (a sphero-conical coordinate stays within "
-                    f"{w / scale:.1e} of the span of k: the point within ~{np.sqrt(w / scale):.0e} "
-                    "of an invariant great circle, or of a periodic orbit); the separated coordinates lose "
-                    "accuracy there (nearly planar motion is not handled)")
+                    f"{max(w, 0.0) / scale:.1e} of the span of k: the point within ~{np.sqrt(max(w, 0.0) / scale):.0e} "
+                    "rad of an invariant great circle); the separated coordinates lose accuracy there")
             self.osc.append(Oscillator(vals[i_lo], vals[i_hi], 4.0,
-                                       below=[self._gap(anc[i_lo], anc[m]) for m in range(i_lo)],
-                                       above=[self._gap(anc[m], anc[i_hi]) for m in range(i_hi + 1, 5)],
+                                       below=below, above=above,
                                        name=f"u{kk + 1}", w=w))
 
     def _roles(self):

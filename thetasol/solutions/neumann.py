@@ -202,8 +202,13 @@ class EllipticNeumann:
         return (self.one_minus_hi + dhi) * (self.one_plus_lo + dlo)
 
     def series(self, g: Callable[[np.ndarray], np.ndarray], what: str) -> np.ndarray:
-        """The Fourier series in alpha of g(theta(alpha)) (noise floor from ell)."""
-        return fit_series(lambda al: g(self.osc.theta_grid(al.size)), what, floor=4 * _EPS * (abs(self.ax.ell) + 1.0))
+        """The Fourier series in alpha of g(theta(alpha)).  Noise floor: the rounding of g (from ell) and
+        that of theta (2 pi eps) times the largest |dg/dtheta|, by differences at the quadrature nodes
+        of the oscillator (dense where g is steep: near a pole with small ell, 1 / (1 - z^2) is)."""
+        th, h = self.osc.F.nodes, 1e-8
+        slope = np.abs(g(th + h) - g(th - h)).max() / (2 * h)
+        return fit_series(lambda al: g(self.osc.theta_grid(al.size)), what,
+                          floor=4 * _EPS * (abs(self.ax.ell) + 1.0) + 4 * np.pi * _EPS * slope)
 
     def angle(self, t: np.ndarray, n_pow: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """alpha(t) and its powers e^{ij alpha}, j = 1..max(self.n_pow, n_pow) (shared by the series)."""
