@@ -17,10 +17,12 @@ The models (``method``), docs/neumann.md has the table:
   ``ds = dt / (u2 - u1)``: ``(du_k / ds)^2 = -4 A(u_k) B(u_k)``, ``B(z) = N(z) + sum_m L_m^2 (z - k_m)``,
   ``N(z) = sum_i x_i^2 prod_{j != i} (z - k_j)``, ``L = x cross xdot`` (Uhlenbeck's integrals
   ``sum F_i / (z - k_i) = B / A`` without their divisors ``k_i - k_j``): the curve ``y^2 = -4 A B``.
-  With ``u = lo + (hi - lo) sin^2(theta / 2)`` between neighbouring roots of ``A B``, ``s(theta)``, its
+  With ``u = lo + (hi - lo) sin^2(theta / 2)`` between neighbouring roots of ``A B`` (kept as offsets
+  from the nearest ``k_i``), ``s(theta)`` is a running integral on graded Gauss-Legendre panels, its
   inverse and ``t(s) = int (u2 - u1) ds`` are linear terms plus Fourier series, and
   ``x_i = prod_k sqrt(k_i - u_k) / sqrt(prod_{j != i} (k_i - k_j))`` (square roots smooth in theta).
-  A time is mapped to ``s`` by safeguarded Newton: a far time costs what ``t = 1`` costs.
+  A time is mapped to ``s`` by safeguarded Newton: a far time costs what ``t = 1`` costs.  The model
+  lives in :mod:`thetasol.solutions._neumann_torus` (:class:`NeumannTorus`, :class:`Oscillator`).
 * ``neumann/elliptic``, ``neumann/latitude`` (a repeated eigenvalue): ``z = x.n`` in a quartic well,
   the azimuth about ``n`` a quadrature on the same circle, or a uniform circle of latitude.
 * ``neumann/planar-*`` (an invariant great circle, or an isotropic ``a``): a pendulum in twice the
@@ -466,8 +468,10 @@ def solve_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, *, reference: str 
     ValueError
         ``a`` not symmetric, NaN or inf in the data, ``q0 = 0``, ``v0`` not tangent.
     ClosedFormUnavailable
-        The torus within ~1e-4 (relative) of a separatrix or ~1e-8 of an invariant great circle
-        without being on it (the series would not converge or lose accuracy).
+        The torus on a separatrix within rounding (two branch points equal), thinner than
+        ``MIN_WIDTH`` (within ~1e-7 rad of an invariant great circle without being on it), or, for a
+        repeated eigenvalue, a small azimuthal momentum near a pole (the azimuth's series would not
+        converge): the message names ``reference``.
     """
     a, q0, v0, R = _validated(a, q0, v0)
     k, axes = np.linalg.eigh(a)
