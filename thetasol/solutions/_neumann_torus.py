@@ -53,13 +53,13 @@ class Oscillator:
         self.below = np.asarray(below, float)
         self.above = np.asarray(above, float)
         self.cplx = np.asarray(complex_roots, complex)
-        self.F = PeriodicIntegral(lambda th: 1.0 / self.rate(th), self._singularities())
+        self.F = PeriodicIntegral(lambda th: 1.0 / self.rate(th), self.singularities())
         self.fbar = self.F.total / (2 * np.pi)
         # theta is known to eps * 2 pi at best: that is the noise floor of its series
         self.B = fit_series(lambda al: self.F.inverse(al * self.fbar) - al, f"the inverse angle of {name}",
                             floor=2 * np.pi * _EPS)
 
-    def _singularities(self) -> np.ndarray:
+    def singularities(self) -> np.ndarray:
         """The complex theta (one per root and sign) where u(theta) meets another root: a root of the
         rate.  Below lo: sin^2(theta/2) = -g/w; above hi: cos^2(theta/2) = -g/w; complex r: (r - lo)/w."""
         sb = 2j * np.arcsinh(np.sqrt(self.below / self.w))

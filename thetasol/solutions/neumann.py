@@ -41,12 +41,14 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.panels import PeriodicIntegral
 from thetasol.core.periodic import (
     SeriesNotConverged,
     eval_series,
     fit_series,
     integrated,
     powers,
+    refined_fft,
     sum_series,
 )
 from thetasol.core.roots import quadratic_roots
@@ -93,15 +95,16 @@ def _axes_of_symmetry(idx: int):
 
 
 def _latitude_roots(kappa: float, h: float, ell: float):
-    """The roots in z of zdot^2 = kappa z^4 - (kappa + 2h) z^2 + 2h - ell^2, as (root, 1 - root when
-    known accurately): z^2 = 1 - v with kappa v^2 + (2h - kappa) v - ell^2 = 0 (v accurate near the poles)."""
+    """The roots in z of zdot^2 = kappa z^4 - (kappa + 2h) z^2 + 2h - ell^2, as (root, 1 - |root| for a
+    real root): z^2 = 1 - v with kappa v^2 + (2h - kappa) v - ell^2 = 0 (v, and so 1 - |z| = v / (1 + |z|),
+    accurate near the poles)."""
     v = quadratic_roots(kappa, 2.0 * h - kappa, -ell * ell)
     roots = []
     for vv in v:
         w = 1.0 - vv
         if w >= 0:
             rt = np.sqrt(w)
-            roots += [(rt, vv / (1.0 + rt)), (-rt, None)]
+            roots += [(rt, vv / (1.0 + rt)), (-rt, vv / (1.0 + rt))]
         else:
             roots += [(1j * np.sqrt(-w), None), (-1j * np.sqrt(-w), None)]
     return roots
@@ -173,30 +176,77 @@ class LatitudeCircle:
 class EllipticNeumann:
     """a with a repeated eigenvalue: ``K = k_perp + kappa n n^T`` with ``n = e_idx``.  ``z = x.n``
     oscillates in a quartic well, ``zdot^2 = kappa z^4 - (kappa + 2h) z^2 + 2h - ell^2``; the azimuth
-    ``int ell / (1 - z^2) dt`` is a Fourier series on the same circle."""
+    ``int ell / (1 - z^2) dt`` is a Fourier series on the same circle.  Where that series does not
+    converge (a small ``ell`` near a pole: the azimuth turns by ~pi in a short time) the horizontal
+    part ``rho e^{i lambda}``, smooth through the pole, is one instead (:meth:`_cartesian`)."""
 
     method = "neumann/elliptic"
 
     def __init__(self, ax: _Axial, roots, lo, hi, y0: np.ndarray):
         self.ax = ax
         zlo, zhi = float(lo[0].real), float(hi[0].real)
-        self.one_minus_hi = hi[1] if hi[1] is not None else 1.0 - zhi
-        self.one_plus_lo = 1.0 + zlo
+        # 1 - z_hi and 1 + z_lo from 1 - |z| where they are small (a turning point near a pole)
+        self.one_minus_hi = hi[1] if zhi > 0 else 1.0 - zhi
+        self.one_plus_lo = lo[1] if zlo < 0 else 1.0 + zlo
         others = [r[0] for r in roots if r is not lo and r is not hi]
         self.osc = osc = Oscillator(zlo, zhi, abs(ax.kappa),
                                     below=[zlo - r.real for r in others if np.isreal(r) and r.real < zlo],
                                     above=[r.real - zhi for r in others if np.isreal(r) and r.real >= zhi],
                                     complex_roots=[r for r in others if not np.isreal(r)], name="z")
-        self.c_lam = self.series(lambda th: ax.ell / self.rho2(th), "the azimuth rate")
         # initial angle theta0: cos from the position, sin from zdot = (w/2) sin(theta) rate
         z0, zd0 = ax.z0, y0[ax.idx]
         cos0 = ((zhi - z0) - (z0 - zlo)) / osc.w
         sin0 = 2.0 * zd0 / (osc.w * np.sqrt(osc.C * np.prod(np.abs(np.array(others) - z0))))
-        self.al0 = osc.alpha(np.arctan2(sin0, cos0))
+        th0 = np.arctan2(sin0, cos0)
+        self.al0 = osc.alpha(th0)
         self.fbar = osc.fbar
+        try:
+            self.c_lam = self.series(lambda th: ax.ell / self.rho2(th), "the azimuth rate")
+        except SeriesNotConverged:
+            self.c_lam = None
+            self._cartesian(th0)
+            return
         self.P_lam = integrated(self.c_lam)
         self.Pl0 = eval_series(self.P_lam, self.al0)
         self.n_pow = max(osc.B.size, self.P_lam.size) - 1
+
+    def _cartesian(self, th0: float) -> None:
+        """``W~(alpha) = rho e^{i (lambda - nu alpha)}`` as a complex Fourier series (``Wp``: m >= 0,
+        ``Wn``: m = -1, -2, ...), ``nu`` the azimuth's advance per unit alpha.  lambda on the grid is the
+        running integral of ``dlambda/dtheta = ell / ((1 - z^2) rate)`` on panels graded toward the
+        zeros of ``1 - z^2`` (``theta = pi +- 2i asinh sqrt((1 - z_hi) / w)``, ``+-2i asinh sqrt((1 + z_lo)
+        / w)``) and of the rate."""
+        ax, osc = self.ax, self.osc
+        poles = [np.pi + 2j * np.arcsinh(np.sqrt(self.one_minus_hi / osc.w)),
+                 2j * np.arcsinh(np.sqrt(self.one_plus_lo / osc.w))]
+        poles = np.array(poles + [p.conjugate() for p in poles])
+        lam = PeriodicIntegral(lambda th: ax.ell / (self.rho2(th) * osc.rate(th)),
+                               np.concatenate([osc.singularities(), poles, -poles]))
+        self.nu = lam.total / (2 * np.pi)
+        lam_start = ax.lam0 - lam(th0)
+        floor = 8 * _EPS * (1.0 + 2 * np.pi * abs(self.nu))
+
+        def transform(n):
+            al = 2 * np.pi * np.arange(n) / n
+            th = osc.theta_grid(n)
+            W = np.sqrt(self.rho2(th)) * np.exp(1j * (lam_start + lam(th) - self.nu * al))
+            return np.fft.fft(W) / n, slice((3 * n) // 8, (5 * n) // 8 + 1), floor
+
+        n, c, keep = refined_fft(transform, "the horizontal motion", 64, 2 ** 13)
+        m = np.abs(np.fft.fftfreq(n, 1.0 / n)[keep]).max() if keep.any() else 0
+        m = int(max(m, 1))
+        self.Wp, self.Wn = c[:m + 1].copy(), c[n - m:][::-1].copy()
+        self.n_pow = max(osc.B.size - 1, m)
+
+    def _horizontal(self, al: np.ndarray, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """rho e^{i lambda} and its time derivative from the Cartesian series (:meth:`_cartesian`)."""
+        m = self.Wp.size - 1
+        Ep, En = E[:m], E[:m].conj()
+        j = np.arange(1, m + 1)
+        Wt = self.Wp[0] + self.Wp[1:] @ Ep + self.Wn @ En
+        dWt = (1j * j * self.Wp[1:]) @ Ep - (1j * j * self.Wn) @ En
+        rot = np.exp(1j * self.nu * al)
+        return Wt * rot, (dWt + 1j * self.nu * Wt) * rot / self.fbar
 
     def rho2(self, th: np.ndarray) -> np.ndarray:
         """1 - z^2 without cancellation."""
@@ -223,9 +273,18 @@ class EllipticNeumann:
         m1, m2, n = ax.basis()
         th = al + sum_series(E, osc.B)
         z = osc.u(th)
+        zd = 0.5 * osc.w * np.sin(th) * osc.rate(th)
+        if self.c_lam is None:
+            # the direction of W, its modulus from z (|x| = 1 to rounding at any t); the velocity
+            # made tangent (the series' error has a normal part)
+            W, dW = self._horizontal(al, E)
+            aW = np.abs(W)
+            W = np.sqrt(self.rho2(th)) * np.where(aW > 0, W / np.where(aW > 0, aW, 1.0), 1.0)
+            x = z[:, None] * n + W.real[:, None] * m1 + W.imag[:, None] * m2
+            xd = zd[:, None] * n + dW.real[:, None] * m1 + dW.imag[:, None] * m2
+            return x, xd - x * np.einsum("ij,ij->i", x, xd)[:, None], th
         rho = np.sqrt(self.rho2(th))
         lam = ax.lam0 + self.c_lam[0].real * t + self.fbar * (sum_series(E, self.P_lam) - self.Pl0)
-        zd = 0.5 * osc.w * np.sin(th) * osc.rate(th)
         cl, sl = np.cos(lam)[:, None], np.sin(lam)[:, None]
         radial = cl * m1 + sl * m2
         east = -sl * m1 + cl * m2
@@ -240,8 +299,9 @@ class EllipticNeumann:
 
     def info(self) -> dict:
         return {"torus_dimension": 1, "reference_axis": self.ax.idx, "period": float(2 * np.pi * self.fbar),
-                "azimuth_drift": float(self.c_lam[0].real),
-                "series_terms": [int(self.osc.B.size), int(self.c_lam.size)]}
+                "azimuth_drift": float(self.c_lam[0].real if self.c_lam is not None else self.nu / self.fbar),
+                "series_terms": [int(self.osc.B.size),
+                                 int(self.c_lam.size if self.c_lam is not None else self.Wp.size)]}
 
 
 def _repeated_model(k, x0, y0, idx):
