@@ -529,9 +529,8 @@ def solve_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, *, reference: str 
         ``a`` not symmetric, NaN or inf in the data, ``q0 = 0``, ``v0`` not tangent.
     ClosedFormUnavailable
         The torus on a separatrix within rounding (two branch points equal), thinner than
-        ``MIN_WIDTH`` (within ~1e-7 rad of an invariant great circle without being on it), or, for a
-        repeated eigenvalue, a small azimuthal momentum near a pole (the azimuth's series would not
-        converge): the message names ``reference``.
+        ``MIN_WIDTH`` (within ~1e-7 rad of an invariant great circle without being on it), or a
+        Fourier series that would need more terms than its limit: the message names ``reference``.
     """
     a, q0, v0, R = _validated(a, q0, v0)
     k, axes = np.linalg.eigh(a)
