@@ -251,7 +251,7 @@ def test_refusals_name_the_reference():
     for _, a, q0, v0, what in refused_cases():
         with pytest.raises(ClosedFormUnavailable, match=what) as info:
             solve_neumann(a, q0, v0)
-        assert "use a numerical integration of qddot = -a q + lambda q" in str(info.value)
+        assert "use thetasol.integrate_neumann" in str(info.value)
 
 
 def _sphero_conical(k, x, y):

@@ -67,7 +67,7 @@ PLANAR_TOL = 64 * _EPS
 #: Relative tolerance on q0 . v0 (the velocity must be tangent to the sphere).
 TANGENT_TOL = 1e-12
 #: The numerical reference named where no closed form is built.
-_REFERENCE = "a numerical integration of qddot = -a q + lambda q, lambda = (q.aq - |qdot|^2) / |q|^2"
+_REFERENCE = "thetasol.integrate_neumann (qddot = -a q + lambda q, lambda = (q.aq - |qdot|^2) / |q|^2)"
 
 
 @contextmanager
