@@ -20,7 +20,7 @@ from math import comb
 
 import numpy as np
 
-from thetasol.core.dd import two_prod, two_sum
+from thetasol.core.dd import split, two_prod, two_sum
 
 EPS = np.finfo(float).eps
 
@@ -538,6 +538,39 @@ def comp_horner(chi, clo, z):
     n = chi.shape[-1] - 1
     s = np.broadcast_to(chi[..., n], z.shape).astype(complex)
     comp = np.broadcast_to(clo[..., n], z.shape).astype(complex)
+    if n == 0:
+        return _cadd_eft(s, comp)
+    z = np.asarray(z, dtype=complex)
+    # the same operations as _cmul_eft, with z split once and the four real products stacked (few
+    # numpy calls on these small arrays); Veltkamp's split needs no rescaling below 1e150
+    zri = np.stack([z.real, z.imag])
+    if _big(zri):
+        return _comp_horner_general(chi, clo, z, s, comp, n)
+    zh, zl = split(zri)
+    zri, zh, zl = zri[None], zh[None], zl[None]
+    for j in range(n - 1, -1, -1):
+        sri = np.stack([s.real, s.imag])
+        if _big(sri):
+            return _comp_horner_general(chi, clo, z, s, comp, j + 1)
+        sh, sl = split(sri)
+        sri, sh, sl = sri[:, None], sh[:, None], sl[:, None]
+        P = sri * zri                               # [[re re, re im], [im re, im im]]
+        E = ((sh * zh - P) + sh * zl + sl * zh) + sl * zl
+        pr, e3 = two_sum(P[0, 0], -P[1, 1])
+        pi, e6 = two_sum(P[0, 1], P[1, 0])
+        p, pe = pr + 1j * pi, (E[0, 0] - E[1, 1] + e3) + 1j * (E[0, 1] + E[1, 0] + e6)
+        s, se = _cadd_eft(p, np.broadcast_to(chi[..., j], z.shape))
+        comp = comp * z + (pe + se + clo[..., j])
+    hi, lo = _cadd_eft(s, comp)
+    return hi, lo
+
+
+def _big(x) -> bool:
+    return bool(np.max(np.abs(x), initial=0.0) > 1e150)
+
+
+def _comp_horner_general(chi, clo, z, s, comp, n):
+    """comp_horner's loop from the power n down, with the rescaling two-products (huge values)."""
     for j in range(n - 1, -1, -1):
         p, pe = _cmul_eft(s, z)
         s, se = _cadd_eft(p, np.broadcast_to(chi[..., j], z.shape))
