@@ -21,6 +21,9 @@ import numpy as np
 
 __all__ = []
 
+#: Bytes of phase products per block of times in :meth:`FlowTheta.__call__` (an L2-sized block).
+BLOCK_BYTES = 1 << 19
+
 
 class FlowTheta:
     """Values and u-derivatives of theta(s_j + t u) for shifts s_j (S, g) and real u (r,)."""
@@ -64,18 +67,32 @@ class FlowTheta:
         self.Dd = D * (2j * math.pi * (self.modes @ u))[None, :]
         self.u = u
         self.r = r
+        self._k = [np.arange(self.span[i]) + self.lo[i] for i in range(r)]
+        self._idx = [self.modes[:, i] - self.lo[i] for i in range(r)]
 
     def __call__(self, t: np.ndarray, derivative: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv."""
+        """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv.
+
+        The times go in blocks whose phase products (block x modes complex) fit in ~0.5 MB of
+        cache: 2.5x faster per time than one pass over 2001 times (the products then take 16 MB;
+        tools/setup_prof, generic and near-unstable reference bodies), with the same values (each
+        row is the same operations whatever the block).
+        """
         t = np.asarray(t, float)
         phi = np.multiply.outer(t, self.u)
         phi -= np.round(phi)
-        X = None
-        for i in range(self.r):
-            k = np.arange(self.span[i]) + self.lo[i]
-            tab = np.exp(2j * math.pi * np.multiply.outer(phi[:, i], k))     # (n, span_i)
-            col = tab[:, self.modes[:, i] - self.lo[i]]
-            X = col if X is None else X * col
-        v = X @ self.D.T
-        dv = X @ self.Dd.T if derivative else None
+        n, S = t.shape[0], self.D.shape[0]
+        v = np.empty((n, S), complex)
+        dv = np.empty((n, S), complex) if derivative else None
+        blk = int(min(512, max(16, BLOCK_BYTES // (16 * max(1, self.modes.shape[0])))))
+        for a in range(0, n, blk):
+            b = min(n, a + blk)
+            X = None
+            for i in range(self.r):
+                tab = np.exp(2j * math.pi * np.multiply.outer(phi[a:b, i], self._k[i]))   # (block, span_i)
+                col = tab[:, self._idx[i]]
+                X = col if X is None else X * col
+            v[a:b] = X @ self.D.T
+            if derivative:
+                dv[a:b] = X @ self.Dd.T
         return self.e, v, dv
