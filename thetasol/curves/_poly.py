@@ -541,32 +541,36 @@ def comp_horner(chi, clo, z):
     if n == 0:
         return _cadd_eft(s, comp)
     z = np.asarray(z, dtype=complex)
-    # the same operations as _cmul_eft, with z split once and the four real products stacked (few
-    # numpy calls on these small arrays); Veltkamp's split needs no rescaling below 1e150
-    zri = np.stack([z.real, z.imag])
-    if _big(zri):
+    # The operations of _cmul_eft / _cadd_eft on stacked real arrays (few numpy calls on these small
+    # arrays): rows [Re s Re z, Re s Im z, Im s (-Im z), Im s Re z] are the four two-products (a
+    # negated factor negates product and error exactly), summed pairwise as in _cmul_eft.
+    ZZ = np.stack([z.real, z.imag, -z.imag, z.real])
+    if _big(ZZ):
         return _comp_horner_general(chi, clo, z, s, comp, n)
-    zh, zl = split(zri)
-    zri, zh, zl = zri[None], zh[None], zl[None]
+    ZZh, ZZl = split(ZZ)
+    chb = np.broadcast_to(chi, z.shape + (n + 1,))
+    CH = np.stack([chb.real, chb.imag])
+    S = np.stack([s.real, s.imag])
+    buf = np.empty(z.shape, complex)
     for j in range(n - 1, -1, -1):
-        sri = np.stack([s.real, s.imag])
-        if _big(sri):
-            return _comp_horner_general(chi, clo, z, s, comp, j + 1)
-        sh, sl = split(sri)
-        sri, sh, sl = sri[:, None], sh[:, None], sl[:, None]
-        P = sri * zri                               # [[re re, re im], [im re, im im]]
-        E = ((sh * zh - P) + sh * zl + sl * zh) + sl * zl
-        pr, e3 = two_sum(P[0, 0], -P[1, 1])
-        pi, e6 = two_sum(P[0, 1], P[1, 0])
-        p, pe = pr + 1j * pi, (E[0, 0] - E[1, 1] + e3) + 1j * (E[0, 1] + E[1, 0] + e6)
-        s, se = _cadd_eft(p, np.broadcast_to(chi[..., j], z.shape))
-        comp = comp * z + (pe + se + clo[..., j])
-    hi, lo = _cadd_eft(s, comp)
+        if _big(S):
+            return _comp_horner_general(chi, clo, z, S[0] + 1j * S[1], comp, j + 1)
+        SS = np.repeat(S, 2, axis=0)
+        SSh, SSl = split(SS)
+        Pr = SS * ZZ
+        E = ((SSh * ZZh - Pr) + SSh * ZZl + SSl * ZZh) + SSl * ZZl
+        p, e = two_sum(Pr[:2], Pr[2:])                  # [Re, Im] of fl(s z) and their errors
+        pe = (E[:2] + E[2:]) + e
+        S, se = two_sum(p, CH[..., j])
+        T = pe + se
+        buf.real, buf.imag = T[0], T[1]
+        comp = comp * z + (buf + clo[..., j])
+    hi, lo = _cadd_eft(S[0] + 1j * S[1], comp)
     return hi, lo
 
 
-def _big(x) -> bool:
-    return bool(np.max(np.abs(x), initial=0.0) > 1e150)
+def _big(x: np.ndarray) -> bool:
+    return bool(x.size and np.abs(x).max() > 1e150)
 
 
 def _comp_horner_general(chi, clo, z, s, comp, n):
