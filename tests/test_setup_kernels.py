@@ -85,6 +85,18 @@ def test_stacked_compensated_horner_is_bit_identical():
             np.testing.assert_array_equal(a, b)
 
 
+@pytest.mark.parametrize("layout", ["row", "shared", "broadcast"])
+def test_compensated_horner_in_blocks_is_bit_identical(layout):
+    rng = np.random.default_rng(4)
+    K, m, n = 1677, 3, 3
+    shape = {"row": (K, 1, n + 1), "shared": (n + 1,), "broadcast": (1, m, n + 1)}[layout]
+    chi = rng.normal(size=shape) + 1j * rng.normal(size=shape)
+    clo = chi * 1e-17
+    z = rng.normal(size=(K, m)) + 1j * rng.normal(size=(K, m))
+    for a, b in zip(_horner_plain(chi, clo, z), _poly.comp_horner(chi, clo, z), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
 def test_solve3_matches_mpmath_lu_solve():
     rng = np.random.default_rng(2)
     with mpmath.workdps(40):

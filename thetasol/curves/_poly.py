@@ -529,6 +529,10 @@ def _cadd_eft(a, b):
     return sr + 1j * si, er + 1j * ei
 
 
+#: Points per block of :func:`comp_horner` (its ~15 temporaries of 4 x block doubles stay in L2).
+_HORNER_BLOCK = 1024
+
+
 def comp_horner(chi, clo, z):
     """Compensated Horner: sum_j (chi_j + clo_j) z^j as (hi, lo), coefficients along the last axis.
 
@@ -536,11 +540,21 @@ def comp_horner(chi, clo, z):
     eps |value| + eps^2 sum |c_j| |z|^j.
     """
     n = chi.shape[-1] - 1
-    s = np.broadcast_to(chi[..., n], z.shape).astype(complex)
-    comp = np.broadcast_to(clo[..., n], z.shape).astype(complex)
+    z = np.asarray(z)
+    if z.ndim and z.size > _HORNER_BLOCK and z.shape[0] > 1:
+        # rows are independent: blocks that stay in cache (the stacked temporaries are 4x z)
+        step = max(1, _HORNER_BLOCK * z.shape[0] // z.size)
+        rows = lambda c, i: c[i:i + step] if c.ndim - 1 == z.ndim and c.shape[0] == z.shape[0] else c  # noqa: E731
+        parts = [comp_horner(rows(chi, i), rows(clo, i), z[i:i + step]) for i in range(0, z.shape[0], step)]
+        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+    # (filled by broadcasting assignment: np.broadcast_to costs ~10 us a call on these small arrays)
+    s = np.empty(z.shape, complex)
+    s[...] = chi[..., n]
+    comp = np.empty(z.shape, complex)
+    comp[...] = clo[..., n]
     if n == 0:
         return _cadd_eft(s, comp)
-    z = np.asarray(z, dtype=complex)
+    z = z.astype(complex, copy=False)
     # The operations of _cmul_eft / _cadd_eft on stacked real arrays (few numpy calls on these small
     # arrays): rows [Re s Re z, Re s Im z, Im s (-Im z), Im s Re z] are the four two-products (a
     # negated factor negates product and error exactly), summed pairwise as in _cmul_eft.
@@ -548,8 +562,8 @@ def comp_horner(chi, clo, z):
     if _big(ZZ):
         return _comp_horner_general(chi, clo, z, s, comp, n)
     ZZh, ZZl = split(ZZ)
-    chb = np.broadcast_to(chi, z.shape + (n + 1,))
-    CH = np.stack([chb.real, chb.imag])
+    CH = np.empty((2,) + z.shape + (n + 1,))
+    CH[0], CH[1] = chi.real, chi.imag
     S = np.stack([s.real, s.imag])
     buf = np.empty(z.shape, complex)
     for j in range(n - 1, -1, -1):
