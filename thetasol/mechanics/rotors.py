@@ -402,6 +402,17 @@ class GyrostatConfiguration:
         return eff
 
     @property
+    def body_names(self) -> list[str]:
+        """The bodies with mass, root first: each carrier with mass, then its rotors (the order of the
+        split's and the unsplit reference's trajectories)."""
+        out = []
+        for n in self.order:
+            if isinstance(self.carriers[n], Body):
+                out.append(n)
+            out.extend(self.rotors_of[n])
+        return out
+
+    @property
     def mass(self) -> float:
         """Total mass."""
         return self._effective[self.root].mass
@@ -455,17 +466,18 @@ class GyrostatConfiguration:
             e, Qn, Wn = self._effective[n], np.asarray(Q[n], float), np.asarray(omega[n], float)
             QW = Qn @ hat(Wn)
 
-            def at(r_c, v_c, n=n, e=e, Qn=Qn, QW=QW):   # position, velocity of a carrier-frame point
+            def at(r_c, v_c=None, n=n, e=e, Qn=Qn, QW=QW):   # position, velocity of a carrier-frame point
                 d = r_c - e.center
-                return X[n] + np.einsum("...ij,...j->...i", Qn, d), Xd[n] + np.einsum("...ij,...j->...i", QW, d) \
-                    + np.einsum("...ij,...j->...i", Qn, v_c)
+                x = X[n] + np.einsum("...ij,...j->...i", Qn, d)
+                v = Xd[n] + np.einsum("...ij,...j->...i", QW, d)
+                return x, v if v_c is None else v + np.einsum("...ij,...j->...i", Qn, v_c)
 
             c = self.carriers[n]
             if isinstance(c, Body):
-                x, v = at(c.center, 0.0)
+                x, v = at(c.center)
                 out[n] = {"position": x, "velocity": v, "attitude": Qn, "omega": Wn}
             for k in self.children[n]:
-                X[k], Xd[k] = at(self.joints[k].parent_point, 0.0)
+                X[k], Xd[k] = at(self.joints[k].parent_point)
             for rn in self.rotors_of[n]:
                 self._place_rotor(self.rotors[rn], at, Qn, Wn, np.asarray(phi[rn], float),
                                   np.asarray(phidot[rn], float), X, Xd, out)

@@ -30,6 +30,7 @@ from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import invariants
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.scenes.format import Scene
+from thetasol.scenes.gyrostat_scene import GyrostatScene, run_gyrostat_scene
 from thetasol.scenes.pipeline import ConfigurationSolution
 
 __all__ = ["Check", "run"]
@@ -202,7 +203,7 @@ def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say
     return check
 
 
-def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Trajectories, str, list[Check]]:
+def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = None) -> tuple[Trajectories, str, list[Check]]:
     """Solve a scene by the split and compare its exact parts with the numerical references.
 
     Parameters
@@ -221,6 +222,9 @@ def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Tr
     checks : list of Check
         Every comparison with its tolerance; ``all(c.ok for c in checks)`` is the verdict.
     """
+    if isinstance(scene, GyrostatScene):
+        traj, text, raw = run_gyrostat_scene(scene, check=check, out=out)
+        return traj, text, [Check(f"split (Theorem 5) vs unsplit multibody: {w}", d, tl, "-") for w, d, tl in raw]
     say = _Text(out)
     _describe_scene(scene, say)
     start = time.perf_counter()
