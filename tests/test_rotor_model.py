@@ -15,8 +15,7 @@ from conftest import rand_Q
 from thetasol.core.so3 import hat
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Joint
-from thetasol.mechanics.rotors import (GyrostatConfiguration, MasslessCarrier, Rotor, axis_rotation,
-                                       gyrostat_energy)
+from thetasol.mechanics.rotors import GyrostatConfiguration, MasslessCarrier, Rotor, axis_rotation, gyrostat_energy
 
 
 def _frame(l):
