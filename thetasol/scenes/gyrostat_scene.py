@@ -41,9 +41,10 @@ from thetasol.integrators.multibody_rotors import integrate_gyrostat_multibody, 
 from thetasol.integrators.rotation import numerical_rotation
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Joint
-from thetasol.mechanics.rotors import GyrostatConfiguration, MasslessCarrier, Rotor, axis_rotation
+from thetasol.mechanics.rotors import GyrostatConfiguration, MasslessCarrier, Rotor, axis_rotation, gyrostat_energy
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.scenes.pipeline import closed_form_rotation, rotation_kind
+from thetasol.solutions.base import Solution
 from thetasol.solutions.gyrostat import solve_gyrostat
 from thetasol.solutions.mass_center import MassCenterMotion
 
@@ -78,8 +79,12 @@ class _Part:
 
 
 @dataclass(frozen=True, eq=False)
-class GyrostatSplit:
+class GyrostatSplit(Solution):
     """A CR^n-central configuration by the split of Theorem 5; ``sol(t)`` -> :class:`Trajectories`.
+
+    ``sol(t)`` takes 1-d times and returns :class:`Trajectories` of every body with mass
+    (:attr:`GyrostatConfiguration.body_names`), with ``info["rotor_angles"]`` (rotor -> ``phi(t)``) and
+    ``info["carrier_attitudes"]`` (massless carriers included); :meth:`state` takes any shape.
 
     Attributes
     ----------
@@ -87,10 +92,14 @@ class GyrostatSplit:
     a, b : ndarray
     mass_center : MassCenterMotion
     parts : dict carrier -> the rotation of its effective gyrostat
-    momenta : dict carrier -> ndarray
-        The conserved ``p_ka`` (8.25) of its rotors.
-    models : dict carrier -> str
-        Which method turns each effective gyrostat.
+    method : str
+        ``"split (Theorem 5): "`` and the method of every carrier.
+    invariants : dict
+        First integrals: ``rotor_momenta`` (carrier -> the conserved ``p_ka`` (8.25)), ``energies``
+        (carrier -> (8.34) as a physical energy, :func:`~thetasol.mechanics.rotors.gyrostat_energy`) and
+        ``mass_center`` (per unit mass).
+    diagnostics : dict
+        ``models`` (carrier -> which method turns its effective gyrostat).
     rtol : float
         Tolerance of the numerical rotations.
     """
@@ -100,12 +109,26 @@ class GyrostatSplit:
     b: np.ndarray
     mass_center: MassCenterMotion
     parts: dict
-    momenta: dict
-    models: dict
+    method: str
+    invariants: dict = field(repr=False)
+    diagnostics: dict = field(default_factory=dict, repr=False)
     rtol: float = 1e-12
 
+    @property
+    def momenta(self) -> dict:
+        """Carrier -> the conserved rotor momenta ``p_ka`` (8.25)."""
+        return self.invariants["rotor_momenta"]
+
+    @property
+    def models(self) -> dict:
+        """Carrier -> the method of its effective gyrostat."""
+        return self.diagnostics["models"]
+
+    def _chunk_size(self) -> int:
+        return 1 << 62   # the parts chunk themselves; a numerical one integrates once
+
     def evaluate_parts(self, t: np.ndarray) -> tuple[dict, dict, dict, dict]:
-        """Per carrier ``omega``, ``Q`` and per rotor ``phi``, ``phidot`` at the 1-d times ``t``."""
+        """Per carrier ``omega``, ``Q`` and per rotor ``phi``, ``phidot`` at the flat times ``t``."""
         W, Qs, phi, phid = {}, {}, {}, {}
         for n, part in self.parts.items():
             W[n], Qs[n], ph, phd = part(t, self.a, self.rtol)
@@ -113,10 +136,26 @@ class GyrostatSplit:
                 phi[r], phid[r] = ph[..., i], phd[..., i]
         return W, Qs, phi, phid
 
+    def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, ...]:
+        q, qd = self.mass_center(t)
+        W, Qs, phi, phid = self.evaluate_parts(t)
+        placed = self.config.place(q, qd, Qs, W, phi, phid)
+        names = self.config.body_names
+        rot = list(self.config.rotors)
+        return (q, qd, *(np.stack([placed[n][k] for n in names], axis=1)
+                         for k in ("position", "velocity", "attitude", "omega")),
+                np.stack([phi[r] for r in rot], axis=1) if rot else np.zeros((t.size, 0)))
+
+    def state(self, t: Any) -> tuple[np.ndarray, ...]:
+        """``(q, qdot, position, velocity, attitude, omega, rotor_angles)`` at times of any shape: ``t.shape``
+        leading, then the body axis (``body_names``) or the rotor axis (``config.rotors`` order)."""
+        return super().__call__(t)
+
     def __call__(self, t: Any) -> Trajectories:
         tt = V.times(t, "t")
         if tt.ndim != 1 or tt.size == 0:
-            raise ValueError("t must be a non-empty 1-d array")
+            raise ValueError(f"t must be a non-empty 1-d array for Trajectories, got shape {tt.shape}; "
+                             "use .state(t) for other shapes")
         start = time.perf_counter()
         q, qd = self.mass_center(tt)
         W, Qs, phi, phid = self.evaluate_parts(tt)
@@ -129,6 +168,10 @@ class GyrostatSplit:
                             attitude=np.array([placed[n]["attitude"] for n in names]),
                             omega=np.array([placed[n]["omega"] for n in names]),
                             mass_center=q, mass_center_velocity=qd, info=info)
+
+    def evaluate(self, t: Any) -> Trajectories:
+        """Alias of ``sol(t)``."""
+        return self(t)
 
 
 def _part(e, a, Q0, w0, p, rotation, rtol) -> _Part:
@@ -165,13 +208,16 @@ def solve_gyrostat_configuration(config: GyrostatConfiguration, a: Any, b: Any, 
     a, b = V.symmetric_matrix(a, "a"), V.vector3(b, "b")
     mc = MassCenterMotion(a, b, V.vector3(q0, "q0"), V.vector3(v0, "v0"))
     momenta = config.initial_momenta(omega0)
-    parts, models = {}, {}
+    parts, models, energies = {}, {}, {}
     for n, e in config.effective_gyrostats().items():
         Q0n = V.rotation_matrix(Q0.get(n, np.eye(3)), f"Q0[{n!r}]")
         w0n = V.vector3(omega0.get(n, np.zeros(3)), f"omega0[{n!r}]")
         parts[n] = _part(e, a, Q0n, w0n, momenta[n], rotation, rtol)
         models[n] = parts[n].model
-    return GyrostatSplit(config, a, b, mc, parts, momenta, models, rtol)
+        energies[n] = float(gyrostat_energy(e.J, e.J_gyro, a, Q0n, w0n))
+    method = "split (Theorem 5): " + ", ".join(f"{n}={m}" for n, m in models.items())
+    inv = {"rotor_momenta": momenta, "energies": energies, "mass_center": mc.invariants}
+    return GyrostatSplit(config, a, b, mc, parts, method, inv, {"models": models}, rtol)
 
 
 # -- scene files ---------------------------------------------------------------------------------------
