@@ -145,3 +145,20 @@ def test_lagrange_gyrostat_refusals_and_limits():
     assert solve_lagrange_gyrostat(I, c, np.zeros(3), Q0, w0).method == "lagrange/elliptic"
     free = solve_lagrange_gyrostat(I, c, N, Q0, w0, gravity=[0.0, 0.0, 0.0])
     assert free.method.startswith("gyrostat/")
+
+
+def test_numerical_gyrostat_protocol():
+    from thetasol.integrators.gyrostat import numerical_gyrostat
+
+    rng = np.random.default_rng(7)
+    Q0, w0 = rand_Q(rng), np.array([0.3, -0.5, 0.9])
+    sol = numerical_gyrostat(J0, None, Q0, w0, rotors=ROTORS, a=A_POT, rtol=1e-12)
+    assert sol.method == "numerical-gyrostat/DOP853"
+    t = np.array([[0.0, 3.0], [-2.0, 7.0]])
+    w, Q = sol(t)
+    assert w.shape == (2, 2, 3) and Q.shape == (2, 2, 3, 3) and sol.rotor_angles(t).shape == (2, 2, 2)
+    w2, Q2, ang = integrate_gyrostat(J0, None, Q0, w0, t, rotors=ROTORS, a=A_POT, rtol=1e-12)
+    assert np.array_equal(w, w2) and np.array_equal(sol.rotor_angles(t), ang)
+    E = gyrostat_energy(_full(J0, ROTORS), J0, A_POT, Q, w)
+    assert np.max(np.abs(E - sol.invariants["energy"])) < 1e-11 * abs(sol.invariants["energy"])
+    assert np.allclose(sol.invariants["rotor_momenta"], [0.4, -0.3])

@@ -22,7 +22,9 @@ pivot the energy, the vertical momentum ``(m + N) . gamma`` and, for a Lagrange 
 """
 from __future__ import annotations
 
+import sys
 from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -32,9 +34,11 @@ from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize, vee
 from thetasol.integrators._common import extended_inertia
 from thetasol.mechanics.heavy_top import heavy_top_data
+from thetasol.solutions.base import RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
 
-__all__ = ["integrate_gyrostat", "integrate_heavy_gyrostat", "gyrostat_rotor_data"]
+__all__ = ["integrate_gyrostat", "integrate_heavy_gyrostat", "gyrostat_rotor_data", "NumericalGyrostat",
+           "numerical_gyrostat"]
 
 
 def gyrostat_rotor_data(rotors: Sequence[Mapping] | None, N: ArrayLike | None
@@ -214,6 +218,63 @@ def integrate_heavy_gyrostat(I: ArrayLike, center: ArrayLike, N: ArrayLike, Q0: 
     Y, inv = _grid(tt, run, y0)
     omega, Q, _ = _finish(Y, inv, tt, Im, np.zeros((0, 3)), np.zeros(0), np.zeros(0))
     return omega, Q
+
+
+@dataclass(frozen=True, eq=False)
+class NumericalGyrostat(RotationSolution):
+    """:func:`integrate_gyrostat` in a quadratic potential behind the RotationSolution protocol.
+
+    ``sol(t)`` integrates on demand from ``t = 0`` (one integration per call, any shape and order of
+    ``t``); :meth:`rotor_angles` and :meth:`evaluate_with_angles` give the rotor angles of (8.28).
+    ``J`` is the carrier's second moments without the rotors' axial moments (as for
+    :func:`thetasol.solve_gyrostat`).  Build it with :func:`numerical_gyrostat`.
+    """
+
+    N: np.ndarray = None
+    rotors: tuple = ()
+    rtol: float = 1e-12
+    integrator: str = "DOP853"
+
+    def _chunk_size(self) -> int:
+        return sys.maxsize
+
+    def evaluate_with_angles(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``(omega, Q, rotor angles)`` at times ``t`` of any shape, one integration."""
+        return integrate_gyrostat(self.J, self.N, self.Q0, self.omega0, t, rotors=list(self.rotors) or None,
+                                  a=self.a, rtol=self.rtol, method=self.integrator)
+
+    def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return self.evaluate_with_angles(t)[:2]
+
+    def rotor_angles(self, t: ArrayLike) -> np.ndarray:
+        """Rotor angles ``phi_k(t)``, ``phi_k(0) = 0``, shape ``t.shape + (n_rotors,)``."""
+        return self.evaluate_with_angles(t)[2]
+
+
+def numerical_gyrostat(J: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0: ArrayLike, *,
+                       rotors: Sequence[Mapping] | None = None, a: ArrayLike | None = None, rtol: float = 1e-12,
+                       method: str = "DOP853") -> NumericalGyrostat:
+    """A gyrostat in ``1/2 x^T a x`` (8.32) as a solution evaluated by :func:`integrate_gyrostat`.
+
+    ``invariants``: ``energy`` ((8.34) as a physical energy, with the rotors' axial moments in the
+    potential) and ``rotor_momenta`` (the ``p_k``); ``diagnostics``: the integrator and its tolerance.
+    """
+    Jm = V.second_moments(J, "J")
+    axes, A, p, Nv = gyrostat_rotor_data(rotors, N)
+    am = np.zeros((3, 3)) if a is None else V.symmetric_matrix(a, "a")
+    Q0m = V.rotation_matrix(Q0, "Q0")
+    w0 = V.vector3(omega0, "omega0")
+    if not (0 < rtol < 1):
+        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
+    Jfull = Jm + sum((0.5 * Ak * (np.eye(3) - 2 * np.outer(l, l)) for l, Ak in zip(axes, A, strict=True)),
+                     np.zeros((3, 3)))
+    Im = np.trace(Jm) * np.eye(3) - Jm
+    energy = 0.5 * w0 @ Im @ w0 + 0.5 * np.trace(Q0m.T @ am @ Q0m @ Jfull)
+    specs = tuple({"axis": l, "A": float(Ak), "p": float(pk)} for l, Ak, pk in zip(axes, A, p, strict=True))
+    return NumericalGyrostat(Jm, am, np.array(Q0, dtype=float), w0, f"numerical-gyrostat/{method}",
+                             {"energy": float(energy), "rotor_momenta": p.copy()},
+                             None, {"integrator": "integrate_gyrostat", "method": method, "rtol": rtol},
+                             N=Nv, rotors=specs, rtol=float(rtol), integrator=method)
 
 
 def _heyoka_run(Jm, w0, Nv, Q0, rtol, dtype, torque_spec):

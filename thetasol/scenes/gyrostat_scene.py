@@ -36,7 +36,7 @@ import numpy as np
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import rodrigues
-from thetasol.integrators.gyrostat import integrate_gyrostat
+from thetasol.integrators.gyrostat import numerical_gyrostat
 from thetasol.integrators.multibody_rotors import integrate_gyrostat_multibody, relative_rotor_angles
 from thetasol.integrators.rotation import numerical_rotation
 from thetasol.mechanics.bodies import Body
@@ -66,11 +66,10 @@ class _Part:
     p: np.ndarray
     specs: list = field(default_factory=list)
 
-    def __call__(self, t, a, rtol):
+    def __call__(self, t):
         """``(omega, Q, phi, phidot)`` at the 1-d times ``t``."""
         if self.kind == "numerical":
-            J, Q0, w0 = self.sol
-            w, Q, phi = integrate_gyrostat(J, None, Q0, w0, t, rotors=self.specs, a=a, rtol=rtol)
+            w, Q, phi = self.sol.evaluate_with_angles(t)
         else:
             w, Q = self.sol(t)
             phi = self.sol.rotor_angles(t) if (self.kind == "closed" and len(self.A)) else np.zeros(t.shape + (0,))
@@ -131,7 +130,7 @@ class GyrostatSplit(Solution):
         """Per carrier ``omega``, ``Q`` and per rotor ``phi``, ``phidot`` at the flat times ``t``."""
         W, Qs, phi, phid = {}, {}, {}, {}
         for n, part in self.parts.items():
-            W[n], Qs[n], ph, phd = part(t, self.a, self.rtol)
+            W[n], Qs[n], ph, phd = part(t)
             for i, r in enumerate(self.config.rotors_of[n]):
                 phi[r], phid[r] = ph[..., i], phd[..., i]
         return W, Qs, phi, phid
@@ -187,8 +186,8 @@ def _part(e, a, Q0, w0, p, rotation, rtol) -> _Part:
     if rotation_kind(a) == "elliptic" and rotation != "numerical":
         sol = solve_gyrostat(e.J_gyro, None, Q0, w0, rotors=specs)
         return _Part("closed", sol, f"gyrostat (8.39): closed form {sol.method}", axes, A, p, specs)
-    return _Part("numerical", (e.J_gyro, Q0, w0), f"gyrostat (8.32): integrate_gyrostat (DOP853, rtol={rtol:g})",
-                 axes, A, p, specs)
+    sol = numerical_gyrostat(e.J_gyro, None, Q0, w0, rotors=specs, a=a, rtol=rtol)
+    return _Part("numerical", sol, f"gyrostat (8.32): integrate_gyrostat (DOP853, rtol={rtol:g})", axes, A, p, specs)
 
 
 def solve_gyrostat_configuration(config: GyrostatConfiguration, a: Any, b: Any, q0: Any, v0: Any,
