@@ -161,7 +161,7 @@ class GyrostatSplit(Solution):
         placed = self.config.place(q, qd, Qs, W, phi, phid)
         names = tuple(self.config.body_names)
         info = {"models": dict(self.models), "seconds": time.perf_counter() - start,
-                "rotor_angles": phi, "carrier_attitudes": Qs}
+                "rotor_angles": phi, "carrier_attitudes": Qs, "carrier_omegas": W}
         return Trajectories(t=tt.copy(), names=names, position=np.array([placed[n]["position"] for n in names]),
                             velocity=np.array([placed[n]["velocity"] for n in names]),
                             attitude=np.array([placed[n]["attitude"] for n in names]),
@@ -426,6 +426,23 @@ def _rotor_angle_gap(scene: GyrostatScene, traj: Trajectories, mb: Trajectories)
     return gap
 
 
+def _drift(scene: GyrostatScene, sol: GyrostatSplit, traj: Trajectories, say) -> None:
+    """Relative drift of (8.34) of every effective gyrostat along the split, and of (8.40) ``|m + N|^2``
+    where the potential is isotropic."""
+    say("first integrals along the split (max relative drift): (8.34) energy" +
+        ("; (8.40) |m + N|^2" if rotation_kind(scene.a) == "elliptic" else ""))
+    for n, e in scene.config.effective_gyrostats().items():
+        Q, W = traj.info["carrier_attitudes"][n], traj.info["carrier_omegas"][n]
+        E = gyrostat_energy(e.J, e.J_gyro, scene.a, Q, W)
+        ref = sol.invariants["energies"][n]
+        line = f"  {n}: {float(np.max(np.abs(E - ref))) / max(abs(ref), 1e-300):.1e}"
+        if rotation_kind(scene.a) == "elliptic":
+            h = W @ e.I_gyro + (e.N(sol.momenta[n]) if e.rotors else 0.0)
+            h2 = np.sum(h * h, axis=-1)
+            line += f", {float(np.max(np.abs(h2 - h2[0]))) / max(h2[0], 1e-300):.1e}"
+        say(line)
+
+
 def run_gyrostat_scene(scene: GyrostatScene, check: bool = True, out: TextIO | None = None
                        ) -> tuple[Trajectories, str, list[tuple[str, float, float]]]:
     """Solve a scene with rotors by the split and compare it with the unsplit multibody system.
@@ -446,6 +463,7 @@ def run_gyrostat_scene(scene: GyrostatScene, check: bool = True, out: TextIO | N
     traj = sol(scene.t)
     split_seconds = time.perf_counter() - start
     _describe(scene, sol, say)
+    _drift(scene, sol, traj, say)
     checks = []
     s = scene.solver
     if check and s.get("check_multibody", True):
