@@ -116,3 +116,14 @@ def test_split_state_shapes_and_first_integrals():
                 h = W[n] @ e.I_gyro + e.N(sol.momenta[n])
                 h2 = np.sum(h * h, axis=1)
                 assert np.max(np.abs(h2 - h2[0])) < 5e-15 * h2[0]   # measured 6.5e-16
+
+
+def test_cli_solves_a_rotor_scene(tmp_path, capsys):
+    from thetasol.cli import main
+
+    out = tmp_path / "hooke.npz"
+    assert main(["solve", str(DATA / "hooke.toml"), "--no-check", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "effective gyrostats (8.17), (8.23)" in text and "(8.34) energy" in text
+    with np.load(out) as f:
+        assert f["position"].shape[0] == 2
