@@ -23,6 +23,7 @@ from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.mechanics.constraints import Pivot, Sphere, pivot_mass_center
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.scenes.fixed_point import solve_fixed_point
+from thetasol.scenes.gyrostat_scene import GyrostatScene, gyrostat_scene_from_dict
 from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
 
 __all__ = ["Scene", "load_scene", "demo_scene_path"]
@@ -96,8 +97,9 @@ class Scene:
         return _scene_from_dict(d, source)
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file (TOML).
+def load_scene(path: str | Path) -> Scene | GyrostatScene:
+    """Read and validate a scene file (TOML); a file with ``[[rotors]]`` gives a
+    :class:`~thetasol.scenes.gyrostat_scene.GyrostatScene` (Section 8).
 
     Raises
     ------
@@ -392,7 +394,10 @@ def _solver_options(solver: Mapping, t: np.ndarray, make_central: bool) -> dict:
     return s
 
 
-def _scene_from_dict(d: Any, source: str) -> Scene:
+def _scene_from_dict(d: Any, source: str) -> Scene | GyrostatScene:
+    if isinstance(d, Mapping) and "rotors" in d:
+        # rotors: the split of Theorem 5 (thetasol.scenes.gyrostat_scene)
+        return gyrostat_scene_from_dict(d, source)
     try:
         return _build_scene(d)
     except ValueError as exc:

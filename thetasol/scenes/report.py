@@ -37,6 +37,7 @@ from thetasol.mechanics.equations import invariants
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.scenes.fixed_point import pivoted_body
 from thetasol.scenes.format import Scene
+from thetasol.scenes.gyrostat_scene import GyrostatScene, run_gyrostat_scene
 from thetasol.scenes.pipeline import ConfigurationSolution
 
 __all__ = ["Check", "run"]
@@ -268,7 +269,7 @@ def _stepper(progress: Callable[[str, int, int], None] | None, multibody: bool) 
     return step
 
 
-def run(scene: Scene, check: bool = True, out: TextIO | None = None,
+def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = None,
         progress: Callable[[str, int, int], None] | None = None) -> tuple[Trajectories, str, list[Check]]:
     """Solve a scene by the split and compare its exact parts with the numerical references.
 
@@ -291,6 +292,13 @@ def run(scene: Scene, check: bool = True, out: TextIO | None = None,
     checks : list of Check
         Every comparison with its tolerance; ``all(c.ok for c in checks)`` is the verdict.
     """
+    if isinstance(scene, GyrostatScene):
+        step = _stepper(progress, False)
+        step()
+        traj, text, raw = run_gyrostat_scene(scene, check=check, out=out)
+        step()
+        step()
+        return traj, text, [Check(f"split (Theorem 5) vs unsplit multibody: {w}", d, tl, "-") for w, d, tl in raw]
     say = _Text(out)
     multibody = check and scene.solver.get("check_multibody", True)
     step = _stepper(progress, multibody)
