@@ -37,7 +37,7 @@ departs from the split.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -98,8 +98,9 @@ def initial_state(config: Configuration, q0: ArrayLike, v0: ArrayLike, Q0: Mappi
 class _System:
     """Right-hand side of the maximal-coordinate equations (module docstring)."""
 
-    def __init__(self, config, a, b, alpha, kappa, radius=None):
+    def __init__(self, config, a, b, alpha, kappa, radius=None, forces=None):
         self.radius = radius  # of the sphere constraint on the system mass centre, or None
+        self.forces = forces  # extra applied forces and body-frame torques, or None
         self.names = config.order
         idx = {n: i for i, n in enumerate(self.names)}
         bodies = [config.bodies[n] for n in self.names]
@@ -191,6 +192,8 @@ class _System:
         f = np.empty((N, 6))
         f[:, :3] = -self.m[:, None] * (x @ a + 0.5 * self.b)
         f[:, 3:] = np.einsum("nji,nj->ni", Q, tau_space) - cross(w, Iw)
+        if self.forces is not None:
+            f += self.forces(_t, x, v, Q, w)
         f = f.ravel()
         if K or self.radius is not None:
             G, rhs = self._joint_rows(x, v, Q, w)
@@ -213,7 +216,7 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
                         Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike], t: ArrayLike,
                         rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
                         alpha: float | None = None, kappa: float | None = None,
-                        constraint: Sphere | None = None) -> Trajectories:
+                        constraint: Sphere | None = None, forces: Callable | None = None) -> Trajectories:
     """Integrate a tree of rigid bodies on spherical joints in ``phi(x) = 1/2 x^T a x + 1/2 b^T x``.
 
     Parameters
@@ -245,6 +248,11 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
         Hold the system mass centre on ``|q| = constraint.radius`` (Theorem 3; module
         docstring).  Needs ``b = 0``, ``|q0| = radius`` and ``v0`` tangent
         (:meth:`Sphere.check`, else ``ValueError``).
+    forces : callable, optional
+        Further applied loads ``forces(t, x, v, Q, omega) -> (N, 6)``: per body (``config.order``)
+        the force on its mass centre (space frame) and the torque about it (body frame), from
+        the states ``x, v (N, 3)``, ``Q (N, 3, 3)``, ``omega (N, 3)``.  Used for the exact
+        ``1/r`` field and control torques (:mod:`thetasol.integrators.multibody_gravity`).
 
     Returns
     -------
@@ -277,7 +285,7 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     if alpha is None:
         alpha = max(1.0, float(np.max(np.linalg.norm(w, axis=1))) + float(np.sqrt(np.max(np.abs(np.linalg.eigvalsh(a))))))
     kappa = alpha if kappa is None else float(kappa)
-    sys = _System(config, a, b, float(alpha), kappa, None if constraint is None else constraint.radius)
+    sys = _System(config, a, b, float(alpha), kappa, None if constraint is None else constraint.radius, forces)
     y0 = sys.pack(x, v, Q, w)
     start = time.perf_counter()
     if tt[-1] > 0:

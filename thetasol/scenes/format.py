@@ -22,11 +22,12 @@ from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.trajectories import Trajectories
+from thetasol.scenes.orbit import OrbitEntry, orbit_entry, solve_orbiting_configuration
 from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
 
 __all__ = ["Scene", "load_scene", "demo_scene_path"]
 
-_TOP_KEYS = {"name", "description", "bodies", "joints", "potential", "initial", "output", "solver", "constraint"}
+_TOP_KEYS = {"name", "description", "bodies", "joints", "potential", "initial", "output", "solver", "constraint", "orbit"}
 _BODY_KEYS = {"name", "mass", "J", "I", "center", "box", "masses", "points"}
 _JOINT_KEYS = {"parent", "child", "parent_point", "child_point"}
 _SOLVER_KEYS = {"rtol", "method", "rotation", "make_central", "check_multibody", "check_t_end", "check_rtol"}
@@ -54,6 +55,9 @@ class Scene:
         ``make_central``.
     constraint : Sphere or None
         The system mass centre held on a sphere about the origin (Theorem 3), if any.
+    orbit : OrbitEntry or None
+        The ``[orbit]`` (Theorem 4): then ``q0, v0`` are its ``r0, v0``, ``a`` the tidal matrix
+        (7.11) at ``t = 0`` and ``b = 0`` (:mod:`thetasol.scenes.orbit`).
     """
 
     config: Configuration
@@ -68,10 +72,15 @@ class Scene:
     description: str = ""
     solver: dict = field(default_factory=dict)
     constraint: Sphere | None = None
+    orbit: OrbitEntry | None = None
 
     def solution(self, rotation: str | None = None) -> ConfigurationSolution:
         """The split solution (:func:`~thetasol.scenes.pipeline.solve_configuration`) with the scene's options."""
         s = self.solver
+        if self.orbit is not None:
+            return solve_orbiting_configuration(self.config, self.orbit.orbit, self.Q0, self.omega0,
+                                                rotation=rotation or s.get("rotation", "auto"),
+                                                rtol=s.get("rtol", 1e-12), method=s.get("method", "DOP853"))
         return solve_configuration(self.config, self.a, self.b, self.q0, self.v0, self.Q0, self.omega0,
                                    rotation=rotation or s.get("rotation", "auto"), rtol=s.get("rtol", 1e-12),
                                    method=s.get("method", "DOP853"), constraint=self.constraint)
@@ -374,9 +383,12 @@ def _build_scene(d: Any) -> Scene:
     _unknown(solver, _SOLVER_KEYS, "[solver]")
     make_central = solver.get("make_central", False)
     config = _configuration(list(byname.values()), raw_joints, make_central)
-    a, b = _potential(d)
+    orbit = orbit_entry(d)
+    a, b = _potential(d) if orbit is None else (orbit.tidal_matrix(), np.zeros(3))
     q0, v0, Q0, w0 = _initial(d, config.order)
+    if orbit is not None:
+        q0, v0 = orbit.orbit.r0.copy(), orbit.orbit.v0.copy()
     constraint = _constraint(d, b, q0, v0)
     t = _output(d)
     return Scene(config=config, a=a, b=b, q0=q0, v0=v0, Q0=Q0, omega0=w0, t=t, name=name, description=desc,
-                 solver=_solver_options(solver, t, make_central), constraint=constraint)
+                 solver=_solver_options(solver, t, make_central), constraint=constraint, orbit=orbit)

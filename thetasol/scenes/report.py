@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import io
 import time
-from dataclasses import dataclass
 from typing import TextIO
 
 import numpy as np
@@ -29,30 +28,12 @@ from thetasol.integrators.rotation import integrate_rotation
 from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import invariants
 from thetasol.mechanics.trajectories import Trajectories
+from thetasol.scenes.checks import Check
 from thetasol.scenes.format import Scene
+from thetasol.scenes.orbit_report import run_orbit
 from thetasol.scenes.pipeline import ConfigurationSolution
 
 __all__ = ["Check", "run"]
-
-
-@dataclass
-class Check:
-    """One comparison of the report: a max deviation against a stated tolerance."""
-
-    what: str
-    deviation: float
-    tolerance: float
-    seconds: str
-
-    @property
-    def ok(self) -> bool:
-        """The deviation is within the tolerance."""
-        return bool(self.deviation <= self.tolerance)
-
-    def line(self) -> str:
-        """The report line of this check."""
-        return (f"  {self.what}: {self.deviation:.2e} (tolerance {self.tolerance:.1e}) [{self.seconds}]  "
-                f"{'ok' if self.ok else 'FAILED'}")
 
 
 class _Text:
@@ -221,6 +202,8 @@ def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Tr
     checks : list of Check
         Every comparison with its tolerance; ``all(c.ok for c in checks)`` is the verdict.
     """
+    if scene.orbit is not None:
+        return run_orbit(scene, check=check, out=out)
     say = _Text(out)
     _describe_scene(scene, say)
     start = time.perf_counter()
