@@ -22,8 +22,10 @@ order, the equations of :mod:`thetasol.mechanics.gravity_gradient` with a contro
 
 with ``I`` the principal moments in the order of ``B0``.  The controller minimizes
 ``int x^T Qw x + u^T Rw u`` over ``x = (theta, theta')`` (``scipy.linalg.solve_continuous_are``),
-``u = -K x``; by default ``Qw = diag(1, 1, 1, 1/n^2, 1/n^2, 1/n^2)`` and ``Rw = 1 / (n^2 I_max)^2``,
-which makes the design independent of the units.  Measured state: ``theta`` the rotation vector of
+``u = -K x``; by default ``Qw = diag(1, 1, 1, 1/n^2, 1/n^2, 1/n^2)`` and ``Rw = diag(1 / (n^2 I_i)^2)``
+(each axis's couple in units of its own gravity-gradient scale ``n^2 I_i``), which makes the design
+independent of the units and keeps every closed-loop rate of order ``n`` even for a body with one
+small moment (no stiff mode for the integrator).  Measured state: ``theta`` the rotation vector of
 ``R = F^T Q B0`` and ``theta' = omega_a - n R^T e3`` (exact: ``vee(R^T R')``).
 """
 from __future__ import annotations
@@ -36,9 +38,11 @@ from scipy.linalg import solve_continuous_are
 from scipy.spatial.transform import Rotation
 
 from thetasol.core import validate as V
-from thetasol.mechanics.gravity_gradient import GravityGradientStability, gravity_gradient_stability
+from thetasol.mechanics.configuration import Configuration
+from thetasol.mechanics.gravity_gradient import GravityGradientStability, gravity_gradient_stability, orbit_frame
 
-__all__ = ["gravity_gradient_linearization", "AttitudeLQR", "lqr_attitude_controller"]
+__all__ = ["gravity_gradient_linearization", "AttitudeLQR", "lqr_attitude_controller", "StationController",
+           "station_controller"]
 
 
 def gravity_gradient_linearization(J: ArrayLike, mean_motion: float) -> tuple[np.ndarray, np.ndarray]:
@@ -132,7 +136,7 @@ def lqr_attitude_controller(J: ArrayLike, mean_motion: float, Qw: ArrayLike | No
     Qw : array_like (6, 6) or (6,), optional
         State weight on ``(theta, theta')`` (default ``diag(1, 1, 1, n^-2, n^-2, n^-2)``).
     Rw : array_like (3, 3) or (3,), optional
-        Control weight (default ``1 / (n^2 I_max)^2``).
+        Control weight (default ``diag(1 / (n^2 I_i)^2)``).
     alignment : array_like (3, 3), optional
         Body-frame axes (columns, right-handed, principal axes of ``J``) to hold along radial,
         along-track and normal.
@@ -162,13 +166,67 @@ def lqr_attitude_controller(J: ArrayLike, mean_motion: float, Qw: ArrayLike | No
         raise ValueError(f"the alignment's axes are not principal axes of J (off-diagonal {off:.3g})")
     A, B = gravity_gradient_linearization(np.diag(Ja), mean_motion)
     st = gravity_gradient_stability(np.diag(Ja), mean_motion)
-    n, Imax = st.mean_motion, float(np.max(st.inertia))
+    n = st.mean_motion
     Qm = np.diag(np.r_[np.ones(3), np.full(3, n ** -2)]) if Qw is None else _weight(Qw, 6, "Qw")
-    Rm = np.eye(3) / (n * n * Imax) ** 2 if Rw is None else _weight(Rw, 3, "Rw")
+    Rm = np.diag((n * n * st.inertia) ** -2.0) if Rw is None else _weight(Rw, 3, "Rw")
     P = solve_continuous_are(A, B, Qm, Rm)
     K = np.linalg.solve(Rm, B.T @ P)
     return AttitudeLQR(alignment=B0, inertia=st.inertia, mean_motion=n, A=A, B=B, K=K, P=P,
                        closed_loop_eigenvalues=np.linalg.eigvals(A - B @ K), open_loop=st)
+
+
+class StationController:
+    """One :class:`AttitudeLQR` per effective body, applied as pure couples on the physical bodies.
+
+    ``ctrl(t, q, qdot, Q, omega) -> (N, 3)``: the body-frame couple on each body (``config.order``),
+    from the orbit frame of the measured system mass centre ``q, qdot`` and each body's own attitude
+    ``Q[i]`` and rate ``omega[i]``, nothing else: the controllers are the separate designs of
+    Corollary 5.  Bodies without a controller get zero.  This is the ``torques`` argument of
+    :class:`thetasol.integrators.multibody_gravity.PointMassGravity`.
+
+    Attributes
+    ----------
+    names : tuple of str
+        ``config.order``.
+    controllers : dict name -> AttitudeLQR
+    """
+
+    def __init__(self, names: tuple, controllers: dict):
+        self.names = tuple(names)
+        self.controllers = dict(controllers)
+
+    def __call__(self, t: float, q: np.ndarray, qdot: np.ndarray, Q: np.ndarray, omega: np.ndarray) -> np.ndarray:
+        F = orbit_frame(q, qdot)
+        out = np.zeros((len(self.names), 3))
+        for i, n in enumerate(self.names):
+            c = self.controllers.get(n)
+            if c is not None:
+                out[i] = c.torque(Q[i], omega[i], F)
+        return out
+
+
+def station_controller(config: Configuration, mean_motion: float, alignments: dict, Qw: ArrayLike | None = None,
+                       Rw: ArrayLike | None = None) -> StationController:
+    """An LQR per effective body, each designed on that body alone (Corollary 5).
+
+    Parameters
+    ----------
+    config : Configuration
+        A central tree; each controller uses its body's effective second moments (2.15), (3.7).
+    mean_motion : float
+        ``n`` of the circular orbit.
+    alignments : mapping name -> (3, 3)
+        Per controlled body, the body-frame principal axes (columns) to hold along radial,
+        along-track, normal (:func:`lqr_attitude_controller`).  Other bodies are left free.
+    Qw, Rw : optional
+        Weights, the same for every body (defaults of :func:`lqr_attitude_controller`).
+    """
+    unknown = set(alignments) - set(config.order)
+    if unknown:
+        raise ValueError(f"alignments name unknown bodies {sorted(unknown)}")
+    ctrl = {n: lqr_attitude_controller(config.effective_body(n).J, mean_motion, Qw, Rw, alignment=B0)
+            for n, B0 in alignments.items()}
+    return StationController(config.order, ctrl)
 
 
 def _weight(W: ArrayLike, k: int, name: str) -> np.ndarray:
