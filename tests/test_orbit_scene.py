@@ -174,3 +174,30 @@ def test_scaled_station_is_central_and_scaled():
     for n in cfg.order:
         assert np.allclose(cfg.effective_body(n).J, 0.25 * scene.config.effective_body(n).J, rtol=1e-14, atol=0)
     assert set(pts) == set(scene.orbit.points)
+
+
+def test_leo_station_in_si_units():
+    """The example scaled to a 52 m, 14.8 t station on a 400 km circular orbit (SI units)."""
+    mu, R = 3.986004418e14, 6778137.0
+    n, s = math.sqrt(mu / R ** 3), 1e4
+    d = _raw()
+    d["orbit"] = {"mu": mu, "r0": [R, 0.0, 0.0], "v0": [0.0, math.sqrt(mu / R), 0.0]}
+    for b in d["bodies"]:
+        for k in ("box", "center"):
+            if k in b:
+                b[k] = [x * s for x in b[k]]
+        if "points" in b:
+            b["points"] = [[x * s for x in p] for p in b["points"]]
+            b["masses"] = [m * 1e3 for m in b["masses"]]
+        else:
+            b["mass"] *= 1e3
+    for j in d["joints"]:
+        j["parent_point"] = [x * s for x in j["parent_point"]]
+    d["initial"]["omega"] = {k: [x * n for x in v] for k, v in d["initial"]["omega"].items()}
+    d["output"] = {"t_end": 4 * math.pi / n, "samples": 101}
+    traj, text, checks = run(Scene.from_dict(d))
+    assert all(c.ok for c in checks), text
+    # measured: positions 4.50e-3 m = 11.1 (L/R)^2 R at L/R = 7.7e-6, ratio 4.001 (exponent 2.0005)
+    assert next(c for c in checks if "log2" in c.what).deviation < 2e-3
+    pos = float(next(ln for ln in text.splitlines() if "size x1:" in ln).split("positions ")[1].split()[0])
+    assert 3e-3 < pos < 6e-3

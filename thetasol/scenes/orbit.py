@@ -175,7 +175,7 @@ def station_stability(config: Configuration, orbit: KeplerOrbit, Q0: Mapping[str
     out = {}
     for i, (name, e) in enumerate(config.effective_bodies().items()):
         B0, angle = _nearest_alignment(F, Qa[i], e.axes)
-        Jal = np.diag(B0.T @ e.J @ B0)
+        Jal = np.maximum(np.diag(B0.T @ e.J @ B0), 0.0)    # a flat body's zero moment may round below 0
         lag = e.axes[:, [2, 1, 0]].copy()                   # J descending: I ascending radial -> normal
         if np.linalg.det(lag) < 0:
             lag[:, 2] = -lag[:, 2]
