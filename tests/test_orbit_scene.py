@@ -90,6 +90,7 @@ def test_split_and_unsplit_differ_by_size_squared_at_two_orbit_radii():
     (lambda d: d["orbit"].update(v0=[1.0, 0.0, 0.0]), "radial"),
     (lambda d: d["orbit"].update(e=0.1), "unknown key"),
     (lambda d: d["orbit"].update(r0=[1.0, float("nan"), 0.0]), "orbit.r0"),
+    (lambda d: d.update(solver={"method": "splitting"}), "not offered on an orbit"),
 ])
 def test_orbit_entry_errors(edit, message):
     d = _raw()

@@ -99,8 +99,8 @@ def _body_points(raw_bodies: list) -> dict:
 def orbit_entry(d: Mapping) -> OrbitEntry | None:
     """The ``[orbit]`` of a parsed scene table (after its bodies were validated), or None without one.
 
-    Raises ``ValueError`` for unknown keys, a missing or non-positive ``mu``, a radial orbit, and
-    entries that contradict it: ``[potential]``, ``[constraint]``, ``initial.q`` or ``initial.v``
+    Raises ``ValueError`` for unknown keys, a missing or non-positive ``mu``, a radial orbit,
+    ``solver.method = "splitting"``, and entries that contradict it: ``[potential]``, ``[constraint]``, ``initial.q`` or ``initial.v``
     (the orbit gives the system mass centre's state; one source of truth).
     """
     if "orbit" not in d:
@@ -117,6 +117,10 @@ def orbit_entry(d: Mapping) -> OrbitEntry | None:
     for clash in ("potential", "constraint"):
         if clash in d:
             raise ValueError(f"[orbit] and [{clash}] exclude each other: the field of an orbit is -mu/|x|")
+    solver = d.get("solver", {})
+    if isinstance(solver, dict) and solver.get("method") == "splitting":
+        raise ValueError("solver.method = \"splitting\" is not offered on an orbit (the torque depends on time "
+                         "through the orbit): use DOP853, RK45, RK23 or heyoka")
     ini = d.get("initial", {})
     if isinstance(ini, dict) and set(ini) & {"q", "v"}:
         raise ValueError("with [orbit], the system mass centre's state is orbit.r0 and orbit.v0: "
