@@ -75,7 +75,8 @@ class Scene:
     orbit: OrbitEntry | None = None
 
     def solution(self, rotation: str | None = None) -> ConfigurationSolution:
-        """The split solution (:func:`~thetasol.scenes.pipeline.solve_configuration`) with the scene's options."""
+        """The split solution with the scene's options: :func:`~thetasol.scenes.pipeline.solve_configuration`,
+        or with an ``[orbit]`` :func:`~thetasol.scenes.orbit.solve_orbiting_configuration` (Theorem 4)."""
         s = self.solver
         if self.orbit is not None:
             return solve_orbiting_configuration(self.config, self.orbit.orbit, self.Q0, self.omega0,
