@@ -198,7 +198,7 @@ def test_leo_station_in_si_units():
     d["output"] = {"t_end": 4 * math.pi / n, "samples": 101}
     traj, text, checks = run(Scene.from_dict(d))
     assert all(c.ok for c in checks), text
-    # measured: positions 4.50e-3 m = 11.1 (L/R)^2 R at L/R = 7.7e-6, ratio 4.001 (exponent 2.0005)
+    # measured: positions 4.50e-3 m = 11.1 (L/R)^2 R at L/R = 7.7e-6, ratio 4.000 (|log2 ratio - 2| = 2.1e-7)
     assert next(c for c in checks if "log2" in c.what).deviation < 2e-3
     pos = float(next(ln for ln in text.splitlines() if "size x1:" in ln).split("positions ")[1].split()[0])
     assert 3e-3 < pos < 6e-3
