@@ -43,9 +43,11 @@ _group("thetasol.mechanics.equations", "invariants", "spectral_coefficients", "t
 _group("thetasol.mechanics.heavy_top", "heavy_top_invariants", "kovalevskaya_integral")
 _group("thetasol.mechanics.gravity_gradient", "gravity_gradient_stability", "GravityGradientStability",
        "gravity_gradient_torque", "orbit_frame")
+_group("thetasol.mechanics.attitude_control", "lqr_attitude_controller", "AttitudeLQR", "station_controller")
 # numerical references
 _group("thetasol.integrators.rotation", "integrate_rotation")
 _group("thetasol.integrators.multibody", "integrate_multibody")
+_group("thetasol.integrators.multibody_gravity", "integrate_multibody_gravity")
 _group("thetasol.integrators.orbiting_rotation", "integrate_orbiting_rotation")
 _group("thetasol.integrators.heavy_top", "integrate_heavy_top")
 _group("thetasol.integrators.neumann", "integrate_neumann")
@@ -56,6 +58,7 @@ _group("thetasol.integrators.multibody_rotors", "integrate_gyrostat_multibody")
 _group("thetasol.scenes.format", "Scene", "load_scene", "demo_scene_path")
 _group("thetasol.scenes.pipeline", "solve_configuration", "ConfigurationSolution")
 _group("thetasol.scenes.report", "run")
+_group("thetasol.scenes.orbit", "solve_orbiting_configuration", "OrbitingConfigurationSolution")
 _group("thetasol.scenes.fixed_point", "solve_fixed_point", "FixedPointSolution")
 _group("thetasol.scenes.gyrostat_scene", "solve_gyrostat_configuration", "GyrostatSplit", "load_gyrostat_scene")
 # the machinery: theta functions and curves
@@ -90,10 +93,12 @@ if TYPE_CHECKING:
     from thetasol.integrators.gyrostat import integrate_gyrostat, integrate_heavy_gyrostat
     from thetasol.integrators.heavy_top import integrate_heavy_top
     from thetasol.integrators.multibody import integrate_multibody
+    from thetasol.integrators.multibody_gravity import integrate_multibody_gravity
     from thetasol.integrators.multibody_rotors import integrate_gyrostat_multibody
     from thetasol.integrators.neumann import integrate_neumann
     from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
     from thetasol.integrators.rotation import integrate_rotation
+    from thetasol.mechanics.attitude_control import AttitudeLQR, lqr_attitude_controller, station_controller
     from thetasol.mechanics.bodies import Body
     from thetasol.mechanics.configuration import Configuration, Joint
     from thetasol.mechanics.constraints import Pivot, Sphere
@@ -117,6 +122,7 @@ if TYPE_CHECKING:
     from thetasol.scenes.fixed_point import FixedPointSolution, solve_fixed_point
     from thetasol.scenes.format import Scene, demo_scene_path, load_scene
     from thetasol.scenes.gyrostat_scene import GyrostatSplit, load_gyrostat_scene, solve_gyrostat_configuration
+    from thetasol.scenes.orbit import OrbitingConfigurationSolution, solve_orbiting_configuration
     from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
     from thetasol.scenes.report import run
     from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution, Solution
