@@ -39,8 +39,8 @@ def main(argv=None):
     args = ap.parse_args(argv)
     refs = json.loads(REFS.read_text())
     names = args.cases.split(",") if args.cases else list(refs)
-    import threadpoolctl
     import scipy.linalg  # noqa: F401
+    import threadpoolctl
     blas = [f"{i['internal_api']} {i['num_threads']} threads" for i in threadpoolctl.threadpool_info()
             if i["user_api"] == "blas"]
     print(f"machine: {machine_info('heyoka')}; BLAS found: {', '.join(blas)}\n")
