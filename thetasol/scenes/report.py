@@ -12,10 +12,14 @@ that do not use them, each with its max deviation, a stated tolerance and timing
 * the whole split against the unsplit multibody system of :mod:`thetasol.integrators.multibody`
   (tolerance ``10 check_rtol (1 + t) (1 + max |x|)``, docs/mechanics.md);
 
-and the drift of the first integrals (4.9), (4.13), (4.12) along each rotation.
+and the drift of the first integrals (4.9), (4.13), (4.12) along each rotation; then when the closed
+form pays off: from this run's set-up, evaluation and integration times, the horizon beyond which the
+split is cheaper than the multibody integration and each closed-form rotation cheaper than
+integrate_rotation (at the scene's output density and for one far time), and the accuracy argument.
 """
 from __future__ import annotations
 
+import importlib
 import io
 import time
 from dataclasses import dataclass
@@ -30,7 +34,7 @@ from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import invariants
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.scenes.format import Scene
-from thetasol.scenes.pipeline import ConfigurationSolution
+from thetasol.scenes.pipeline import ConfigurationSolution, rotation_kind
 
 __all__ = ["Check", "run"]
 
@@ -129,8 +133,11 @@ def _describe_models(sol: ConfigurationSolution, say: _Text) -> None:
     say()
 
 
-def _reference_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectories) -> list[Check]:
-    """The closed-form mass centre against DOP853, each closed-form rotation against integrate_rotation."""
+def _reference_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectories) -> tuple[list[Check], dict]:
+    """The closed-form mass centre against DOP853, each closed-form rotation against integrate_rotation.
+
+    Also returns the seconds of each rotation's reference integration (name -> seconds).
+    """
     t = scene.t
     start = time.perf_counter()
     qn, vn = _mass_center_numerical(scene.a, scene.b, scene.q0, scene.v0, t, scene.constraint)
@@ -145,6 +152,7 @@ def _reference_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectori
         gap = float(np.max(np.abs(scene.constraint.residual(traj.mass_center)))) / R
         # the models put the point on the unit sphere to rounding: measured 5.6e-16 (tests/test_constrained_scene.py)
         checks.append(Check(f"mass centre on |q| = {R:g}: max ||q| - R| / R", gap, 1e-13, "-"))
+    ref_seconds_of = {}
     for i, n in enumerate(traj.names):
         r = traj.info["rotations"][n]
         if not r["closed_form"]:
@@ -152,11 +160,11 @@ def _reference_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectori
         e = scene.config.effective_body(n)
         start = time.perf_counter()
         wn, Qn = integrate_rotation(e.J, scene.a, scene.Q0[n], scene.omega0[n], t, rtol=1e-13)
-        ref_seconds = time.perf_counter() - start
+        ref_seconds = ref_seconds_of[n] = time.perf_counter() - start
         dev = max(float(np.max(np.abs(Qn - traj.attitude[i]))), float(np.max(np.abs(wn - traj.omega[i]))))
         checks.append(Check(f"rotation of {n}: {sol.rotations[n].method} vs integrate_rotation (DOP853, rtol 1e-13)",
                             dev, 1e-8, f"{r['seconds'] * 1e3:.1f} ms vs {ref_seconds * 1e3:.1f} ms"))
-    return checks
+    return checks, ref_seconds_of
 
 
 def _drift(scene: Scene, traj: Trajectories, say: _Text) -> None:
@@ -175,8 +183,11 @@ def _drift(scene: Scene, traj: Trajectories, say: _Text) -> None:
             f"spectral curve (4.12) {cd:.1e}")
 
 
-def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say: _Text) -> Check:
-    """The split against the unsplit multibody integration up to the scene's ``check_t_end``."""
+def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say: _Text) -> tuple[Check, float, float]:
+    """The split against the unsplit multibody integration up to the scene's ``check_t_end``.
+
+    Also returns the multibody integration's seconds and the end time it reached.
+    """
     s, t = scene.solver, scene.t
     t_end = min(float(s.get("check_t_end", t[-1])), float(t[-1]))
     sel = t <= t_end
@@ -199,7 +210,72 @@ def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say
     check = Check("split vs unsplit multibody: positions and attitudes", max(dv["position"], dv["attitude"]), tol,
                   f"split {split_seconds:.2f} s vs multibody {mb.info['seconds']:.2f} s")
     say(check.line())
-    return check
+    return check, mb.info["seconds"], t_end
+
+
+def _load_closed_forms(scene: Scene) -> float:
+    """Import the theta-function machinery (and the curve engine's sympy and mpmath) once, if the scene needs it.
+
+    Seconds spent: a one-off cost per process, reported apart from the split's time as the integrators'
+    imports are from theirs.
+    """
+    if rotation_kind(scene.a) == "elliptic":
+        return 0.0
+    start = time.perf_counter()
+    for name in ("thetasol.solutions.rotation", "thetasol.solutions.theta_rotation", "sympy", "mpmath"):
+        importlib.import_module(name)
+    return time.perf_counter() - start
+
+
+def _dur(seconds: float) -> str:
+    """A duration in s, ms or us, three digits."""
+    for unit, scale in (("s", 1.0), ("ms", 1e-3)):
+        if seconds >= scale:
+            return f"{seconds / scale:.3g} {unit}"
+    return f"{seconds * 1e6:.3g} us"
+
+
+def _break_even(setup: float, per_time: float, rate: float, density: float) -> str:
+    """The horizon beyond which ``setup + per_time * density * T`` is below ``rate * T``."""
+    gain = rate - per_time * density
+    return f"T > {setup / gain:.3g}" if gain > 0 else "never at this output density"
+
+
+#: DOP853 at rtol 1e-13 against the closed form on the generic reference body (80-bit references,
+#: docs/bench_theta_rotation.md): the integrator's error grows with the horizon, the closed form's does not.
+_ACCURACY = ("accuracy: an integrator's error grows with the horizon (DOP853 at rtol 1e-13 on the generic reference "
+             "body: 7e-11 at t = 1000, 7e-9 at t = 1e4), a closed form's stays near its set-up accuracy (theta: "
+             "1e-13 at t = 1000, 1e-12 at t = 1e4; docs/bench_theta_rotation.md); matching it over long horizons "
+             "costs an integrator a tighter tolerance or extended precision, so at equal accuracy the closed form "
+             "pays off before the horizons above")
+
+
+def _pays_off(scene: Scene, sol: ConfigurationSolution, traj: Trajectories, ref_seconds: dict,
+              multibody: tuple[float, float] | None, say: _Text) -> None:
+    """When the closed form pays off: set-up against horizon and accuracy, from this run's timings."""
+    t = scene.t
+    span = float(t[-1] - min(t[0], 0.0))
+    if span <= 0 or not ref_seconds:
+        return
+    density = t.size / span
+    d, ev = sol.diagnostics, traj.info["evaluation_seconds"]
+    say()
+    say(f"when the closed form pays off (this run's costs, taken as linear in the horizon T; output at "
+        f"{density:.3g} times per unit time):")
+    if multibody is not None:
+        mb_seconds, mb_end = multibody
+        rate, setup = mb_seconds / mb_end, d["setup_seconds"]
+        per_time = sum(ev.values()) / t.size
+        say(f"  the split against the unsplit multibody integration ({_dur(rate)} per unit time): set-up "
+            f"{_dur(setup)}, evaluation {_dur(per_time)} per time: cheaper for "
+            f"{_break_even(setup, per_time, rate, density)} (this scene: T = {span:g})")
+    say("  each closed-form rotation against integrate_rotation (DOP853, rtol 1e-13), for output at this density "
+        "and for one time at T:")
+    for n, ref in ref_seconds.items():
+        setup, per_time, rate = d["rotations"][n]["setup_seconds"], ev[n] / t.size, ref / span
+        say(f"    {n}: set-up {_dur(setup)}, {_dur(per_time)} per time against {_dur(rate)} per unit time: "
+            f"{_break_even(setup, per_time, rate, density)}, one time {_break_even(setup, 0.0, rate, 1.0)}")
+    say("  " + _ACCURACY)
 
 
 def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Trajectories, str, list[Check]]:
@@ -223,24 +299,33 @@ def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Tr
     """
     say = _Text(out)
     _describe_scene(scene, say)
+    import_seconds = _load_closed_forms(scene)
     start = time.perf_counter()
     sol = scene.solution()
+    setup_seconds = time.perf_counter() - start
     traj = sol(scene.t)
     split_seconds = time.perf_counter() - start
     _describe_models(sol, say)
 
     say("exact parts against the numerical references (max abs deviation):")
-    checks = _reference_checks(scene, sol, traj)
+    checks, ref_seconds = _reference_checks(scene, sol, traj)
     for c in checks:
         say(c.line())
     if not any(r["closed_form"] for r in traj.info["rotations"].values()):
         say("  rotations: no closed form applies to these data; they ARE the numerical reference")
     _drift(scene, traj, say)
+    multibody = None
     if check and scene.solver.get("check_multibody", True):
-        checks.append(_multibody_check(scene, traj, split_seconds, say))
+        mb_check, *multibody = _multibody_check(scene, traj, split_seconds, say)
+        checks.append(mb_check)
+    _pays_off(scene, sol, traj, ref_seconds, multibody, say)
     say()
-    say(f"timings: split solution {split_seconds:.3f} s (mass centre {traj.info['mass_center_seconds'] * 1e3:.2f} ms; "
-        + ", ".join(f"{n} {r['seconds'] * 1e3:.0f} ms" for n, r in traj.info["rotations"].items()) + ")")
+    say(f"timings: split solution {split_seconds:.3f} s = set-up {setup_seconds:.3f} s + evaluation "
+        f"{split_seconds - setup_seconds:.3f} s at {scene.t.size} times (mass centre "
+        f"{traj.info['mass_center_seconds'] * 1e3:.2f} ms; "
+        + ", ".join(f"{n} {r['seconds'] * 1e3:.0f} ms" for n, r in traj.info["rotations"].items()) + ")"
+        + (f"; one-off imports of the closed-form machinery {import_seconds:.2f} s, not counted" if import_seconds
+           else ""))
     say("verdict: " + ("all checks passed" if all(c.ok for c in checks) else
                        "FAILED: " + "; ".join(c.what for c in checks if not c.ok)))
     return traj, say.buf.getvalue(), checks
