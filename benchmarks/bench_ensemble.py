@@ -14,6 +14,7 @@ holds a recorded run).
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import time
 import warnings
@@ -47,8 +48,9 @@ def _dask(items, t, n_workers):
     import distributed
 
     start = time.perf_counter()
-    with distributed.LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster, distributed.Client(cluster) as client:
+    cluster = distributed.LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                                       dashboard_address=None, silence_logs=logging.CRITICAL)
+    with cluster, distributed.Client(cluster) as client:
         client.wait_for_workers(n_workers)
         boot = time.perf_counter() - start
         seconds, out = _run(items, t, client=client)
@@ -66,7 +68,7 @@ def main(argv=None):
     items, t = bodies(args.n, args.seed), np.linspace(0.0, 100.0, args.times)
     print(f"machine: {machine_info('heyoka', 'dask', 'distributed')}")
     print(f"{args.n} bodies (seed {args.seed}, {len(REGIMES)} regimes in turn), {args.times} times each, "
-          f"cores usable: {len(os.sched_getaffinity(0))}\n")
+          f"cores usable: {len(os.sched_getaffinity(0))}, load average at start {os.getloadavg()[0]:.1f}\n")
     rows, ref = [], None
     engines = [("serial", "one process (workers=1)", lambda: (0.0, *_run(items, t, workers=1))),
                ("pool", "local process pool, 2 workers", lambda: (0.0, *_run(items, t, workers=2))),

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import pathlib
 import subprocess
 import sys
@@ -183,7 +184,7 @@ def main(argv=None):
     args = ap.parse_args(argv)
     refs = json.loads(REFS.read_text())
     names = (args.cases or (QUICK if args.quick else ",".join(refs))).split(",")
-    print(f"machine: {machine_info('heyoka')}")
+    print(f"machine: {machine_info('heyoka')}; load average at start {os.getloadavg()[0]:.1f}")
     print(f"dense: {N_DENSE} times on [0, {T_END:g}] plus the reference times; heyoka float64 tol 1e-16; "
           "errors against the 80-bit references at t <= 1000; best of 3 (evaluation, propagation), "
           "one set-up each\n")
