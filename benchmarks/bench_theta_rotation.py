@@ -120,19 +120,21 @@ def cold_start(data) -> float:
 
 # -- output ---------------------------------------------------------------------------------------
 
-def print_table(rows, quick):
+def print_header(quick):
     print("| case | method | set-up (ms) | set-up / heyoka to 1000 | dense theta (us/time) | dense heyoka (us/time) "
           "| dense theta / heyoka | t = 1e6 theta (us) | t = 1e6 in dense points | heyoka to 1000 (ms) "
           + ("" if quick else "| DOP853 dense (us/time) | DOP853 / heyoka ") + "| error theta | error heyoka "
           + ("" if quick else "| error DOP853 ") + "| theta error to t = 4002 |")
-    print("|---" * (14 if quick else 17) + "|")
-    for r in rows:
-        dop = "" if quick else f"| {r['dop_dense'] * 1e6:.3g} | {r['dop_dense'] / r['hy_dense']:.3g} "
-        dop_err = "" if quick else f"| {r['dop_err']:.1e} "
-        print(f"| {r['case']} | {r['method']} | {r['setup'] * 1e3:.0f} | {r['setup'] / r['hy_run']:.2f} | "
-              f"{r['dense'] * 1e6:.2f} | {r['hy_dense'] * 1e6:.2f} | {r['dense'] / r['hy_dense']:.2f} | "
-              f"{r['far'] * 1e6:.0f} | {r['far'] / r['dense']:.1f} | {r['hy_run'] * 1e3:.1f} {dop}| "
-              f"{r['err']:.1e} | {r['hy_err']:.1e} {dop_err}| {r['err_4002']:.1e} |")
+    print("|---" * (14 if quick else 17) + "|", flush=True)
+
+
+def print_row(r, quick):
+    dop = "" if quick else f"| {r['dop_dense'] * 1e6:.3g} | {r['dop_dense'] / r['hy_dense']:.3g} "
+    dop_err = "" if quick else f"| {r['dop_err']:.1e} "
+    print(f"| {r['case']} | {r['method']} | {r['setup'] * 1e3:.0f} | {r['setup'] / r['hy_run']:.2f} | "
+          f"{r['dense'] * 1e6:.2f} | {r['hy_dense'] * 1e6:.2f} | {r['dense'] / r['hy_dense']:.2f} | "
+          f"{r['far'] * 1e6:.0f} | {r['far'] / r['dense']:.1f} | {r['hy_run'] * 1e3:.1f} {dop}| "
+          f"{r['err']:.1e} | {r['hy_err']:.1e} {dop_err}| {r['err_4002']:.1e} |", flush=True)
 
 
 def print_summary(rows, compile_s, cold, quick):
@@ -191,10 +193,10 @@ def main(argv=None):
     cold = cold_start(refs["generic"])
     ta, compile_s = heyoka_integrator()
     rows = []
+    print_header(args.quick)
     for name in names:
         rows.append(bench_body(name, refs[name], ta, args.quick))
-        print(f"  {name}: done", file=sys.stderr, flush=True)
-    print_table(rows, args.quick)
+        print_row(rows[-1], args.quick)
     print_summary(rows, compile_s, cold, args.quick)
     if args.plot:
         plot(rows, args.plot)
