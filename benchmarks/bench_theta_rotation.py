@@ -18,7 +18,7 @@ Measured in one run on this machine, for every reference body of tests/data/rota
 
 Ratios are to heyoka: set-up / heyoka's propagation to t = 1000, dense theta / dense heyoka.
 
-Run:  python benchmarks/bench_theta_rotation.py [--quick] [--cases a,b] [--plot PNG]
+Run:  python benchmarks/bench_theta_rotation.py [--quick] [--cases a,b] [--plot PNG] [--clock cpu]
 (``--quick``: five bodies, no DOP853.)  docs/bench_theta_rotation.md holds a recorded run.
 """
 from __future__ import annotations
@@ -39,6 +39,9 @@ from thetasol import integrate_rotation, solve_rotation
 REFS = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "rotation" / "refs.json"
 QUICK = "generic,saddle,rank_one,near_unstable_equilibrium,symmetric_oblate"
 T_END, N_DENSE, T_FAR = 1000.0, 20001, 1e6
+#: the clock of every timing: wall (perf_counter) or this process's CPU time (--clock cpu, for a shared
+#: machine: every method here runs on one thread, so on a quiet machine the two agree)
+CLOCK = [time.perf_counter]
 
 
 # -- heyoka float64, compiled once: the body enters through runtime parameters -------------------
@@ -47,7 +50,7 @@ def heyoka_integrator():
     """(taylor_adaptive in float64 at tol 1e-16 with J, I^-1 and a as parameters, compile seconds)."""
     import heyoka as hy
 
-    start = time.perf_counter()
+    start = CLOCK[0]()
     xs = hy.make_vars(*[f"m{i}" for i in range(3)], *[f"q{i}{j}" for i in range(3) for j in range(3)])
     m, Q = xs[:3], [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]
     p = [hy.par[k] for k in range(27)]
@@ -63,7 +66,7 @@ def heyoka_integrator():
     Qdot = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
     ta = hy.taylor_adaptive(list(zip(xs, mdot + Qdot, strict=True)), np.zeros(12), tol=1e-16,
                             pars=np.zeros(27))
-    return ta, time.perf_counter() - start
+    return ta, CLOCK[0]() - start
 
 
 def heyoka_run(ta, J, a, Q0, w0, grid):
@@ -90,19 +93,19 @@ def bench_body(name, data, ta, quick):
     grid = np.union1d(np.linspace(0.0, T_END, N_DENSE), tr[near])
     at_refs = np.searchsorted(grid, tr[near])
     row = {"case": name}
-    row["setup"], sol = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=1)
+    row["setup"], sol = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=1, clock=CLOCK[0])
     row["method"] = sol.method
-    row["dense"], (w, Q) = best_of(lambda: sol(grid), repeat=3)
+    row["dense"], (w, Q) = best_of(lambda: sol(grid), repeat=3, clock=CLOCK[0])
     row["dense"] /= grid.size
-    row["far"], _ = best_of(lambda: sol(np.array([T_FAR])), repeat=7)
+    row["far"], _ = best_of(lambda: sol(np.array([T_FAR])), repeat=7, clock=CLOCK[0])
     row["err"] = err(w[at_refs], Q[at_refs], wr[near], Qr[near])
     w4, Q4 = sol(tr)
     row["err_4002"] = err(w4, Q4, wr, Qr)
-    hy_run, (w, Q) = best_of(lambda: heyoka_run(ta, J, a, Q0, w0, grid), repeat=3)
+    hy_run, (w, Q) = best_of(lambda: heyoka_run(ta, J, a, Q0, w0, grid), repeat=3, clock=CLOCK[0])
     row["hy_run"], row["hy_dense"], row["hy_err"] = hy_run, hy_run / grid.size, err(w[at_refs], Q[at_refs], wr[near],
                                                                                      Qr[near])
     if not quick:
-        dop, (w, Q) = best_of(lambda: integrate_rotation(J, a, Q0, w0, grid, rtol=1e-13), repeat=1)
+        dop, (w, Q) = best_of(lambda: integrate_rotation(J, a, Q0, w0, grid, rtol=1e-13), repeat=1, clock=CLOCK[0])
         row["dop_run"], row["dop_dense"], row["dop_err"] = dop, dop / grid.size, err(w[at_refs], Q[at_refs],
                                                                                   wr[near], Qr[near])
     return row
@@ -110,10 +113,11 @@ def bench_body(name, data, ta, quick):
 
 def cold_start(data) -> float:
     """Seconds for a fresh process to import thetasol and solve the body (interpreter start excluded)."""
-    code = ("import time; t0 = time.perf_counter(); import numpy as np; from thetasol import solve_rotation; "
+    clock = "process_time" if CLOCK[0] is time.process_time else "perf_counter"
+    code = (f"import time; t0 = time.{clock}(); import numpy as np; from thetasol import solve_rotation; "
             f"d = {json.dumps({k: data[k] for k in ('J', 'a', 'Q0', 'omega0')})}; "
             "solve_rotation(np.diag(d['J']), np.array(d['a']), np.array(d['Q0']), np.array(d['omega0'])); "
-            "print(time.perf_counter() - t0)")
+            f"print(time.{clock}() - t0)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     return float(out.stdout.split()[-1])
 
@@ -183,10 +187,14 @@ def main(argv=None):
     ap.add_argument("--quick", action="store_true", help=f"five bodies ({QUICK}), no DOP853")
     ap.add_argument("--cases", default=None, help="comma-separated reference bodies (default: all)")
     ap.add_argument("--plot", default=None, help="write the ratio plot (needs matplotlib)")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                    help="wall time, or this process's CPU time (on a shared, loaded machine)")
     args = ap.parse_args(argv)
+    CLOCK[0] = time.process_time if args.clock == "cpu" else time.perf_counter
     refs = json.loads(REFS.read_text())
     names = (args.cases or (QUICK if args.quick else ",".join(refs))).split(",")
     print(f"machine: {machine_info('heyoka')}; load average at start {os.getloadavg()[0]:.1f}")
+    print(f"clock: {args.clock} time")
     print(f"dense: {N_DENSE} times on [0, {T_END:g}] plus the reference times; heyoka float64 tol 1e-16; "
           "errors against the 80-bit references at t <= 1000; best of 3 (evaluation, propagation), "
           "one set-up each\n")
