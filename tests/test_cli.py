@@ -17,6 +17,7 @@ def test_demo_as_a_process(tmp_path):
     res = subprocess.run([sys.executable, "-m", "thetasol", "demo", "-o", str(tmp_path / "demo.npz")],
                          capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert res.returncode == 0, res.stderr
+    assert "[1/3] split solution ..." in res.stderr and "[3/3] unsplit multibody reference ..." in res.stderr
     out = res.stdout
     for text in ("effective bodies", "J principal", "principal axes", "mass centre (3.2): closed form",
                  "rotation of core", "numerical", "max abs deviation", "split vs unsplit multibody",
@@ -28,14 +29,87 @@ def test_demo_as_a_process(tmp_path):
     assert (tmp_path / "demo.report.txt").read_text().startswith("scene: station")
 
 
-def test_solve_writes_csv_and_report(tmp_path, capsys):
+def test_solve_writes_csv_report_and_plot(tmp_path, capsys):
+    """-o writes trajectories and report, --plot a PNG; the parts in progress are announced on stderr."""
+    pytest.importorskip("matplotlib")
     out = tmp_path / "sat.csv"
-    assert main(["solve", str(EXAMPLE), "-o", str(out), "--no-check"]) == 0
-    printed = capsys.readouterr().out
+    assert main(["solve", str(EXAMPLE), "-o", str(out), "--no-check", "--plot", str(tmp_path / "sat.png")]) == 0
+    captured = capsys.readouterr()
+    printed = captured.out
     assert "verdict: all checks passed" in printed and "unsplit" not in printed
     header = out.read_text().splitlines()[0]
     assert header.startswith("t,q_x,q_y,q_z") and "magnetometer.Q33" in header
     assert (tmp_path / "sat.report.txt").read_text() in printed + "\n"
+    assert (tmp_path / "sat.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert f"wrote {tmp_path / 'sat.png'}" in printed
+    lines = captured.err.splitlines()       # not a terminal: a line per part
+    assert lines[:2] == ["thetasol: [1/2] split solution ...", "thetasol: [2/2] numerical references ..."]
+    assert lines[2].startswith("thetasol: done in ") and len(lines) == 3
+    assert "-o station.npz" not in printed   # the hint is the demo's
+
+
+def _fake_run(scene, check=True, out=None, progress=None):
+    """A stand-in for scenes.report.run: one static body, the progress calls of a run without multibody."""
+    from thetasol.mechanics.trajectories import Trajectories
+
+    for k, label in enumerate(("split solution", "numerical references", "done")):
+        progress(label, k, 2)
+    t = np.linspace(0.0, 1.0, 5)
+    z = np.zeros((1, 5, 3))
+    traj = Trajectories(t=t, names=("a",), position=z, velocity=z, attitude=np.tile(np.eye(3), (1, 5, 1, 1)),
+                        omega=z, mass_center=z[0], mass_center_velocity=z[0])
+    print("verdict: all checks passed", file=out)
+    return traj, "report\n", []
+
+
+def test_demo_tells_about_output(capsys, monkeypatch):
+    import thetasol.scenes.report as scene_mod
+
+    monkeypatch.setattr(scene_mod, "run", _fake_run)
+    assert main(["demo"]) == 0
+    out = capsys.readouterr().out
+    assert "not written: 'python -m thetasol demo -o station.npz' (or .csv)" in out and "--plot station.png" in out
+
+
+def test_plot_refused_before_solving(tmp_path, capsys, monkeypatch):
+    """A wrong suffix, a missing folder or no matplotlib: exit 2 naming the problem, nothing solved or written."""
+    import thetasol.scenes.report as scene_mod
+
+    def never(*args, **kwargs):
+        raise AssertionError("solved before checking the plot file")
+
+    monkeypatch.setattr(scene_mod, "run", never)
+    assert main(["solve", str(EXAMPLE), "--plot", str(tmp_path / "x.jpg")]) == 2
+    assert ".png, .pdf, .svg" in capsys.readouterr().err
+    assert main(["demo", "--plot", str(tmp_path / "missing" / "x.png")]) == 2
+    assert "does not exist" in capsys.readouterr().err
+    monkeypatch.setitem(sys.modules, "matplotlib", None)       # as if not installed
+    for name in [m for m in sys.modules if m.startswith("matplotlib.") or m == "thetasol.plot"]:
+        monkeypatch.delitem(sys.modules, name)
+    assert main(["demo", "--plot", str(tmp_path / "x.png")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("thetasol: error: --plot: thetasol.plot needs matplotlib") and "thetasol[plot]" in err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_progress_bar_on_a_terminal(monkeypatch):
+    """On a terminal with tqdm installed the parts drive a bar (its description names the part)."""
+    pytest.importorskip("tqdm")
+    import io
+
+    from thetasol.cli import _Progress
+
+    class Terminal(io.StringIO):
+        def isatty(self):
+            return True
+
+    err = Terminal()
+    monkeypatch.setattr(sys, "stderr", err)
+    with _Progress() as progress:
+        progress("split solution", 0, 2)
+        progress("numerical references", 1, 2)
+        assert progress.bar.n == 1 and progress.bar.total == 2
+    assert "numerical references" in err.getvalue() and "thetasol:" not in err.getvalue()
 
 
 @pytest.mark.parametrize("scene_text, match", [

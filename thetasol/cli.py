@@ -4,7 +4,10 @@
 ``demo`` and ``solve`` print the report of :func:`thetasol.scenes.report.run` (effective bodies, the model of each
 part, the exact parts against the numerical references with deviations and timings).
 ``solve`` (and ``demo`` with ``-o``) also writes the trajectories (``.npz`` or ``.csv``)
-and the report (``<stem>.report.txt``), atomically.
+and the report (``<stem>.report.txt``), atomically; with ``--plot FILE`` (``.png``, ``.pdf`` or ``.svg``;
+needs matplotlib, the ``plot`` extra) a figure of the trajectories (:func:`thetasol.plot.trajectories`).
+While they work they show which part is running on stderr (a tqdm bar on a terminal when tqdm is
+installed, else a line per part).
 
 ``reference list`` prints the exact reference cases of :mod:`thetasol.reference`;
 ``reference export NAME -o FILE [--t0 T0 --t1 T1 --n N]`` writes one case's exact states on ``N``
@@ -18,6 +21,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
+import time
 
 from thetasol._version import __version__
 
@@ -46,6 +50,8 @@ def _parser() -> argparse.ArgumentParser:
                                               "(and the report to <stem>.report.txt)")
         q.add_argument("--no-check", action="store_true",
                        help="skip the unsplit multibody reference (the slowest comparison)")
+        q.add_argument("--plot", metavar="FILE", help="write a figure of the trajectories (.png, .pdf or .svg; "
+                                                      "needs matplotlib: pip install \"thetasol[plot]\")")
     return p
 
 
@@ -53,6 +59,10 @@ def _check_output(path: str) -> None:
     """Refuse an output path that cannot be written, before the (long) solve."""
     if not path.lower().endswith((".npz", ".csv")):
         raise ValueError(f"output file must end in .npz or .csv, got {path!r}")
+    _check_folder(path)
+
+
+def _check_folder(path: str) -> None:
     folder = os.path.dirname(os.path.abspath(path))
     if not os.path.isdir(folder):
         raise ValueError(f"output directory {folder!r} does not exist (for {path!r})")
@@ -72,16 +82,81 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.output is not None:
             _check_output(args.output)
+        if args.plot is not None:
+            _check_plot(args.plot)
         path = demo_scene_path() if args.command == "demo" else args.scene
         scene = load_scene(path)
-        traj, report, checks = run(scene, check=not args.no_check, out=sys.stdout)
+        with _Progress() as progress:
+            traj, report, checks = run(scene, check=not args.no_check, out=sys.stdout, progress=progress)
         if args.output is not None:
             for p in write_trajectories(traj, args.output, report=report):
                 print(f"wrote {p}")
+        if args.plot is not None:
+            print(f"wrote {_write_plot(traj, args.plot)}")
+        if args.command == "demo" and args.output is None:
+            print(_OUTPUT_HINT + ("; '--plot station.png' draws them" if args.plot is None else ""))
     except ValueError as exc:
         print(f"thetasol: error: {exc}", file=sys.stderr)
         return 2
     return 0 if all(c.ok for c in checks) else 1
+
+
+_OUTPUT_HINT = ("the trajectories were not written: 'python -m thetasol demo -o station.npz' (or .csv) writes "
+                "them and this report (station.report.txt)")
+_PLOT_SUFFIXES = (".png", ".pdf", ".svg")
+
+
+def _check_plot(path: str) -> None:
+    """Refuse a plot file that cannot be written, or matplotlib missing, before the (long) solve."""
+    if not path.lower().endswith(_PLOT_SUFFIXES):
+        raise ValueError(f"plot file must end in {', '.join(_PLOT_SUFFIXES)}, got {path!r}")
+    _check_folder(path)
+    try:
+        import thetasol.plot  # noqa: F401
+    except ImportError as exc:
+        raise ValueError(f"--plot: {exc}") from None
+
+
+def _write_plot(traj, path: str) -> str:
+    """Draw the trajectories (thetasol.plot.trajectories) into ``path``; no pyplot state is touched."""
+    from matplotlib.figure import Figure
+
+    from thetasol.plot import trajectories
+
+    fig = trajectories(traj, fig=Figure(figsize=(11, 8), dpi=100))
+    fig.savefig(path)
+    return path
+
+
+class _Progress:
+    """``run``'s progress on stderr: a tqdm bar on a terminal when tqdm is installed, else a line per part."""
+
+    def __enter__(self):
+        self.bar = None
+        self.start = time.perf_counter()
+        if sys.stderr.isatty():
+            try:
+                from tqdm import tqdm
+            except ImportError:
+                pass
+            else:
+                self.bar = tqdm(total=1, unit="part", file=sys.stderr, leave=False)
+        return self
+
+    def __call__(self, label: str, k: int, n: int) -> None:
+        if self.bar is not None:
+            self.bar.total = n
+            self.bar.n = k
+            self.bar.set_description(label)
+            self.bar.refresh()
+        elif label == "done":
+            print(f"thetasol: done in {time.perf_counter() - self.start:.1f} s", file=sys.stderr, flush=True)
+        else:
+            print(f"thetasol: [{k + 1}/{n}] {label} ...", file=sys.stderr, flush=True)
+
+    def __exit__(self, *exc) -> None:
+        if self.bar is not None:
+            self.bar.close()
 
 
 def _reference(args) -> int:

@@ -28,6 +28,13 @@ and no torque.  The row joins the joint rows of the same KKT system with
 ``gdot = q.qdot / R`` and ``gamma = |qdot|^2 / R`` (``gddot = G acc + gamma``).  This models the
 rod of the paper without choosing a material attachment point (the mass centre is none).
 
+With ``constraint=Pivot(body, point, position)`` (Section 5) the point ``point`` of ``body`` is
+held at ``position`` in space by a spherical joint to the ground: three more rows
+``g = x_B + Q_B rho - position = 0``, ``rho = point - c_B``, the joint rows with the ground as the
+other body (``G = [1, -Q_B hat(rho)]``, ``gamma = Q_B (omega x (omega x rho))``).  Nothing else
+changes: no effective body, no pivot inertia.  The initial state is the joints' one moved so that
+the pivot sits at ``position`` with zero velocity (``q0`` and ``v0`` follow; given ones must agree).
+
 The ODE is integrated by :func:`scipy.integrate.solve_ivp` (DOP853 by default).  Dense
 maximal coordinates are slow compared with the split (it is a reference, not the product),
 but they are transparent, and the code is short enough to audit.  It also serves users as
@@ -47,10 +54,10 @@ from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize, vee
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
-from thetasol.mechanics.constraints import Sphere
+from thetasol.mechanics.constraints import Pivot, Sphere
 from thetasol.mechanics.trajectories import Trajectories
 
-__all__ = ["initial_state", "integrate_multibody"]
+__all__ = ["initial_state", "pivot_initial_state", "integrate_multibody"]
 
 
 def initial_state(config: Configuration, q0: ArrayLike, v0: ArrayLike, Q0: Mapping[str, ArrayLike],
@@ -96,13 +103,46 @@ def initial_state(config: Configuration, q0: ArrayLike, v0: ArrayLike, Q0: Mappi
     return x, v, Q0, w0
 
 
+def pivot_initial_state(config: Configuration, pivot: Pivot, q0: ArrayLike | None, v0: ArrayLike | None,
+                        Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike]
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`initial_state` with the pivot at its place and at rest; ``q0``, ``v0`` (if given) checked.
+
+    Raises
+    ------
+    ValueError
+        The pivot's body is not in ``config``, or a given ``q0`` / ``v0`` differs from the one the
+        pivot implies by more than 1e-12 of the configuration's size and speed.
+    """
+    if not isinstance(pivot, Pivot):
+        raise ValueError(f"pivot must be a Pivot, got {type(pivot).__name__}")
+    if pivot.body not in config.bodies:
+        raise ValueError(f"pivot body {pivot.body!r} is not in the configuration; bodies are {config.order}")
+    x, v, Q, w = initial_state(config, np.zeros(3), np.zeros(3), Q0, omega0)
+    i = config.order.index(pivot.body)
+    rho = pivot.point - config.bodies[pivot.body].center
+    x += pivot.position - (x[i] + Q[i] @ rho)
+    v -= v[i] + Q[i] @ np.cross(w[i], rho)
+    m = np.array([config.bodies[n].mass for n in config.order])
+    q, qd = m @ x / m.sum(), m @ v / m.sum()
+    size = 1.0 + float(np.max(np.abs(x - pivot.position)))
+    speed = 1e-300 + float(np.max(np.abs(v)))
+    for given, implied, scale, what in ((q0, q, size, "q0"), (v0, qd, speed, "v0")):
+        if given is not None and np.max(np.abs(V.vector3(given, what) - implied)) > 1e-12 * scale:
+            raise ValueError(f"{what} = {np.asarray(given, float).tolist()} disagrees with the pivot, which puts "
+                             f"it at {implied.tolist()}; pass None")
+    return x, v, Q, w
+
+
 class _System:
     """Right-hand side of the maximal-coordinate equations (module docstring)."""
 
-    def __init__(self, config, a, b, alpha, kappa, radius=None):
+    def __init__(self, config, a, b, alpha, kappa, radius=None, pivot=None):
         self.radius = radius  # of the sphere constraint on the system mass centre, or None
         self.names = config.order
         idx = {n: i for i, n in enumerate(self.names)}
+        self.pivot = None if pivot is None else (idx[pivot.body], pivot.point - config.bodies[pivot.body].center,
+                                                 pivot.position)
         bodies = [config.bodies[n] for n in self.names]
         self.N = N = len(bodies)
         self.m = np.array([b_.mass for b_ in bodies])
@@ -182,6 +222,23 @@ class _System:
         rhs = -(qd @ qd / R + 2 * self.alpha * (q @ qd) / R + self.alpha ** 2 * g)
         return G.reshape(1, 6 * self.N), np.array([rhs])
 
+    def _pivot_rows(self, x, v, Q, w):
+        """The rows (3, 6N) of ``g = x_B + Q_B rho - position`` and their right-hand side (module docstring)."""
+        i, rho, pos = self.pivot
+        G = np.zeros((3, self.N, 6))
+        G[:, i, :3] = np.eye(3)
+        G[:, i, 3:] = -Q[i] @ hat(rho)
+        wr = np.cross(w[i], rho)
+        g = x[i] + Q[i] @ rho - pos
+        gd = v[i] + Q[i] @ wr
+        gamma = Q[i] @ np.cross(w[i], wr)
+        return G.reshape(3, 6 * self.N), -(gamma + 2 * self.alpha * gd + self.alpha ** 2 * g)
+
+    def pivot_residual(self, x, Q):
+        """``|x_B + Q_B rho - position|`` of the states (..., N, ...) of :meth:`unpack`."""
+        i, rho, pos = self.pivot
+        return np.linalg.norm(x[..., i, :] + Q[..., i, :, :] @ rho - pos, axis=-1)
+
     def __call__(self, _t, y):
         N, K = self.N, self.K
         x, v, Q, w = self.unpack(y)
@@ -193,10 +250,11 @@ class _System:
         f[:, :3] = -self.m[:, None] * (x @ a + 0.5 * self.b)
         f[:, 3:] = np.einsum("nji,nj->ni", Q, tau_space) - cross(w, Iw)
         f = f.ravel()
-        if K or self.radius is not None:
+        if K or self.radius is not None or self.pivot is not None:
             G, rhs = self._joint_rows(x, v, Q, w)
-            if self.radius is not None:
-                Gs, rs = self._sphere_row(x, v)
+            extra = [] if self.radius is None else [self._sphere_row(x, v)]
+            extra += [] if self.pivot is None else [self._pivot_rows(x, v, Q, w)]
+            for Gs, rs in extra:
                 G, rhs = np.concatenate([G, Gs]), np.concatenate([rhs, rs])
             MG = self.Minv @ G.T
             acc = self.Minv @ f
@@ -215,7 +273,7 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
                         Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike], t: ArrayLike,
                         rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
                         alpha: float | None = None, kappa: float | None = None,
-                        constraint: Sphere | None = None) -> Trajectories:
+                        constraint: Sphere | Pivot | None = None) -> Trajectories:
     """Integrate a tree of rigid bodies on spherical joints in ``phi(x) = 1/2 x^T a x + 1/2 b^T x``.
 
     Parameters
@@ -246,14 +304,17 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     constraint : Sphere, optional
         Hold the system mass centre on ``|q| = constraint.radius`` (Theorem 3; module
         docstring).  Needs ``b = 0``, ``|q0| = radius`` and ``v0`` tangent
-        (:meth:`Sphere.check`, else ``ValueError``).
+        (:meth:`Sphere.check`, else ``ValueError``).  A :class:`Pivot` holds one point of any body
+        fixed in space (Section 5); ``q0`` and ``v0`` then follow from the attitudes and may be
+        ``None`` (given ones must agree to 1e-12 relative, else ``ValueError``).
 
     Returns
     -------
     Trajectories
         ``info`` holds ``"constraint_residual"`` (max joint gap), ``"orthogonality"``
         (max ``|Q^T Q - 1|`` before the output projection), ``"nfev"``, ``"seconds"``; with a
-        constraint also ``"sphere_residual"`` (max ``| |q| - radius |``).
+        sphere also ``"sphere_residual"`` (max ``| |q| - radius |``), with a pivot
+        ``"pivot_residual"`` (max distance of the pivot from its place).
 
     Notes
     -----
@@ -271,15 +332,19 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     if not (0 < rtol < 1):
         raise ValueError(f"rtol must be in (0, 1), got {rtol}")
     atol = 1e-3 * rtol if atol is None else float(atol)
-    if constraint is not None:
-        if not isinstance(constraint, Sphere):
-            raise ValueError(f"constraint must be a Sphere or None, got {type(constraint).__name__}")
-        b, q0, v0 = constraint.check(b, q0, v0)
-    x, v, Q, w = initial_state(config, q0, v0, Q0, omega0)
+    if isinstance(constraint, Pivot):
+        x, v, Q, w = pivot_initial_state(config, constraint, q0, v0, Q0, omega0)
+    else:
+        if constraint is not None:
+            if not isinstance(constraint, Sphere):
+                raise ValueError(f"constraint must be a Sphere, a Pivot or None, got {type(constraint).__name__}")
+            b, q0, v0 = constraint.check(b, q0, v0)
+        x, v, Q, w = initial_state(config, q0, v0, Q0, omega0)
     if alpha is None:
         alpha = max(1.0, float(np.max(np.linalg.norm(w, axis=1))) + float(np.sqrt(np.max(np.abs(np.linalg.eigvalsh(a))))))
     kappa = alpha if kappa is None else float(kappa)
-    sys = _System(config, a, b, float(alpha), kappa, None if constraint is None else constraint.radius)
+    sys = _System(config, a, b, float(alpha), kappa, constraint.radius if isinstance(constraint, Sphere) else None,
+                  constraint if isinstance(constraint, Pivot) else None)
     y0 = sys.pack(x, v, Q, w)
     start = time.perf_counter()
     if tt[-1] > 0:
@@ -302,7 +367,9 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     info = {"model": "multibody (maximal coordinates, KKT, Baumgarte)", "method": method, "rtol": rtol,
             "atol": atol, "alpha": float(alpha), "kappa": kappa, "nfev": int(nfev), "seconds": seconds,
             "constraint_residual": resid, "orthogonality": ortho}
-    if constraint is not None:
+    if isinstance(constraint, Sphere):
         info["sphere_residual"] = float(np.max(np.abs(constraint.residual(mc))))
+    if isinstance(constraint, Pivot):
+        info["pivot_residual"] = float(np.max(sys.pivot_residual(states[0], states[2])))
     return Trajectories(t=tt.copy(), names=tuple(sys.names), position=X, velocity=Vel, attitude=Qs, omega=W,
                         mass_center=mc, mass_center_velocity=mcv, info=info)

@@ -3,7 +3,7 @@
 A scene (TOML, read with the standard library's :mod:`tomllib`; format in
 docs/scene_format.md) gives bodies, joints, the potential (2.4), the initial state and the
 output times, and optionally a ``[constraint]`` on the system mass centre (the sphere of
-Theorem 3).  :func:`load_scene` reads and validates one; every error is a ``ValueError``
+Theorem 3) or a ``[fixed_point]``: a point of the main body held fixed in space (Section 5).  :func:`load_scene` reads and validates one; every error is a ``ValueError``
 naming the file and the entry.  Unknown keys are errors: a typo must not change the physics.
 """
 from __future__ import annotations
@@ -20,13 +20,15 @@ from thetasol.core import validate as V
 from thetasol.core.so3 import rodrigues
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
-from thetasol.mechanics.constraints import Sphere
+from thetasol.mechanics.constraints import Pivot, Sphere, pivot_mass_center
 from thetasol.mechanics.trajectories import Trajectories
+from thetasol.scenes.fixed_point import solve_fixed_point
 from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
 
 __all__ = ["Scene", "load_scene", "demo_scene_path"]
 
-_TOP_KEYS = {"name", "description", "bodies", "joints", "potential", "initial", "output", "solver", "constraint"}
+_TOP_KEYS = {"name", "description", "bodies", "joints", "potential", "initial", "output", "solver", "constraint",
+             "fixed_point"}
 _BODY_KEYS = {"name", "mass", "J", "I", "center", "box", "masses", "points"}
 _JOINT_KEYS = {"parent", "child", "parent_point", "child_point"}
 _SOLVER_KEYS = {"rtol", "method", "rotation", "make_central", "check_multibody", "check_t_end", "check_rtol"}
@@ -54,6 +56,9 @@ class Scene:
         ``make_central``.
     constraint : Sphere or None
         The system mass centre held on a sphere about the origin (Theorem 3), if any.
+    fixed_point : Pivot or None
+        A point of the main body (the root) held fixed in space (Section 5), if any; ``q0`` and
+        ``v0`` are then the ones it implies.
     """
 
     config: Configuration
@@ -68,10 +73,15 @@ class Scene:
     description: str = ""
     solver: dict = field(default_factory=dict)
     constraint: Sphere | None = None
+    fixed_point: Pivot | None = None
 
     def solution(self, rotation: str | None = None) -> ConfigurationSolution:
         """The split solution (:func:`~thetasol.scenes.pipeline.solve_configuration`) with the scene's options."""
         s = self.solver
+        if self.fixed_point is not None:
+            return solve_fixed_point(self.config, self.a, self.b, self.fixed_point, self.Q0, self.omega0,
+                                     rotation=rotation or s.get("rotation", "auto"), rtol=s.get("rtol", 1e-12),
+                                     method=s.get("method", "DOP853"))
         return solve_configuration(self.config, self.a, self.b, self.q0, self.v0, self.Q0, self.omega0,
                                    rotation=rotation or s.get("rotation", "auto"), rtol=s.get("rtol", 1e-12),
                                    method=s.get("method", "DOP853"), constraint=self.constraint)
@@ -300,6 +310,38 @@ def _constraint(d: Mapping, b: np.ndarray, q0: np.ndarray, v0: np.ndarray) -> Sp
     return sphere
 
 
+def _fixed_point(d: Mapping, config: Configuration) -> Pivot | None:
+    """The ``[fixed_point]`` (``body``, ``point``, ``position``): a point of the main body fixed in space."""
+    if "fixed_point" not in d:
+        return None
+    f = _table(d, "fixed_point")
+    _unknown(f, {"body", "point", "position"}, "[fixed_point]")
+    for k in ("body", "point"):
+        if k not in f:
+            raise ValueError(f"[fixed_point] needs '{k}'")
+    body = f["body"]
+    if not isinstance(body, str) or body not in config.bodies:
+        raise ValueError(f"fixed_point.body: unknown body {body!r}; bodies are {config.order}")
+    if body != config.root:
+        raise ValueError(f"fixed_point.body {body!r} is not the main body (the root of the joint tree, "
+                         f"{config.root!r}): Section 5 fixes a point of the main body, and a pivot in another "
+                         f"body ties the rotations on its path to the root together; write the joints with "
+                         f"{body!r} as the root")
+    if "constraint" in d:
+        raise ValueError("[fixed_point] and [constraint] together: with a fixed point the system mass centre "
+                         "already stays at the fixed distance |c - r_P| from the pivot, so a sphere either "
+                         "repeats that (drop [constraint]) or over-constrains the configuration")
+    ini = d.get("initial", {})
+    given = [k for k in ("q", "v") if isinstance(ini, dict) and k in ini]
+    if given:
+        raise ValueError(f"initial.{given[0]}: with [fixed_point] the system mass centre and its velocity follow "
+                         "from the pivot and the main body's attitude and angular velocity; omit "
+                         + " and ".join(f"initial.{k}" for k in given))
+    point = _array(f["point"], "fixed_point.point", (3,))
+    position = _array(f.get("position", [0.0, 0.0, 0.0]), "fixed_point.position", (3,))
+    return Pivot(body, point, position)
+
+
 def _output(d: Mapping) -> np.ndarray:
     """The output times: ``times``, or ``samples`` points on ``[0, t_end]``."""
     out = _table(d, "output")
@@ -376,7 +418,11 @@ def _build_scene(d: Any) -> Scene:
     config = _configuration(list(byname.values()), raw_joints, make_central)
     a, b = _potential(d)
     q0, v0, Q0, w0 = _initial(d, config.order)
+    pivot = _fixed_point(d, config)
+    if pivot is not None:
+        q0, v0 = pivot_mass_center(pivot, config.effective_body(config.root).center, Q0[config.root],
+                                   w0[config.root])
     constraint = _constraint(d, b, q0, v0)
     t = _output(d)
     return Scene(config=config, a=a, b=b, q0=q0, v0=v0, Q0=Q0, omega0=w0, t=t, name=name, description=desc,
-                 solver=_solver_options(solver, t, make_central), constraint=constraint)
+                 solver=_solver_options(solver, t, make_central), constraint=constraint, fixed_point=pivot)

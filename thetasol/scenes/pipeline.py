@@ -44,7 +44,7 @@ from thetasol.solutions.base import ClosedFormUnavailable, Solution
 from thetasol.solutions.mass_center import MassCenterMotion
 from thetasol.solutions.neumann import NeumannSolution, solve_neumann
 
-__all__ = ["ConfigurationSolution", "solve_configuration", "rotation_kind", "closed_form_rotation"]
+__all__ = ["ConfigurationSolution", "solve_configuration", "rotation_kind", "closed_form_rotation", "effective_rotations"]
 
 
 def rotation_kind(a: ArrayLike) -> str:
@@ -210,11 +210,17 @@ def _check_arguments(config: Configuration, rotation: str, check_central: bool, 
         config.check_central()
 
 
-def _rotations(config: Configuration, a: np.ndarray, Qa: np.ndarray, wa: np.ndarray, rotation: str,
-               rtol: float, method: str, kind: str) -> tuple[dict, dict]:
-    """The rotation solution of every effective body and its diagnostics (model, reason, seconds)."""
+def effective_rotations(config: Configuration, a: np.ndarray, Qa: np.ndarray, wa: np.ndarray, rotation: str,
+                        rtol: float, method: str, kind: str, skip: tuple[str, ...] = ()) -> tuple[dict, dict]:
+    """The rotation of every effective body (Theorem 2) but those in ``skip``, and its diagnostics.
+
+    Each body gets its closed form when one applies (``rotation='auto'``), else ``integrate_rotation``;
+    the diagnostics give per body the model, the reason a closed form was not used and the set-up seconds.
+    """
     sols, diag = {}, {}
     for i, (n, e) in enumerate(config.effective_bodies().items()):
+        if n in skip:
+            continue
         start = time.perf_counter()
         sol, why = (None, "rotation='numerical'") if rotation == "numerical" else \
             closed_form_rotation(e.J, a, Qa[i], wa[i])
@@ -319,7 +325,7 @@ def solve_configuration(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     Qa, wa = initial_attitudes(config, Q0, omega0)
     mc, mc_model, mc_why, mc_seconds = _mass_center(a, b, q0, v0, constraint, rtol)
     kind = rotation_kind(a)
-    rots, rot_diag = _rotations(config, a, Qa, wa, rotation, rtol, method, kind)
+    rots, rot_diag = effective_rotations(config, a, Qa, wa, rotation, rtol, method, kind)
     models = {"mass_center": mc_model, "rotations": {n: r["model"] for n, r in rot_diag.items()}}
     diagnostics = {"models": models, "rotation_kind": kind, "rotations": rot_diag, "mass_center_reason": mc_why,
                    "mass_center_setup_seconds": mc_seconds,

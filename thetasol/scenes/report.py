@@ -11,6 +11,10 @@ that do not use them, each with its max deviation, a stated tolerance and timing
   (tolerance 1e-8);
 * the whole split against the unsplit multibody system of :mod:`thetasol.integrators.multibody`
   (tolerance ``10 check_rtol (1 + t) (1 + max |x|)``, docs/mechanics.md);
+* with a ``[fixed_point]`` (Section 5): the main body's closed form about the pivot against
+  :func:`thetasol.integrators.fixed_point.integrate_fixed_point` at rtol 1e-13 (tolerance 1e-8;
+  no mass-centre check, the pivot fixes it), and the unsplit system with the pivot as a spherical
+  joint to the ground;
 
 and the drift of the first integrals (4.9), (4.13), (4.12) along each rotation; then when the closed
 form pays off: from this run's set-up, evaluation and integration times, the horizon beyond which the
@@ -22,17 +26,20 @@ from __future__ import annotations
 import importlib
 import io
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import TextIO
 
 import numpy as np
 from scipy.integrate import solve_ivp
 
+from thetasol.integrators.fixed_point import fixed_point_energy, integrate_fixed_point
 from thetasol.integrators.multibody import integrate_multibody
 from thetasol.integrators.rotation import integrate_rotation
 from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import invariants
 from thetasol.mechanics.trajectories import Trajectories
+from thetasol.scenes.fixed_point import pivoted_body
 from thetasol.scenes.format import Scene
 from thetasol.scenes.pipeline import ConfigurationSolution, rotation_kind
 
@@ -47,6 +54,9 @@ class Check:
     deviation: float
     tolerance: float
     seconds: str
+    #: the effective body of a rotation against integrate_rotation, and that integration's seconds
+    body: str = ""
+    reference_seconds: float | None = None
 
     @property
     def ok(self) -> bool:
@@ -103,6 +113,8 @@ def _describe_scene(scene: Scene, say: _Text) -> None:
     if scene.constraint is not None:
         say(f"constraint: the system mass centre on the sphere |q| = {scene.constraint.radius:g} about the origin "
             "(Theorem 3, Neumann's problem)")
+    if scene.fixed_point is not None:
+        _describe_pivot(scene, say)
     say(f"output: {t.size} times in [{t[0]:g}, {t[-1]:g}]")
     say()
     say("effective bodies (2.15), (3.7), in each body's frame:")
@@ -114,9 +126,21 @@ def _describe_scene(scene: Scene, say: _Text) -> None:
     say()
 
 
+def _describe_pivot(scene: Scene, say: _Text) -> None:
+    """The fixed point and the main effective body about it, (5.1)-(5.3)."""
+    p = scene.fixed_point
+    pb = pivoted_body(scene.config, p, scene.a, scene.b)
+    say(f"fixed point (Section 5): the point {_fmt(p.point)} of the main body {p.body!r} held at {_fmt(p.position)}")
+    say(f"  main effective body about it: mass {pb.mass:.6g}, R (5.1) {_fmt(pb.R)}, "
+        f"I (5.2) principal {_fmt(np.linalg.eigvalsh(pb.I))}")
+    say(f"  potential about the pivot: a as given, b + 2 a x_P = {_fmt(pb.b)}; case: {pb.case}")
+
+
 def _describe_models(sol: ConfigurationSolution, say: _Text) -> None:
     say("models:")
-    if sol.constraint is not None:
+    if "pivoted_body" in sol.diagnostics:
+        say(f"  mass centre: {sol.diagnostics['models']['mass_center']}")
+    elif sol.constraint is not None:
         say(f"  mass centre (6.1)-(6.2): {sol.diagnostics['models']['mass_center']}")
         if sol.diagnostics["mass_center_reason"]:
             say(f"    (no closed form: {sol.diagnostics['mass_center_reason']})")
@@ -133,12 +157,11 @@ def _describe_models(sol: ConfigurationSolution, say: _Text) -> None:
     say()
 
 
-def _reference_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectories) -> tuple[list[Check], dict]:
-    """The closed-form mass centre against DOP853, each closed-form rotation against integrate_rotation.
-
-    Also returns the seconds of each rotation's reference integration (name -> seconds).
-    """
+def _reference_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectories) -> list[Check]:
+    """The closed-form mass centre against DOP853, each closed-form rotation against integrate_rotation."""
     t = scene.t
+    if scene.fixed_point is not None:
+        return _pivot_checks(scene, sol, traj)
     start = time.perf_counter()
     qn, vn = _mass_center_numerical(scene.a, scene.b, scene.q0, scene.v0, t, scene.constraint)
     ref_seconds = time.perf_counter() - start
@@ -152,25 +175,52 @@ def _reference_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectori
         gap = float(np.max(np.abs(scene.constraint.residual(traj.mass_center)))) / R
         # the models put the point on the unit sphere to rounding: measured 5.6e-16 (tests/test_constrained_scene.py)
         checks.append(Check(f"mass centre on |q| = {R:g}: max ||q| - R| / R", gap, 1e-13, "-"))
-    ref_seconds_of = {}
+    return checks + _rotation_checks(scene, sol, traj, skip_root=False)
+
+
+def _rotation_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectories, skip_root: bool) -> list[Check]:
+    """Each closed-form rotation of an effective body about its mass centre against integrate_rotation."""
+    checks, t = [], scene.t
     for i, n in enumerate(traj.names):
         r = traj.info["rotations"][n]
-        if not r["closed_form"]:
+        if not r["closed_form"] or (skip_root and i == 0):
             continue
         e = scene.config.effective_body(n)
         start = time.perf_counter()
         wn, Qn = integrate_rotation(e.J, scene.a, scene.Q0[n], scene.omega0[n], t, rtol=1e-13)
-        ref_seconds = ref_seconds_of[n] = time.perf_counter() - start
+        ref_seconds = time.perf_counter() - start
         dev = max(float(np.max(np.abs(Qn - traj.attitude[i]))), float(np.max(np.abs(wn - traj.omega[i]))))
         checks.append(Check(f"rotation of {n}: {sol.rotations[n].method} vs integrate_rotation (DOP853, rtol 1e-13)",
-                            dev, 1e-8, f"{r['seconds'] * 1e3:.1f} ms vs {ref_seconds * 1e3:.1f} ms"))
-    return checks, ref_seconds_of
+                            dev, 1e-8, f"{r['seconds'] * 1e3:.1f} ms vs {ref_seconds * 1e3:.1f} ms",
+                            body=n, reference_seconds=ref_seconds))
+    return checks
+
+
+def _pivot_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectories) -> list[Check]:
+    """The main body's closed form about the pivot against integrate_fixed_point; the others as usual."""
+    checks, n = [], traj.names[0]
+    r = traj.info["rotations"][n]
+    if r["closed_form"]:
+        pb = sol.diagnostics["pivoted_body"]
+        start = time.perf_counter()
+        wn, Qn = integrate_fixed_point(pb.J, pb.R, scene.a, pb.b, scene.Q0[n], scene.omega0[n], scene.t, rtol=1e-13)
+        ref_seconds = time.perf_counter() - start
+        dev = max(float(np.max(np.abs(Qn - traj.attitude[0]))), float(np.max(np.abs(wn - traj.omega[0]))))
+        checks.append(Check(f"rotation of {n} about the pivot: {sol.rotations[n].method} vs integrate_fixed_point "
+                            "(DOP853, rtol 1e-13)", dev, 1e-8,
+                            f"{r['seconds'] * 1e3:.1f} ms vs {ref_seconds * 1e3:.1f} ms"))
+    return checks + _rotation_checks(scene, sol, traj, skip_root=True)
 
 
 def _drift(scene: Scene, traj: Trajectories, say: _Text) -> None:
     say()
     say("first integrals of each effective rotation along the solution (max relative drift):")
     for i, n in enumerate(traj.names):
+        if i == 0 and scene.fixed_point is not None:
+            pb = pivoted_body(scene.config, scene.fixed_point, scene.a, scene.b)
+            E = fixed_point_energy(pb.J, pb.R, scene.a, pb.b, traj.attitude[0], traj.omega[0])
+            say(f"  {n} about the pivot: energy (5.3) {float(np.max(np.abs(E - E[0])) / max(abs(E[0]), 1e-300)):.1e}")
+            continue
         e = scene.config.effective_body(n)
         inv = invariants(e.J, scene.a, traj.attitude[i], traj.omega[i])
         drift = {}
@@ -192,9 +242,11 @@ def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say
     t_end = min(float(s.get("check_t_end", t[-1])), float(t[-1]))
     sel = t <= t_end
     say()
-    say(f"the split against the unsplit multibody system (maximal coordinates, KKT, t <= {t_end:g}):")
+    pivot = scene.fixed_point
+    say(f"the split against the unsplit multibody system (maximal coordinates, KKT, t <= {t_end:g}"
+        + (", the pivot a spherical joint to the ground):" if pivot is not None else "):"))
     mb = integrate_multibody(scene.config, scene.a, scene.b, scene.q0, scene.v0, scene.Q0, scene.omega0, t[sel],
-                             rtol=s.get("check_rtol", 1e-12), constraint=scene.constraint)
+                             rtol=s.get("check_rtol", 1e-12), constraint=scene.constraint if pivot is None else pivot)
     sub = Trajectories(t=t[sel], names=traj.names, position=traj.position[:, sel],
                        velocity=traj.velocity[:, sel], attitude=traj.attitude[:, sel], omega=traj.omega[:, sel],
                        mass_center=traj.mass_center[sel], mass_center_velocity=traj.mass_center_velocity[sel])
@@ -206,7 +258,8 @@ def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say
     say(f"  positions {dv['position']:.2e}, velocities {dv['velocity']:.2e}, attitudes {dv['attitude']:.2e}, "
         f"angular velocities {dv['omega']:.2e}")
     say(f"  multibody: {mb.info['nfev']} right-hand sides, max joint gap {mb.info['constraint_residual']:.1e}"
-        + (f", max sphere gap ||q| - R| {mb.info['sphere_residual']:.1e}" if scene.constraint is not None else ""))
+        + (f", max sphere gap ||q| - R| {mb.info['sphere_residual']:.1e}" if scene.constraint is not None else "")
+        + (f", max pivot gap {mb.info['pivot_residual']:.1e}" if pivot is not None else ""))
     check = Check("split vs unsplit multibody: positions and attitudes", max(dv["position"], dv["attitude"]), tol,
                   f"split {split_seconds:.2f} s vs multibody {mb.info['seconds']:.2f} s")
     say(check.line())
@@ -278,7 +331,21 @@ def _pays_off(scene: Scene, sol: ConfigurationSolution, traj: Trajectories, ref_
     say("  " + _ACCURACY)
 
 
-def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Trajectories, str, list[Check]]:
+def _stepper(progress: Callable[[str, int, int], None] | None, multibody: bool) -> Callable[[], None]:
+    """Each call announces the next part of :func:`run` as ``progress(label, k, n)`` before part ``k``
+    of ``n`` starts; the call after the last part sends ``progress("done", n, n)``."""
+    labels = ["split solution", "numerical references"] + (["unsplit multibody reference"] if multibody else [])
+    parts = iter(range(len(labels) + 1))
+
+    def step() -> None:
+        k = next(parts)
+        if progress is not None:
+            progress(labels[k] if k < len(labels) else "done", k, len(labels))
+    return step
+
+
+def run(scene: Scene, check: bool = True, out: TextIO | None = None,
+        progress: Callable[[str, int, int], None] | None = None) -> tuple[Trajectories, str, list[Check]]:
     """Solve a scene by the split and compare its exact parts with the numerical references.
 
     Parameters
@@ -288,6 +355,9 @@ def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Tr
         Also run the unsplit multibody reference (if the scene's ``check_multibody`` allows).
     out : text stream, optional
         Where to print the report as it is produced (besides returning it).
+    progress : callable, optional
+        ``progress(label, k, n)`` is called as part ``k`` of ``n`` starts (the split solution, the
+        numerical references, the multibody reference) and as ``progress("done", n, n)`` at the end.
 
     Returns
     -------
@@ -298,8 +368,11 @@ def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Tr
         Every comparison with its tolerance; ``all(c.ok for c in checks)`` is the verdict.
     """
     say = _Text(out)
+    multibody = check and scene.solver.get("check_multibody", True)
+    step = _stepper(progress, multibody)
     _describe_scene(scene, say)
     import_seconds = _load_closed_forms(scene)
+    step()
     start = time.perf_counter()
     sol = scene.solution()
     setup_seconds = time.perf_counter() - start
@@ -308,17 +381,21 @@ def run(scene: Scene, check: bool = True, out: TextIO | None = None) -> tuple[Tr
     _describe_models(sol, say)
 
     say("exact parts against the numerical references (max abs deviation):")
-    checks, ref_seconds = _reference_checks(scene, sol, traj)
+    step()
+    checks = _reference_checks(scene, sol, traj)
     for c in checks:
         say(c.line())
     if not any(r["closed_form"] for r in traj.info["rotations"].values()):
         say("  rotations: no closed form applies to these data; they ARE the numerical reference")
     _drift(scene, traj, say)
-    multibody = None
-    if check and scene.solver.get("check_multibody", True):
-        mb_check, *multibody = _multibody_check(scene, traj, split_seconds, say)
+    mb_cost = None
+    if multibody:
+        step()
+        mb_check, *mb_cost = _multibody_check(scene, traj, split_seconds, say)
         checks.append(mb_check)
-    _pays_off(scene, sol, traj, ref_seconds, multibody, say)
+    ref_seconds = {c.body: c.reference_seconds for c in checks if c.body and c.reference_seconds is not None}
+    _pays_off(scene, sol, traj, ref_seconds, mb_cost, say)
+    step()
     say()
     say(f"timings: split solution {split_seconds:.3f} s = set-up {setup_seconds:.3f} s + evaluation "
         f"{split_seconds - setup_seconds:.3f} s at {scene.t.size} times (mass centre "

@@ -81,15 +81,20 @@ def _refuse_small_spin(Jp, a, w0p, spin, M0, u0) -> None:
             f"|omega0| + sqrt|a|, below {MIN_AXIAL_SPIN:g}): the spectral curve is at or near a tacnode "
             "over E = infinity (the axis moves as in Neumann's problem, genus 2), which is not "
             "implemented; use thetasol.integrate_rotation")
-    Js = Jp.copy()
-    i = int(np.argmin(np.diff(Js)))
-    Js[i] = Js[i + 1] = 0.5 * (Js[i] + Js[i + 1])           # snapped as spectral_curve does
-    far = farthest_branch_point(np.diag(Js), M0, u0) * (Jp[-1] / sqrt_a)
+    far = farthest_branch_point(np.diag(Jp), M0, u0) * (Jp[-1] / sqrt_a)
     if far > MAX_FAR_BRANCH:
         raise ClosedFormUnavailable(
             f"symmetric body with branch points of its spectral curve at |E| ~ {far:.1e} sqrt|a| / J "
             f"(above {MAX_FAR_BRANCH:g}; axial spin {abs(spin) / scale:.1e} of |omega0| + sqrt|a|): near a "
             "tacnode over E = infinity, out of the curve engine's reach; use thetasol.integrate_rotation")
+
+
+def _snap_pair(Jp: np.ndarray) -> np.ndarray:
+    """The two closest principal second moments replaced by their mean (as spectral_curve snaps them)."""
+    Js = Jp.copy()
+    i = int(np.argmin(np.diff(Js)))
+    Js[i] = Js[i + 1] = 0.5 * (Js[i] + Js[i + 1])
+    return Js
 
 
 def _refuse_small_gap(Jp) -> None:
@@ -107,9 +112,12 @@ def body_frame(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray)
     Jp, P = sorted_principal_frame(J)
     Q0p = Q0 @ P
     w0p = P.T @ omega0
+    spin, axis = 0.0, symmetry_axis(Jp)
+    if axis is not None:
+        # every stage (curve, eigenvector poles, frame) solves the exactly symmetric body
+        Jp = _snap_pair(Jp)
     M0 = hat(inertia_from_moments(np.diag(Jp)) @ w0p)
     u0 = -(Q0p.T @ a @ Q0p)
-    spin, axis = 0.0, symmetry_axis(Jp)
     if axis is not None:
         spin = float(w0p[axis])
         _refuse_small_spin(Jp, a, w0p, spin, M0, u0)
