@@ -1,15 +1,18 @@
-"""Error against cost for the heavy top: the Lagrange top in closed form against DOP853 and heyoka.
+"""Error against cost for the heavy top: the Lagrange and Kovalevskaya tops in closed form against DOP853 and heyoka.
 
-Run:  python benchmarks/bench_heavy_top.py [--quick]
+Run:  python benchmarks/bench_heavy_top.py [--quick] [--only lagrange|kovalevskaya]
 
 Prints, for Simo-Wong's fast top, the Bruls-Cardona top (its axis passes 7.2e-7 rad from hanging
-straight down) and a random slow top:
+straight down), a random slow Lagrange top and two random Kovalevskaya tops (five real branch points,
+three real and a complex pair; the tops of tests/test_kovalevskaya_top.py):
 
 1. dense output over [0, T] (T = 100, 10 with --quick): wall time and max error in omega and Q of
    the closed form (set-up included), of integrate_heavy_top with DOP853 at two tolerances and of
    heyoka in float64; the reference is heyoka in 80-bit extended precision at tolerance 1e-19;
-2. the closed form's set-up cost and its cost per time point in batches of 1, 100 and 1e5 points;
-3. one far-time query t = 1, 1e3, 1e6: the cost is the same (arguments reduced modulo the periods).
+2. far time: the state at the single time T_far = 1000 (100 with --quick), same methods and reference;
+3. the closed form's set-up cost and its cost per time point in batches of 1, 100 and 1e5 points, in CPU
+   time of this process (time.process_time: robust on a shared machine; the closed form is single-threaded);
+4. one far-time query t = 1, 1e3, 1e6: the cost is the same (arguments reduced modulo the periods).
 
 Errors are max over the output times of max |omega - omega_ref| / max(1, |omega_ref|) and
 max |Q - Q_ref|.
@@ -26,11 +29,27 @@ from thetasol.core.so3 import rodrigues
 from thetasol.integrators.heavy_top import integrate_heavy_top
 from thetasol.solutions.heavy_top import solve_heavy_top
 
+CPU = time.process_time
 
-def problems():
+
+def kovalevskaya_top(seed):
+    """The random Kovalevskaya top ``_top(seed)`` of tests/test_kovalevskaya_top.py."""
+    rng = np.random.default_rng(seed)
+    R = rodrigues(rng.normal(size=3))
+    I = R @ np.diag([2.0, 2.0, 1.0]) @ R.T * rng.uniform(0.3, 2.0)
+    c = R @ [np.cos(seed), np.sin(seed), 0.0] * rng.uniform(0.2, 1.0)
+    return I, c, rodrigues(rng.normal(size=3)), rng.normal(size=3) * rng.uniform(0.2, 4.0), \
+        {"mass": 1.0, "gravity": [0, 0, -9.81]}
+
+
+def problems(only=None):
     rng = np.random.default_rng(11)
     slow_Q0 = rodrigues(rng.normal(size=3))
-    return {
+    kova = {"Kovalevskaya top, five real branch points (test seed 2)": kovalevskaya_top(2),
+            "Kovalevskaya top, three real branch points (test seed 17)": kovalevskaya_top(17)}
+    if only == "kovalevskaya":
+        return kova
+    lagrange = {
         "Simo-Wong (I = diag(5, 5, 1), Mgl = 20, W0 = (0, 0, 50))":
             ([5.0, 5.0, 1.0], [0, 0, 1.0], rodrigues(np.array([0.05, 0, 0])), [0, 0, 50.0],
              {"mass": 20.0, "gravity": [0, 0, -1.0]}),
@@ -40,6 +59,7 @@ def problems():
         "slow top (I = (2, 2, 1), l = 0.5, |omega0| ~ 3)":
             ([2.0, 2.0, 1.0], [0, 0, 0.5], slow_Q0, rng.normal(size=3) * 2, {"mass": 1.0, "gravity": [0, 0, -9.81]}),
     }
+    return lagrange if only == "lagrange" else {**lagrange, **kova}
 
 
 def err(a, b):
@@ -70,31 +90,55 @@ def dense(name, case, T, quick):
         print(f"| {r[0]} | {r[1]:.3g} | {r[2]:.2e} |")
 
 
+def far(name, case, T, quick):
+    """The state at the single time ``T``: every method integrates (or evaluates) once."""
+    I, c, Q0, w0, kw = case
+    t = np.array([T])
+    ref = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **kw)
+    rows = []
+    cost, out = best_of(lambda: solve_heavy_top(I, c, Q0, w0, **kw)(t), repeat=3)
+    rows.append(("closed form (set-up + evaluation)", cost, err(out, ref)))
+    for rtol in ([1e-9] if quick else [1e-9, 1e-12]):
+        cost, out = best_of(lambda rtol=rtol: integrate_heavy_top(I, c, Q0, w0, t, rtol=rtol, **kw), repeat=1)
+        rows.append((f"DOP853 rtol={rtol:g}", cost, err(out, ref)))
+    integrate_heavy_top(I, c, Q0, w0, t[:1] * 1e-3, method="heyoka", rtol=1e-16, **kw)
+    cost, out = best_of(lambda: integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", rtol=1e-16, **kw), repeat=1)
+    rows.append(("heyoka float64 tol=1e-16", cost, err(out, ref)))
+    print(f"| {name.split(' (')[0]} | " + " | ".join(f"{r[1]:.3g} s, {r[2]:.1e}" for r in rows) + " |")
+
+
 def costs(name, case):
     I, c, Q0, w0, kw = case
-    setup, sol = best_of(lambda: solve_heavy_top(I, c, Q0, w0, **kw), repeat=7)
+    setup, sol = best_of(lambda: solve_heavy_top(I, c, Q0, w0, **kw), repeat=7, clock=CPU)
     line = [f"set-up {setup * 1e3:.2f} ms"]
     for n in (1, 100, 100000):
         t = np.linspace(0.0, 1e3, n)
-        cost, _ = best_of(lambda t=t: sol(t), repeat=5, number=max(1, 2000 // n))
+        cost, _ = best_of(lambda t=t: sol(t), repeat=5, number=max(1, 2000 // n), clock=CPU)
         line.append(f"{n} pts: {cost / n * 1e6:.2f} us/pt")
     far = []
     for T in (1.0, 1e3, 1e6):
-        cost, _ = best_of(lambda T=T: sol(np.array([T])), repeat=5, number=200)
+        cost, _ = best_of(lambda T=T: sol(np.array([T])), repeat=5, number=200, clock=CPU)
         far.append(f"t = {T:g}: {cost * 1e6:.0f} us")
-    print(f"- {name}: " + "; ".join(line) + "; one far query " + ", ".join(far))
+    print(f"- {name} (CPU time): " + "; ".join(line) + "; one far query " + ", ".join(far))
 
 
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--only", choices=["lagrange", "kovalevskaya"])
     args = ap.parse_args()
     print(machine_info("heyoka"))
     T = 10.0 if args.quick else 100.0
-    for name, case in problems().items():
+    for name, case in problems(args.only).items():
         dense(name, case, T, args.quick)
+    T_far = 100.0 if args.quick else 1000.0
+    print(f"\n## far time: the state at t = {T_far:g} alone (wall time, error against heyoka 80-bit)\n")
+    print("| problem | closed form | DOP853 rtol 1e-9 |" + ("" if args.quick else " DOP853 rtol 1e-12 |")
+          + " heyoka float64 tol 1e-16 (compiled) |\n|---|---|---|---|" + ("" if args.quick else "---|"))
+    for name, case in problems(args.only).items():
+        far(name, case, T_far, args.quick)
     print("\n## closed form: set-up, cost per time point, far-time queries")
-    for name, case in problems().items():
+    for name, case in problems(args.only).items():
         costs(name.split(" (")[0], case)
 
 

@@ -4,13 +4,17 @@
 evaluation cost per time (a batch of 1000 times spread over [0, 1e4]; best of 5, wall clock and process
 CPU time, which is less disturbed by other jobs on a shared machine).
 
-``point``: solve_neumann on tests/test_neumann_point.py's cases: set-up (best of 3), cost per time in
+``point``: solve_neumann on tests/test_neumann_point.py's cases: set-up (best of 5, wall clock and process
+CPU time), cost per time in
 batches of 1000 times over [0, 1000] and of 1 time, the largest relative error (q / R, v / (|v0| +
 R sqrt(a3 - a1))) at t in {0.7, 3.1, 17.3, 102, 1000} against heyoka 80-bit of the constrained
 equations; next to it heyoka in double precision (tol 1e-16) and scipy's DOP853 (rtol 1e-13) producing
 the same batch of 1000 times, with their errors at the same times.
 
-Run: OPENBLAS_NUM_THREADS=1 PYTHONPATH=. python benchmarks/bench_neumann.py [rotation|point]  (needs
+``refusals``: the time solve_neumann takes to raise ClosedFormUnavailable on the data of
+tests/test_neumann_point.py::test_refusals_name_the_reference (best of 5).
+
+Run: OPENBLAS_NUM_THREADS=1 PYTHONPATH=. python benchmarks/bench_neumann.py [rotation|point|refusals]  (needs
 heyoka for the error columns)."""
 import os
 import sys
@@ -88,13 +92,14 @@ def point():
     tt = np.sort(np.random.default_rng(0).uniform(0.0, 1e3, 1000))
     grid = np.unique(np.r_[0.0, T_POINT, tt])           # the integrators produce all of them in one run
     at = np.searchsorted(grid, T_POINT)
-    print("| case | method | set-up (ms) | us/time (batch) | us/time (CPU) | us (1 time) | max error t<=1000 "
-          "| heyoka-dbl build (ms) / us/time / error | DOP853 us/time / error |")
-    print("|---|---|---|---|---|---|---|---|---|")
+    print("| case | method | set-up (ms) | set-up (ms CPU) | us/time (batch) | us/time (CPU) | us (1 time) "
+          "| max error t<=1000 | heyoka-dbl build (ms) / us/time / error | DOP853 us/time / error |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     for label, a, q0, speed, _ in POINT_CASES:
         q0, v0 = _data(a, q0, speed, label)
         ts = 1e-3 if label == "units" else 1.0
-        setup, sol = best_of(lambda: solve_neumann(a, q0, v0))
+        setup, sol = best_of(lambda: solve_neumann(a, q0, v0), repeat=5)
+        setup_cpu = best_of(lambda: solve_neumann(a, q0, v0), repeat=5, clock=time.process_time)[0]
         ev = best_of(lambda: sol(ts * tt), repeat=5)[0] / tt.size * 1e6
         cpu = best_of(lambda: sol(ts * tt), repeat=5, clock=time.process_time)[0] / tt.size * 1e6
         one = best_of(lambda: sol(ts * 3.0), repeat=20)[0] * 1e6
@@ -114,13 +119,32 @@ def point():
             st = r.y.T
             e_dop = _errors(st[at, :3], st[at, 3:], ref[1:, :3], ref[1:, 3:], R, vs).max()
             dop_col = f"{run / grid.size * 1e6:.0f} / {e_dop:.1e}"
-        print(f"| {label} | {sol.method} | {setup * 1e3:.1f} | {ev:.1f} | {cpu:.1f} | {one:.0f} | {err} | "
+        print(f"| {label} | {sol.method} | {setup * 1e3:.1f} | {setup_cpu * 1e3:.1f} | {ev:.1f} | {cpu:.1f} | {one:.0f} | {err} | "
               f"{hy_col} | {dop_col} |")
 
 
+def refusals():
+    from test_neumann_point import refused_cases
+
+    from thetasol.solutions.base import ClosedFormUnavailable
+
+    def attempt(a, q0, v0):
+        try:
+            solve_neumann(a, q0, v0)
+        except ClosedFormUnavailable as err:
+            return str(err)
+        return "solved"
+
+    print("| case | time to refuse (ms) | message |")
+    print("|---|---|---|")
+    for label, a, q0, v0, _ in refused_cases():
+        dt, msg = best_of(lambda: attempt(a, q0, v0), repeat=5)
+        print(f"| {label} | {dt * 1e3:.1f} | {msg[:90]}... |")
+
+
 if __name__ == "__main__":
-    which = sys.argv[1:] or ["rotation", "point"]
+    which = sys.argv[1:] or ["rotation", "point", "refusals"]
     print("# " + machine_info("heyoka"))
     for name in which:
         print(f"\n## {name}\n")
-        {"rotation": rotation, "point": point}[name]()
+        {"rotation": rotation, "point": point, "refusals": refusals}[name]()

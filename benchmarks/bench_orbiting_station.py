@@ -1,7 +1,9 @@
 """Section 7 (the orbiting station): cost and error of the Kepler orbit, the numerical reference of the
 rotation on an orbit and its closed forms.
 
-    PYTHONPATH=. OPENBLAS_NUM_THREADS=1 python benchmarks/bench_orbiting_station.py
+    PYTHONPATH=. OPENBLAS_NUM_THREADS=1 python benchmarks/bench_orbiting_station.py [--station]
+
+(``--station``: only the table of the example station's parts.)
 
 Errors against heyoka in 80-bit (rotation) and quadruple (orbit) precision; times are CPU, best of 3.
 """
@@ -18,8 +20,10 @@ sys.path.insert(0, os.path.dirname(__file__))
 from _common import best_of, machine_info  # noqa: E402
 
 from thetasol.core.so3 import rodrigues  # noqa: E402
+from thetasol.integrators.multibody_gravity import integrate_multibody_gravity  # noqa: E402
 from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation  # noqa: E402
 from thetasol.mechanics.gravity_gradient import orbit_frame  # noqa: E402
+from thetasol.scenes.format import load_scene  # noqa: E402
 from thetasol.solutions.kepler import KeplerOrbit  # noqa: E402
 from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation  # noqa: E402
 
@@ -98,7 +102,32 @@ def rotation_table():
               f"{t_ev / many.size * 1e6:.1f} us per time (t up to 1e6 orbits) | - | {err:.1e} |")
 
 
+def station_table(orbits: int = 2):
+    """The cost of each part of the split of examples/orbiting_station.toml (Theorem 4) and of the unsplit check."""
+    scene = load_scene(os.path.join(os.path.dirname(__file__), "..", "examples", "orbiting_station.toml"))
+    print(f"\n## The example station (4 bodies, normalized units), {orbits} orbits, 201 output times")
+    print("| part | model | CPU |")
+    print("|---|---|---|")
+    t = np.linspace(0.0, orbits * 2 * math.pi, 201)
+    t_set, sol = best_of(lambda: scene.solution(), clock=CPU)
+    print(f"| set-up of the split (orbit, 4 rotations, stability table) | - | {t_set * 1e3:.1f} ms |")
+    t_orb, _ = best_of(lambda: sol.orbit(t), clock=CPU)
+    print(f"| orbit | {sol.orbit.diagnostics['kind']} Kepler, closed form | {t_orb * 1e3:.2f} ms |")
+    for n, rot in sol.rotations.items():
+        t_rot, _ = best_of(lambda r=rot: r(t), clock=CPU)
+        print(f"| rotation of {n} | {rot.method} | {t_rot * 1e3:.1f} ms |")
+    t_all, _ = best_of(lambda: sol(t), clock=CPU)
+    print(f"| the whole split, bodies placed | - | {t_all * 1e3:.1f} ms |")
+    o = sol.orbit
+    t_mb, mb = best_of(lambda: integrate_multibody_gravity(scene.config, o.mu, o.r0, o.v0, scene.Q0, scene.omega0, t,
+                                                           points=scene.orbit.points), repeat=1, clock=CPU)
+    print(f"| unsplit station, exact 1/r field (rtol 1e-12) | maximal coordinates, {mb.info['nfev']} right-hand "
+          f"sides | {t_mb:.2f} s |")
+
+
 if __name__ == "__main__":
     print(machine_info("heyoka"))
-    kepler_table()
-    rotation_table()
+    if "--station" not in sys.argv:
+        kepler_table()
+        rotation_table()
+    station_table()

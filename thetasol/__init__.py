@@ -31,25 +31,36 @@ _group("thetasol.solutions.heavy_top_base", "HeavyTopSolution")
 _group("thetasol.solutions.kepler", "KeplerOrbit")
 _group("thetasol.solutions.orbiting_rotation", "solve_orbiting_rotation", "OrbitingRotation")
 _group("thetasol.solutions.mass_center", "MassCenterMotion", "mass_center")
+_group("thetasol.solutions.lagrange_gyrostat", "solve_lagrange_gyrostat")
 # mechanics: bodies, configurations, equations and first integrals
 _group("thetasol.mechanics.bodies", "Body")
 _group("thetasol.mechanics.configuration", "Configuration", "Joint")
 _group("thetasol.mechanics.trajectories", "Trajectories")
-_group("thetasol.mechanics.constraints", "Sphere")
+_group("thetasol.mechanics.constraints", "Sphere", "Pivot")
+_group("thetasol.mechanics.rotors", "Rotor", "MasslessCarrier", "GyrostatConfiguration", "EffectiveGyrostat",
+       "EffectiveRotor", "gyrostat_energy")
 _group("thetasol.mechanics.equations", "invariants", "spectral_coefficients", "torque")
 _group("thetasol.mechanics.heavy_top", "heavy_top_invariants", "kovalevskaya_integral")
 _group("thetasol.mechanics.gravity_gradient", "gravity_gradient_stability", "GravityGradientStability",
        "gravity_gradient_torque", "orbit_frame")
+_group("thetasol.mechanics.attitude_control", "lqr_attitude_controller", "AttitudeLQR", "station_controller")
 # numerical references
 _group("thetasol.integrators.rotation", "integrate_rotation")
 _group("thetasol.integrators.multibody", "integrate_multibody")
+_group("thetasol.integrators.multibody_gravity", "integrate_multibody_gravity")
 _group("thetasol.integrators.orbiting_rotation", "integrate_orbiting_rotation")
 _group("thetasol.integrators.heavy_top", "integrate_heavy_top")
 _group("thetasol.integrators.neumann", "integrate_neumann")
+_group("thetasol.integrators.fixed_point", "integrate_fixed_point")
+_group("thetasol.integrators.gyrostat", "integrate_gyrostat", "integrate_heavy_gyrostat")
+_group("thetasol.integrators.multibody_rotors", "integrate_gyrostat_multibody")
 # scenes: the split pipeline of a whole configuration
 _group("thetasol.scenes.format", "Scene", "load_scene", "demo_scene_path")
 _group("thetasol.scenes.pipeline", "solve_configuration", "ConfigurationSolution")
 _group("thetasol.scenes.report", "run")
+_group("thetasol.scenes.orbit", "solve_orbiting_configuration", "OrbitingConfigurationSolution")
+_group("thetasol.scenes.fixed_point", "solve_fixed_point", "FixedPointSolution")
+_group("thetasol.scenes.gyrostat_scene", "solve_gyrostat_configuration", "GyrostatSplit", "load_gyrostat_scene")
 # the machinery: theta functions and curves
 _group("thetasol.theta.riemann", "RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce")
 _group("thetasol.curves.plane_curve", "PlaneCurve", "Place")
@@ -78,14 +89,19 @@ if TYPE_CHECKING:
     from thetasol import reference
     from thetasol.curves.plane_curve import Place, PlaneCurve
     from thetasol.curves.spectral import SpectralCurve, spectral_curve
+    from thetasol.integrators.fixed_point import integrate_fixed_point
+    from thetasol.integrators.gyrostat import integrate_gyrostat, integrate_heavy_gyrostat
     from thetasol.integrators.heavy_top import integrate_heavy_top
     from thetasol.integrators.multibody import integrate_multibody
+    from thetasol.integrators.multibody_gravity import integrate_multibody_gravity
+    from thetasol.integrators.multibody_rotors import integrate_gyrostat_multibody
     from thetasol.integrators.neumann import integrate_neumann
     from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
     from thetasol.integrators.rotation import integrate_rotation
+    from thetasol.mechanics.attitude_control import AttitudeLQR, lqr_attitude_controller, station_controller
     from thetasol.mechanics.bodies import Body
     from thetasol.mechanics.configuration import Configuration, Joint
-    from thetasol.mechanics.constraints import Sphere
+    from thetasol.mechanics.constraints import Pivot, Sphere
     from thetasol.mechanics.equations import invariants, spectral_coefficients, torque
     from thetasol.mechanics.gravity_gradient import (
         GravityGradientStability,
@@ -94,8 +110,19 @@ if TYPE_CHECKING:
         orbit_frame,
     )
     from thetasol.mechanics.heavy_top import heavy_top_invariants, kovalevskaya_integral
+    from thetasol.mechanics.rotors import (
+        EffectiveGyrostat,
+        EffectiveRotor,
+        GyrostatConfiguration,
+        MasslessCarrier,
+        Rotor,
+        gyrostat_energy,
+    )
     from thetasol.mechanics.trajectories import Trajectories
+    from thetasol.scenes.fixed_point import FixedPointSolution, solve_fixed_point
     from thetasol.scenes.format import Scene, demo_scene_path, load_scene
+    from thetasol.scenes.gyrostat_scene import GyrostatSplit, load_gyrostat_scene, solve_gyrostat_configuration
+    from thetasol.scenes.orbit import OrbitingConfigurationSolution, solve_orbiting_configuration
     from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
     from thetasol.scenes.report import run
     from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution, Solution
@@ -103,6 +130,7 @@ if TYPE_CHECKING:
     from thetasol.solutions.heavy_top import solve_heavy_top
     from thetasol.solutions.heavy_top_base import HeavyTopSolution
     from thetasol.solutions.kepler import KeplerOrbit
+    from thetasol.solutions.lagrange_gyrostat import solve_lagrange_gyrostat
     from thetasol.solutions.mass_center import MassCenterMotion, mass_center
     from thetasol.solutions.neumann import NeumannSolution, solve_neumann
     from thetasol.solutions.orbiting_rotation import OrbitingRotation, solve_orbiting_rotation

@@ -24,7 +24,8 @@ def two_sum(a: np.ndarray | float, b: np.ndarray | float) -> tuple[np.ndarray, n
     return s, (a - (s - bb)) + (b - bb)
 
 
-def _split(a):
+def split(a: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+    """Veltkamp's split ``a = hi + lo`` into halves of 26 bits (``|a| < 1e150``: no overflow)."""
     t = _SPLIT * a
     hi = t - (t - a)
     return hi, a - hi
@@ -40,8 +41,8 @@ def two_prod(a: np.ndarray | float, b: np.ndarray | float) -> tuple[np.ndarray, 
     if np.max(np.abs(a), initial=0.0) > 1e150 or np.max(np.abs(b), initial=0.0) > 1e150:
         sh = (np.frexp(a)[1] - np.frexp(b)[1]) // 2
         a, b = np.ldexp(a, -sh), np.ldexp(b, sh)
-    ah, al = _split(a)
-    bh, bl = _split(b)
+    ah, al = split(a)
+    bh, bl = split(b)
     return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
 
 

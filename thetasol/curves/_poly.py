@@ -20,7 +20,7 @@ from math import comb
 
 import numpy as np
 
-from thetasol.core.dd import two_prod, two_sum
+from thetasol.core.dd import split, two_prod, two_sum
 
 EPS = np.finfo(float).eps
 
@@ -529,6 +529,10 @@ def _cadd_eft(a, b):
     return sr + 1j * si, er + 1j * ei
 
 
+#: Points per block of :func:`comp_horner` (its ~15 temporaries of 4 x block doubles stay in L2).
+_HORNER_BLOCK = 1024
+
+
 def comp_horner(chi, clo, z):
     """Compensated Horner: sum_j (chi_j + clo_j) z^j as (hi, lo), coefficients along the last axis.
 
@@ -536,8 +540,55 @@ def comp_horner(chi, clo, z):
     eps |value| + eps^2 sum |c_j| |z|^j.
     """
     n = chi.shape[-1] - 1
-    s = np.broadcast_to(chi[..., n], z.shape).astype(complex)
-    comp = np.broadcast_to(clo[..., n], z.shape).astype(complex)
+    z = np.asarray(z)
+    if z.ndim and z.size > _HORNER_BLOCK and z.shape[0] > 1:
+        # rows are independent: blocks that stay in cache (the stacked temporaries are 4x z)
+        step = max(1, _HORNER_BLOCK * z.shape[0] // z.size)
+        rows = lambda c, i: c[i:i + step] if c.ndim - 1 == z.ndim and c.shape[0] == z.shape[0] else c  # noqa: E731
+        parts = [comp_horner(rows(chi, i), rows(clo, i), z[i:i + step]) for i in range(0, z.shape[0], step)]
+        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+    # (filled by broadcasting assignment: np.broadcast_to costs ~10 us a call on these small arrays)
+    s = np.empty(z.shape, complex)
+    s[...] = chi[..., n]
+    comp = np.empty(z.shape, complex)
+    comp[...] = clo[..., n]
+    if n == 0:
+        return _cadd_eft(s, comp)
+    z = z.astype(complex, copy=False)
+    # The operations of _cmul_eft / _cadd_eft on stacked real arrays (few numpy calls on these small
+    # arrays): rows [Re s Re z, Re s Im z, Im s (-Im z), Im s Re z] are the four two-products (a
+    # negated factor negates product and error exactly), summed pairwise as in _cmul_eft.
+    ZZ = np.stack([z.real, z.imag, -z.imag, z.real])
+    if _big(ZZ):
+        return _comp_horner_general(chi, clo, z, s, comp, n)
+    ZZh, ZZl = split(ZZ)
+    CH = np.empty((2,) + z.shape + (n + 1,))
+    CH[0], CH[1] = chi.real, chi.imag
+    S = np.stack([s.real, s.imag])
+    buf = np.empty(z.shape, complex)
+    for j in range(n - 1, -1, -1):
+        if _big(S):
+            return _comp_horner_general(chi, clo, z, S[0] + 1j * S[1], comp, j + 1)
+        SS = np.repeat(S, 2, axis=0)
+        SSh, SSl = split(SS)
+        Pr = SS * ZZ
+        E = ((SSh * ZZh - Pr) + SSh * ZZl + SSl * ZZh) + SSl * ZZl
+        p, e = two_sum(Pr[:2], Pr[2:])                  # [Re, Im] of fl(s z) and their errors
+        pe = (E[:2] + E[2:]) + e
+        S, se = two_sum(p, CH[..., j])
+        T = pe + se
+        buf.real, buf.imag = T[0], T[1]
+        comp = comp * z + (buf + clo[..., j])
+    hi, lo = _cadd_eft(S[0] + 1j * S[1], comp)
+    return hi, lo
+
+
+def _big(x: np.ndarray) -> bool:
+    return bool(x.size and np.abs(x).max() > 1e150)
+
+
+def _comp_horner_general(chi, clo, z, s, comp, n):
+    """comp_horner's loop from the power n down, with the rescaling two-products (huge values)."""
     for j in range(n - 1, -1, -1):
         p, pe = _cmul_eft(s, z)
         s, se = _cadd_eft(p, np.broadcast_to(chi[..., j], z.shape))

@@ -380,11 +380,11 @@ class PlaneCurve:
         return C @ G @ C.T
 
     def _edge_integrals(self, P):
-        # every interval in double-double: periods and potentials are sums over many edges, whose float64
-        # interval sums left them ~2e-15 relative off (too much for the rigid body's theta solution at
-        # t ~ 1e4: docs/theta_rotation.md); +3-16 ms per call on the Sage reference curves
-        ints = self._edge_tracks.integrate(P, dd_all=True)
-        return np.concatenate(ints, axis=0)  # (ne * n, nd), row e * n + s
+        # all in double-double (float64: ~2e-15 relative, docs/theta_rotation.md); periods, potentials share it
+        ck = ("edges", P.shape, P.tobytes(), repr(getattr(P, "exact", None)))
+        if ck not in self._cache:    # rows e * n + s, one column per numerator
+            self._cache[ck] = np.concatenate(self._edge_tracks.integrate(P, dd_all=True), axis=0)
+        return self._cache[ck]
 
     def _period_matrix_mp(self, diffs, dps):
         from thetasol.curves._mp import cycle_sums_mp, integrate_mp

@@ -44,7 +44,7 @@ departs from the split.
 from __future__ import annotations
 
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -137,8 +137,9 @@ def pivot_initial_state(config: Configuration, pivot: Pivot, q0: ArrayLike | Non
 class _System:
     """Right-hand side of the maximal-coordinate equations (module docstring)."""
 
-    def __init__(self, config, a, b, alpha, kappa, radius=None, pivot=None):
+    def __init__(self, config, a, b, alpha, kappa, radius=None, pivot=None, forces=None):
         self.radius = radius  # of the sphere constraint on the system mass centre, or None
+        self.forces = forces  # extra applied forces and body-frame torques, or None
         self.names = config.order
         idx = {n: i for i, n in enumerate(self.names)}
         self.pivot = None if pivot is None else (idx[pivot.body], pivot.point - config.bodies[pivot.body].center,
@@ -249,6 +250,8 @@ class _System:
         f = np.empty((N, 6))
         f[:, :3] = -self.m[:, None] * (x @ a + 0.5 * self.b)
         f[:, 3:] = np.einsum("nji,nj->ni", Q, tau_space) - cross(w, Iw)
+        if self.forces is not None:
+            f += self.forces(_t, x, v, Q, w)
         f = f.ravel()
         if K or self.radius is not None or self.pivot is not None:
             G, rhs = self._joint_rows(x, v, Q, w)
@@ -273,7 +276,7 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
                         Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike], t: ArrayLike,
                         rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
                         alpha: float | None = None, kappa: float | None = None,
-                        constraint: Sphere | Pivot | None = None) -> Trajectories:
+                        constraint: Sphere | Pivot | None = None, forces: Callable | None = None) -> Trajectories:
     """Integrate a tree of rigid bodies on spherical joints in ``phi(x) = 1/2 x^T a x + 1/2 b^T x``.
 
     Parameters
@@ -307,6 +310,11 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
         (:meth:`Sphere.check`, else ``ValueError``).  A :class:`Pivot` holds one point of any body
         fixed in space (Section 5); ``q0`` and ``v0`` then follow from the attitudes and may be
         ``None`` (given ones must agree to 1e-12 relative, else ``ValueError``).
+    forces : callable, optional
+        Further applied loads ``forces(t, x, v, Q, omega) -> (N, 6)``: per body (``config.order``)
+        the force on its mass centre (space frame) and the torque about it (body frame), from
+        the states ``x, v (N, 3)``, ``Q (N, 3, 3)``, ``omega (N, 3)``.  Used for the exact
+        ``1/r`` field and control torques (:mod:`thetasol.integrators.multibody_gravity`).
 
     Returns
     -------
@@ -344,7 +352,7 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
         alpha = max(1.0, float(np.max(np.linalg.norm(w, axis=1))) + float(np.sqrt(np.max(np.abs(np.linalg.eigvalsh(a))))))
     kappa = alpha if kappa is None else float(kappa)
     sys = _System(config, a, b, float(alpha), kappa, constraint.radius if isinstance(constraint, Sphere) else None,
-                  constraint if isinstance(constraint, Pivot) else None)
+                  constraint if isinstance(constraint, Pivot) else None, forces)
     y0 = sys.pack(x, v, Q, w)
     start = time.perf_counter()
     if tt[-1] > 0:

@@ -30,6 +30,9 @@ on time through the orbit.
 """
 from __future__ import annotations
 
+import sys
+from dataclasses import dataclass, field
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -37,9 +40,10 @@ from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
 from thetasol.core.threads import single_blas_thread
 from thetasol.integrators._common import both_ways, solve_ivp_mQ
+from thetasol.solutions.base import RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
 
-__all__ = ["integrate_orbiting_rotation"]
+__all__ = ["integrate_orbiting_rotation", "NumericalOrbitingRotation", "numerical_orbiting_rotation"]
 
 
 @single_blas_thread
@@ -188,3 +192,60 @@ def _heyoka(Jm, orbit, Q0, w0, tgrid, rtol, dtype):
     ta = hy.taylor_adaptive(sys, y0, tol=tol, fp_type=ft)
     states = np.asarray(ta.propagate_grid(grid)[-1], dtype=float)[1:]
     return states[:, 6:9], states[:, 9:].reshape(-1, 3, 3)
+
+
+@dataclass(frozen=True, eq=False)
+class NumericalOrbitingRotation(RotationSolution):
+    """:func:`integrate_orbiting_rotation` behind the :class:`~thetasol.solutions.base.RotationSolution` protocol.
+
+    ``sol(t) -> (omega, Q)`` integrates on demand, once per call, from ``t = 0`` to every requested
+    time (any shape and order); nothing is cached.  ``a`` is the tidal matrix (7.11) at ``t = 0``.
+    Build it with :func:`numerical_orbiting_rotation`.
+    """
+
+    orbit: KeplerOrbit = field(default=None, repr=False)
+    rtol: float = 1e-12
+    integrator: str = "DOP853"
+
+    def _chunk_size(self) -> int:
+        return sys.maxsize  # one integration over all requested times
+
+    def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return integrate_orbiting_rotation(self.J, self.orbit, self.Q0, self.omega0, t, rtol=self.rtol,
+                                           method=self.integrator)
+
+
+def numerical_orbiting_rotation(J: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, omega0: ArrayLike, *,
+                                rtol: float = 1e-12, method: str = "DOP853") -> NumericalOrbitingRotation:
+    """One body's rotation on ``orbit`` as a solution evaluated by :func:`integrate_orbiting_rotation`.
+
+    Returns
+    -------
+    NumericalOrbitingRotation
+        ``method`` is ``"numerical/<method>"``; ``invariants`` holds the Jacobi integral (7.18) at
+        ``t = 0`` when the orbit is circular (``e <= 1e-13``), else nothing (the rotation on an
+        elliptic orbit has no known first integral).
+    """
+    if not isinstance(orbit, KeplerOrbit):
+        raise TypeError(f"orbit must be a KeplerOrbit, got {type(orbit).__name__}")
+    Jm = V.second_moments(J, "J")
+    Qm = V.rotation_matrix(Q0, "Q0")
+    wm = V.vector3(omega0, "omega0")
+    if not (0 < rtol < 1):
+        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
+    r = orbit.r0
+    rn = float(np.linalg.norm(r))
+    a = -3.0 * orbit.mu / rn ** 3 * np.outer(r, r) / rn ** 2
+    d = orbit.diagnostics
+    inv = {}
+    if d["kind"] == "elliptic" and d["e"] <= 1e-13:
+        n = d["mean_motion"]
+        Im = np.trace(Jm) * np.eye(3) - Jm
+        g, h = Qm.T @ (r / rn), np.cross(r, orbit.v0)
+        nb = Qm.T @ (h / np.linalg.norm(h))
+        M = Im @ wm
+        inv["jacobi"] = float(0.5 * M @ wm + 1.5 * n * n * g @ Im @ g - n * M @ nb)
+    return NumericalOrbitingRotation(J=Jm, a=a, Q0=np.array(Q0, dtype=float), omega0=wm, method=f"numerical/{method}",
+                                     invariants=inv, diagnostics={"integrator": "integrate_orbiting_rotation",
+                                                                  "method": method, "rtol": rtol},
+                                     orbit=orbit, rtol=float(rtol), integrator=method)

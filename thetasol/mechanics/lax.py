@@ -135,18 +135,19 @@ def polish_eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha:
             y0 = np.linalg.lstsq(B, v0, rcond=None)[0]
             free = 1 if abs(y0[0]) >= abs(y0[1]) else 0        # normalize the larger coefficient to 1
             x = [mpc(complex(Eo[n])), mpc(complex(wo[n])), mpc(complex(y0[free] / y0[1 - free]))]
+            dv = b2 if free == 1 else b1
             for _ in range(8):
                 e, ww, s = x
                 y = [mpc(1), s] if free == 1 else [s, mpc(1)]
                 v = [y[0] * b1[i] + y[1] * b2[i] for i in range(3)]
-                dv = b2 if free == 1 else b1
-                L = [[J2[i] * e * e * (i == j) + Mm[i][j] * e + Um[i][j] - ww * (i == j) for j in range(3)]
-                     for i in range(3)]
-                F = [sum(L[i][j] * v[j] for j in range(3)) for i in range(3)]
-                dE = [sum((2 * J2[i] * e * (i == j) + Mm[i][j]) * v[j] for j in range(3)) for i in range(3)]
-                ds = [sum(L[i][j] * dv[j] for j in range(3)) for i in range(3)]
-                Jac = mpmath.matrix([[dE[i], -v[i], ds[i]] for i in range(3)])
-                step = mpmath.lu_solve(Jac, mpmath.matrix(F))
+                L = [[Mm[i][j] * e + Um[i][j] for j in range(3)] for i in range(3)]
+                for i in range(3):
+                    L[i][i] += J2[i] * e * e - ww
+                F = [mpmath.fsum(L[i][j] * v[j] for j in range(3)) for i in range(3)]
+                dE = [mpmath.fsum((Mm[i][j] + (2 * J2[i] * e if i == j else 0)) * v[j] for j in range(3))
+                      for i in range(3)]
+                ds = [mpmath.fsum(L[i][j] * dv[j] for j in range(3)) for i in range(3)]
+                step = _solve3([[dE[i], -v[i], ds[i]] for i in range(3)], F)
                 x = [x[k] - step[k] for k in range(3)]
                 if max(abs(step[0]), abs(step[1])) <= tol * (1 + abs(x[0]) + abs(x[1])):
                     break
@@ -154,3 +155,19 @@ def polish_eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha:
                 raise ValueError("polishing moved an eigenvector pole away from its float value")
             Eo[n], wo[n] = complex(x[0]), complex(x[1])
     return Eo, wo
+
+
+def _solve3(A: list, b: list) -> list:
+    """A x = b for a 3 x 3 system of mpmath numbers: Gaussian elimination with partial pivoting
+    (at the working precision; the Newton steps of :func:`polish_eigenvector_poles` need no more)."""
+    A = [row[:] + [bi] for row, bi in zip(A, b, strict=True)]
+    for c in range(3):
+        piv = max(range(c, 3), key=lambda r: abs(complex(A[r][c])))
+        A[c], A[piv] = A[piv], A[c]
+        for r in range(c + 1, 3):
+            f = A[r][c] / A[c][c]
+            A[r] = [A[r][k] - f * A[c][k] for k in range(4)]
+    x = [0, 0, 0]
+    for r in (2, 1, 0):
+        x[r] = (A[r][3] - sum(A[r][k] * x[k] for k in range(r + 1, 3))) / A[r][r]
+    return x

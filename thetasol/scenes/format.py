@@ -23,12 +23,14 @@ from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.mechanics.constraints import Pivot, Sphere, pivot_mass_center
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.scenes.fixed_point import solve_fixed_point
+from thetasol.scenes.gyrostat_scene import GyrostatScene, gyrostat_scene_from_dict
+from thetasol.scenes.orbit import OrbitEntry, orbit_entry, solve_orbiting_configuration
 from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
 
 __all__ = ["Scene", "load_scene", "demo_scene_path"]
 
 _TOP_KEYS = {"name", "description", "bodies", "joints", "potential", "initial", "output", "solver", "constraint",
-             "fixed_point"}
+             "fixed_point", "orbit"}
 _BODY_KEYS = {"name", "mass", "J", "I", "center", "box", "masses", "points"}
 _JOINT_KEYS = {"parent", "child", "parent_point", "child_point"}
 _SOLVER_KEYS = {"rtol", "method", "rotation", "make_central", "check_multibody", "check_t_end", "check_rtol"}
@@ -59,6 +61,9 @@ class Scene:
     fixed_point : Pivot or None
         A point of the main body (the root) held fixed in space (Section 5), if any; ``q0`` and
         ``v0`` are then the ones it implies.
+    orbit : OrbitEntry or None
+        The ``[orbit]`` (Theorem 4): then ``q0, v0`` are its ``r0, v0``, ``a`` the tidal matrix
+        (7.11) at ``t = 0`` and ``b = 0`` (:mod:`thetasol.scenes.orbit`).
     """
 
     config: Configuration
@@ -74,14 +79,20 @@ class Scene:
     solver: dict = field(default_factory=dict)
     constraint: Sphere | None = None
     fixed_point: Pivot | None = None
+    orbit: OrbitEntry | None = None
 
     def solution(self, rotation: str | None = None) -> ConfigurationSolution:
-        """The split solution (:func:`~thetasol.scenes.pipeline.solve_configuration`) with the scene's options."""
+        """The split solution with the scene's options: :func:`~thetasol.scenes.pipeline.solve_configuration`,
+        or with an ``[orbit]`` :func:`~thetasol.scenes.orbit.solve_orbiting_configuration` (Theorem 4)."""
         s = self.solver
         if self.fixed_point is not None:
             return solve_fixed_point(self.config, self.a, self.b, self.fixed_point, self.Q0, self.omega0,
                                      rotation=rotation or s.get("rotation", "auto"), rtol=s.get("rtol", 1e-12),
                                      method=s.get("method", "DOP853"))
+        if self.orbit is not None:
+            return solve_orbiting_configuration(self.config, self.orbit.orbit, self.Q0, self.omega0,
+                                                rotation=rotation or s.get("rotation", "auto"),
+                                                rtol=s.get("rtol", 1e-12), method=s.get("method", "DOP853"))
         return solve_configuration(self.config, self.a, self.b, self.q0, self.v0, self.Q0, self.omega0,
                                    rotation=rotation or s.get("rotation", "auto"), rtol=s.get("rtol", 1e-12),
                                    method=s.get("method", "DOP853"), constraint=self.constraint)
@@ -96,8 +107,9 @@ class Scene:
         return _scene_from_dict(d, source)
 
 
-def load_scene(path: str | Path) -> Scene:
-    """Read and validate a scene file (TOML).
+def load_scene(path: str | Path) -> Scene | GyrostatScene:
+    """Read and validate a scene file (TOML); a file with ``[[rotors]]`` gives a
+    :class:`~thetasol.scenes.gyrostat_scene.GyrostatScene` (Section 8).
 
     Raises
     ------
@@ -392,7 +404,10 @@ def _solver_options(solver: Mapping, t: np.ndarray, make_central: bool) -> dict:
     return s
 
 
-def _scene_from_dict(d: Any, source: str) -> Scene:
+def _scene_from_dict(d: Any, source: str) -> Scene | GyrostatScene:
+    if isinstance(d, Mapping) and "rotors" in d:
+        # rotors: the split of Theorem 5 (thetasol.scenes.gyrostat_scene)
+        return gyrostat_scene_from_dict(d, source)
     try:
         return _build_scene(d)
     except ValueError as exc:
@@ -416,13 +431,20 @@ def _build_scene(d: Any) -> Scene:
     _unknown(solver, _SOLVER_KEYS, "[solver]")
     make_central = solver.get("make_central", False)
     config = _configuration(list(byname.values()), raw_joints, make_central)
-    a, b = _potential(d)
+    orbit = orbit_entry(d)
+    a, b = _potential(d) if orbit is None else (orbit.tidal_matrix(), np.zeros(3))
     q0, v0, Q0, w0 = _initial(d, config.order)
     pivot = _fixed_point(d, config)
+    if pivot is not None and orbit is not None:
+        raise ValueError("scene: [fixed_point] and [orbit] exclude each other (a pivot fixed in space "
+                         "cannot follow an orbit)")
     if pivot is not None:
         q0, v0 = pivot_mass_center(pivot, config.effective_body(config.root).center, Q0[config.root],
                                    w0[config.root])
+    if orbit is not None:
+        q0, v0 = orbit.orbit.r0.copy(), orbit.orbit.v0.copy()
     constraint = _constraint(d, b, q0, v0)
     t = _output(d)
     return Scene(config=config, a=a, b=b, q0=q0, v0=v0, Q0=Q0, omega0=w0, t=t, name=name, description=desc,
-                 solver=_solver_options(solver, t, make_central), constraint=constraint, fixed_point=pivot)
+                 solver=_solver_options(solver, t, make_central), constraint=constraint, fixed_point=pivot,
+                 orbit=orbit)

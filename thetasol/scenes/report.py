@@ -27,7 +27,6 @@ import importlib
 import io
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
 from typing import TextIO
 
 import numpy as np
@@ -39,34 +38,14 @@ from thetasol.integrators.rotation import integrate_rotation
 from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import invariants
 from thetasol.mechanics.trajectories import Trajectories
+from thetasol.scenes.checks import Check
 from thetasol.scenes.fixed_point import pivoted_body
 from thetasol.scenes.format import Scene
+from thetasol.scenes.gyrostat_scene import GyrostatScene, run_gyrostat_scene
+from thetasol.scenes.orbit_report import run_orbit
 from thetasol.scenes.pipeline import ConfigurationSolution, rotation_kind
 
 __all__ = ["Check", "run"]
-
-
-@dataclass
-class Check:
-    """One comparison of the report: a max deviation against a stated tolerance."""
-
-    what: str
-    deviation: float
-    tolerance: float
-    seconds: str
-    #: the effective body of a rotation against integrate_rotation, and that integration's seconds
-    body: str = ""
-    reference_seconds: float | None = None
-
-    @property
-    def ok(self) -> bool:
-        """The deviation is within the tolerance."""
-        return bool(self.deviation <= self.tolerance)
-
-    def line(self) -> str:
-        """The report line of this check."""
-        return (f"  {self.what}: {self.deviation:.2e} (tolerance {self.tolerance:.1e}) [{self.seconds}]  "
-                f"{'ok' if self.ok else 'FAILED'}")
 
 
 class _Text:
@@ -344,7 +323,7 @@ def _stepper(progress: Callable[[str, int, int], None] | None, multibody: bool) 
     return step
 
 
-def run(scene: Scene, check: bool = True, out: TextIO | None = None,
+def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = None,
         progress: Callable[[str, int, int], None] | None = None) -> tuple[Trajectories, str, list[Check]]:
     """Solve a scene by the split and compare its exact parts with the numerical references.
 
@@ -367,6 +346,15 @@ def run(scene: Scene, check: bool = True, out: TextIO | None = None,
     checks : list of Check
         Every comparison with its tolerance; ``all(c.ok for c in checks)`` is the verdict.
     """
+    if isinstance(scene, GyrostatScene):
+        step = _stepper(progress, False)
+        step()
+        traj, text, raw = run_gyrostat_scene(scene, check=check, out=out)
+        step()
+        step()
+        return traj, text, [Check(f"split (Theorem 5) vs unsplit multibody: {w}", d, tl, "-") for w, d, tl in raw]
+    if scene.orbit is not None:
+        return run_orbit(scene, check=check, out=out)
     say = _Text(out)
     multibody = check and scene.solver.get("check_multibody", True)
     step = _stepper(progress, multibody)

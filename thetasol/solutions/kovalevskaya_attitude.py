@@ -10,10 +10,14 @@ The azimuth of ``Q b`` obeys
     = (M x tau) . gamma / (|M|^2 - (M . gamma)^2),  tau = mass |g| gamma x center   (b = M),
 
 a function on the real torus ``z0 + a V1 + b V2`` (an abelian integral of the third kind along the flow).  It is
-sampled on an ``N x N`` grid of the torus angles, its Fourier coefficients taken by FFT, and integrated term by
-term: ``phi(t) = phi0 + c_00 t + sum c_jk (exp(2 pi i (j nu1 + k nu2) t) - 1)/(2 pi i (j nu1 + k nu2))``, the
-torus angles ``nu t`` reduced modulo 1 and ``c_00 t`` modulo ``2 pi`` with two-word products.  The truncation
-(the largest dropped coefficient over its divisor) is ``diagnostics["phase_tail"]``.
+sampled on an ``n1 x n2`` grid of the torus angles (each axis doubled from 32 until the integrated Fourier
+coefficients on its edge are below ``PHASE_TOL``; a doubling samples only the new rows or columns), its Fourier
+coefficients taken by FFT, and integrated term by term:
+``phi(t) = phi0 + c_00 t + sum c_jk (exp(2 pi i (j nu1 + k nu2) t) - 1)/(2 pi i (j nu1 + k nu2))``, the torus
+angles ``nu t`` reduced modulo 1 and ``c_00 t`` modulo ``2 pi`` with two-word products.  The series is kept as
+a dense box of modes ``|j| <= J, |k| <= K`` (the smallest outside which the coefficients sum to at most
+``PHASE_DROP``) and evaluated as a matrix product.  The truncation (the largest coefficient on the grid's edge
+plus the dropped sum) is ``diagnostics["phase_tail"]``.
 """
 from __future__ import annotations
 
@@ -39,24 +43,20 @@ def _torus_lattice(motion, box=4):
     """Two integer vectors ``k1, k2`` (lattice coordinates) spanning the periods of the state on the real torus."""
     W = np.stack([_lattice_coords(motion, motion.V1), motion.lattice_velocity()], 1)   # (4, 2)
     Qw, _ = np.linalg.qr(W)
-    chars = motion.chars1 + motion.chars2
-    cands = []
-    for k in product(range(-box, box + 1), repeat=4):
-        k = np.array(k, float)
-        if not k.any() or np.linalg.norm(k - Qw @ (Qw.T @ k)) > 1e-6 * np.linalg.norm(k):
-            continue
-        if any(np.rint(k[:2] @ (2 * a) + k[2:] @ (2 * b)) % 2 for a, b in chars):
-            continue
-        cands.append(k)
-    if len(cands) < 2:
+    k = np.array(list(product(range(-box, box + 1), repeat=4)), float)
+    k = k[np.any(k != 0, 1)]
+    k = k[np.linalg.norm(k - (k @ Qw) @ Qw.T, axis=1) <= 1e-6 * np.linalg.norm(k, axis=1)]
+    for a, b in motion.chars1 + motion.chars2:
+        k = k[np.rint(k[:, :2] @ (2 * a) + k[:, 2:] @ (2 * b)) % 2 == 0]
+    if len(k) < 2:
         raise RuntimeError("no period lattice of the real torus found")
-    cands.sort(key=lambda k: np.linalg.norm(np.linalg.lstsq(W, k, rcond=None)[0]))
-    k1 = cands[0]
-    ab1 = np.linalg.lstsq(W, k1, rcond=None)[0]
-    for k in cands[1:]:
-        ab = np.linalg.lstsq(W, k, rcond=None)[0]
-        if abs(ab1[0] * ab[1] - ab1[1] * ab[0]) > 1e-6 * np.linalg.norm(ab1) * np.linalg.norm(ab):
-            return k1, k
+    ab = np.linalg.lstsq(W, k.T, rcond=None)[0].T          # (n, 2): the periods in the flows' times
+    order = np.argsort(np.linalg.norm(ab, axis=1), kind="stable")
+    k, ab = k[order], ab[order]
+    cross = np.abs(ab[0, 0] * ab[:, 1] - ab[0, 1] * ab[:, 0])
+    indep = np.nonzero(cross > 1e-6 * np.linalg.norm(ab[0]) * np.linalg.norm(ab, axis=1))[0]
+    if len(indep):
+        return k[0], k[indep[0]]
     raise RuntimeError("the real torus has no two independent periods in the search box")
 
 
@@ -71,12 +71,16 @@ class KovalevskayaAttitude:
     E: np.ndarray        # space frame, third column up
     ref: int             # -1: angular momentum; 0, 1, 2: body axis of the memoir's frame
     nu: tuple            # torus frequencies (hi, lo)
-    modes: np.ndarray    # (n, 2) integer modes
-    coef: np.ndarray     # their coefficients divided by 2 pi i (j nu1 + k nu2)
+    modes: tuple         # (j, k): the integer modes of the two torus angles (rows, columns of coef)
+    coef: np.ndarray     # (len(j), len(k)): coefficients divided by 2 pi i (j nu1 + k nu2)
     rate: tuple          # c_00 (hi, lo)
     phi0: float
     tail: float
-    grid: int
+    grid: tuple          # (n1, n2) samples of the torus angles
+
+    @property
+    def _coef_sum(self) -> float:
+        return float(np.real(np.sum(self.coef)))
 
     def _ref(self, omega, gamma):
         if self.ref < 0:
@@ -87,8 +91,10 @@ class KovalevskayaAttitude:
         t = np.asarray(t, float)
         h, lo = dd_mul(t[..., None], 0.0, self.nu[0], self.nu[1])
         th = (h - np.round(h)) + lo
-        arg = 2 * np.pi * (th @ self.modes.T)
-        per = np.real((np.exp(1j * arg) - 1) @ self.coef)
+        # the dense mode box as a matrix product: one complex exponential per mode index and axis
+        e1 = np.exp((2j * np.pi) * th[..., :1] * self.modes[0])
+        e2 = np.exp((2j * np.pi) * th[..., 1:] * self.modes[1])
+        per = np.real(np.sum(e1 * (e2 @ self.coef.T), -1)) - self._coef_sum
         rh, rl = dd_mul(t, 0.0, self.rate[0], self.rate[1])
         lin = np.mod(rh, 2 * np.pi) + rl
         return self.phi0 + lin + per
@@ -128,22 +134,76 @@ def _rate_on_grid(motion, I, center, mg, x, ref):
     return out
 
 
-def _phase_series(rate, nu, n):
-    """Modes, their integrated coefficients and the largest integrated coefficient on the grid's edge."""
-    F = np.fft.fft2(rate) / n ** 2
-    j = np.fft.fftfreq(n, 1 / n)
-    J = np.stack(np.meshgrid(j, j, indexing="ij"), -1)
-    div = 2j * np.pi * (J @ nu)
+def _phase_series(rate, nu):
+    """Integrated Fourier coefficients of the rate on an ``n1 x n2`` grid: the mode box ``(j, k)`` and its dense
+    coefficient matrix, the largest integrated coefficient on each axis' edge, the sum of the dropped ones
+    (a bound on the phase error they leave), the mean rate."""
+    n1, n2 = rate.shape
+    F = np.fft.fft2(rate) / (n1 * n2)
+    j, k = np.fft.fftfreq(n1, 1 / n1), np.fft.fftfreq(n2, 1 / n2)
+    div = 2j * np.pi * (j[:, None] * nu[0] + k[None, :] * nu[1])
     div[0, 0] = 1.0
     C = F / div
     C[0, 0] = 0.0
-    edge = (np.abs(J[..., 0]) >= n // 2 - 1) | (np.abs(J[..., 1]) >= n // 2 - 1)
-    keep = np.abs(C) > PHASE_CUT
-    return J[keep], C[keep], float(np.max(np.abs(C[edge]))), float(np.real(F[0, 0]))
+    tails = (float(np.max(np.abs(C[np.abs(j) >= n1 // 2 - 1]))), float(np.max(np.abs(C[:, np.abs(k) >= n2 // 2 - 1]))))
+    rows, cols, dropped = _mode_box(np.abs(C), np.abs(j), np.abs(k))
+    return (j[rows], k[cols]), C[np.ix_(rows, cols)], tails, dropped, float(np.real(F[0, 0]))
 
 
-PHASE_CUT = 1e-18      # radians: integrated Fourier coefficients below are dropped
-PHASE_TOL = 1e-15      # the grid doubles (64 .. 512) until the coefficients on its edge are below
+def _mode_box(A, aj, ak):
+    """The smallest box ``|j| <= J, |k| <= K`` (shrunk greedily, the cheaper row or column first) outside which
+    the coefficients sum to at most ``PHASE_DROP``: the evaluation costs ``(2J + 1)(2K + 1)`` products."""
+    M = np.zeros((int(aj.max()) + 1, int(ak.max()) + 1))
+    np.add.at(M, (aj.astype(int)[:, None], ak.astype(int)[None, :]), A)   # mass per (|j|, |k|)
+    J, K, dropped = M.shape[0] - 1, M.shape[1] - 1, 0.0
+    while J > 0 or K > 0:
+        rj = M[J, :K + 1].sum() if J > 0 else np.inf
+        ck = M[:J + 1, K].sum() if K > 0 else np.inf
+        if min(rj, ck) + dropped > PHASE_DROP:
+            break
+        if rj / (2 * K + 1) <= ck / (2 * J + 1):   # per product saved
+            dropped, J = dropped + rj, J - 1
+        else:
+            dropped, K = dropped + ck, K - 1
+    return aj <= J, ak <= K, dropped
+
+
+PHASE_DROP = 5e-16     # radians: the integrated Fourier coefficients dropped sum to at most this
+PHASE_TOL = 1e-15      # an axis of the grid doubles (32 .. 512) until the coefficients on its edge are below
+GRID_START, GRID_MAX = 32, 512
+
+
+def _phase_grid(motion, I, center, mg, k1, k2, nu):
+    """The reference vector and the rate's Fourier series on a grid refined per axis: a doubling samples only
+    the new (odd) rows or columns, so the work is that of the final grid."""
+    def sample(i1, n1, i2, n2, refs):
+        x = (i1 / n1)[:, None, None] * k1 + (i2 / n2)[None, :, None] * k2
+        return _rate_on_grid(motion, I, center, mg, x, refs)
+
+    n = [GRID_START, GRID_START]
+    ar = np.arange(GRID_START)
+    rates = sample(ar, GRID_START, ar, GRID_START, (-1, 0, 1, 2))
+    ref = int(np.argmax([np.min(d) for _, d in rates])) - 1
+    rate = rates[ref + 1][0]
+    while True:
+        modes, coef, tails, dropped, mean = _phase_series(rate, nu)
+        grow = [a for a in (0, 1) if tails[a] >= PHASE_TOL and n[a] < GRID_MAX]
+        if not grow:
+            return ref, modes, coef, max(tails) + dropped, mean, tuple(n)
+        for a in grow:
+            odd = np.arange(1, 2 * n[a], 2)
+            other = np.arange(n[1 - a])
+            new = (sample(odd, 2 * n[0], other, n[1], (ref,)) if a == 0
+                   else sample(other, n[0], odd, 2 * n[1], (ref,)))[0][0]
+            shape = list(rate.shape)
+            shape[a] *= 2
+            out = np.empty(shape)
+            idx = [slice(None), slice(None)]
+            idx[a] = slice(0, None, 2)
+            out[tuple(idx)] = rate
+            idx[a] = slice(1, None, 2)
+            out[tuple(idx)] = new
+            rate, n[a] = out, 2 * n[a]
 
 
 def kovalevskaya_attitude(motion: KovalevskayaMotion, I: ArrayLike, center: ArrayLike, Q0: ArrayLike,
@@ -154,20 +214,7 @@ def kovalevskaya_attitude(motion: KovalevskayaMotion, I: ArrayLike, center: Arra
     mg = mass * np.linalg.norm(g)
     k1, k2 = _torus_lattice(motion)
     nu = np.linalg.lstsq(np.stack([k1, k2], 1), motion.lattice_velocity(), rcond=None)[0]
-    ref = None
-    for n in (64, 128, 256, 512):
-        th = np.arange(n) / n
-        T1, T2 = np.meshgrid(th, th, indexing="ij")
-        x = T1[..., None] * k1 + T2[..., None] * k2
-        if ref is None:
-            rates = _rate_on_grid(motion, I, center, mg, x, (-1, 0, 1, 2))
-            ref = int(np.argmax([np.min(d) for _, d in rates])) - 1
-            rate = rates[ref + 1][0]
-        else:
-            rate = _rate_on_grid(motion, I, center, mg, x, (ref,))[0][0]
-        modes, coef, tail, mean = _phase_series(rate, nu, n)
-        if tail < PHASE_TOL:
-            break
+    ref, modes, coef, tail, mean, n = _phase_grid(motion, I, center, mg, k1, k2, nu)
     up = -g / np.linalg.norm(g)
     e1 = np.cross(up, [1.0, 0.0, 0.0]) if abs(up[0]) < 0.9 else np.cross(up, [0.0, 1.0, 0.0])
     e1 /= np.linalg.norm(e1)
@@ -195,7 +242,7 @@ def build_kovalevskaya_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega
     tau = motion.theta.tau
     diag = {"riemann_matrix": tau.copy(), "flow_direction": motion.V2.copy(), "torus_frequencies": att.nu[0].copy(),
             "fit_residual": motion.fit_residual, "phase_tail": att.tail, "phase_grid": att.grid,
-            "phase_modes": len(att.modes), "precession_rate": att.rate[0],
+            "phase_modes": int(np.count_nonzero(att.coef)), "precession_rate": att.rate[0],
             "phase_reference": "angular momentum" if att.ref < 0 else f"body axis e{att.ref + 1}",
             "c0": motion.c0, "l1": motion.l1}
     return att, diag

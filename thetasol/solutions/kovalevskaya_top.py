@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
-from thetasol.core.dd import dd_mul, dd_split_mp
+from thetasol.core.dd import dd_mul
 from thetasol.core.so3 import cross, rodrigues
 
 __all__ = ["KovalevskayaFrame", "kovalevskaya_frame", "kovalevskaya_variables", "kovalevskaya_curve",
@@ -205,7 +205,7 @@ def kovalevskaya_separated_flow(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, 
 
 # -- stage 3: (omega, gamma) from theta quotients -------------------------------------------------
 
-TAYLOR_ORDER = 2   # Taylor coefficients at t = 0 matched by the fit of the constants
+TAYLOR_ORDER = 2   # Taylor coefficients at t = 0 matched by the fit of the constants (the theta jet's order)
 
 
 def _conv(a, b, n):
@@ -262,16 +262,16 @@ class KovalevskayaMotion:
     c0: float
     l1: float
     P: np.ndarray
-    w: tuple = None     # (hi, lo): V2 = w_m + tau w_n in lattice coordinates, two words
+    w: tuple = None     # (hi, lo): V2 = w_m + tau w_n in lattice coordinates (lo = 0: float64 periods)
     fit_residual: float = 0.0
     V1: np.ndarray = None   # the other real flow of the torus (``sum_i ds_i/y_i``)
 
     def _jets(self, z, chars):
-        out = []
-        for ch in chars:
-            e, v, gr = self.theta.jet(z, char=ch, order=1, separated=True)
-            out.append((e, v, gr @ self.V2))
-        return out
+        # one pass over the lattice for all 16 half characteristics (the reduction of z done once): at 4096
+        # points 0.6x the time of seven passes, at one point 0.12x
+        e, v, gr = self.theta.jet(z, char="all", order=1, separated=True)
+        dv = gr @ self.V2
+        return [(e, v[..., i], dv[..., i]) for i in map(_char_index, chars)]
 
     def _values(self, t, order=0):
         """The seven theta values (and their t-derivatives) in a common unit.
@@ -366,6 +366,14 @@ def _refine(coef, val, der, rows, c0, l1, l, k):
     return (sol.x[:12] + 1j * sol.x[12:]).reshape(4, 3), float(np.max(np.abs(res(sol.x))))
 
 
+def _char_index(ch) -> int:
+    """Position of the half characteristic ``ch = (alpha, beta)`` (None: zero) in ``RiemannTheta(..., char="all")``."""
+    if ch is None:
+        return 0
+    bits = np.rint(2 * np.concatenate([ch[0], ch[1]])).astype(int)
+    return int(bits @ (1 << np.arange(len(bits) - 1, -1, -1)))
+
+
 def _half_characteristic(curve, base, tau, x):
     A = curve.abel_map([curve.places_over(complex(x))[0]], base=base).sum(axis=0)
     al = np.linalg.solve(tau.imag, A.imag)
@@ -373,12 +381,12 @@ def _half_characteristic(curve, base, tau, x):
     return np.round(2 * al) / 2 % 1, np.round(2 * be) / 2 % 1
 
 
-def _theta_taylor(theta, z, V, ch, order=TAYLOR_ORDER):
-    """Taylor coefficients of ``theta[ch](z + V t)`` at ``t = 0`` in units of ``exp(e)``."""
-    from math import factorial
-    out = [theta(z, ch, [V] * n, separated=True) for n in range(order + 1)]
-    e = out[0][0]
-    return e, np.array([np.exp(o[0] - e) * o[1] / factorial(n) for n, o in enumerate(out)])
+def _theta_taylor(theta, z, V, chars):
+    """Taylor coefficients (orders 0, 1, 2) of ``theta[ch](z + V t)`` at ``t = 0``, one row per characteristic, in a
+    common unit ``exp(e)``."""
+    _, v, gr, H = theta.jet(z, char="all", order=2, separated=True)
+    idx = [_char_index(ch) for ch in chars]
+    return np.stack([v[idx], gr[idx] @ V, np.einsum("i,cij,j->c", V, H[idx], V) / 2], 1)
 
 
 def kovalevskaya_motion(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, mass: float,
@@ -392,9 +400,7 @@ def kovalevskaya_motion(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: 
     ch2 = tuple(((ch1[a][0] + ch1[b][0]) % 1, (ch1[a][1] + ch1[b][1]) % 1) for a, b in ((1, 2), (0, 2), (0, 1)))
     z0 = setup.z0 + setup.K
     V2 = setup.V[:, 1]
-    taylor = [_theta_taylor(setup.theta, z0, V2, ch) for ch in (None,) + ch1 + ch2]
-    e = taylor[0][0]
-    T = [np.exp(tt[0] - e) * tt[1] for tt in taylor]
+    T = list(_theta_taylor(setup.theta, z0, V2, (None,) + ch1 + ch2))
     g = np.asarray(gravity, float)
     x = np.concatenate([np.asarray(omega0, float) @ setup.frame.P,
                         (np.asarray(Q0, float).T @ (g / np.linalg.norm(g))) @ setup.frame.P])
@@ -408,21 +414,4 @@ def kovalevskaya_motion(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: 
     coef = np.stack([np.linalg.solve(A, b + 0j) for A, b in rows])
     coef, resid = _refine(coef, val, der, rows, c0, l1, setup.l, k)
     return KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, coef, c0, l1, setup.frame.P,
-                              _lattice_frequency(setup.curve), resid, setup.V[:, 0])
-
-
-def _lattice_frequency(curve, dps=34):
-    """``V2 = w_m + tau w_n`` (``V2 = A^-1 e_2/2``, the time direction) from periods at ``dps`` digits, as two words."""
-    import mpmath
-    P = curve.period_matrix(dps=dps)
-    with mpmath.workdps(dps):
-        A = mpmath.matrix([[P[i, j] for j in range(2)] for i in range(2)])
-        B = mpmath.matrix([[P[i, 2 + j] for j in range(2)] for i in range(2)])
-        Ai = mpmath.inverse(A)
-        tau = Ai * B
-        tau = (tau + tau.T) / 2
-        V = Ai * mpmath.matrix([0, 1]) / 2
-        Yi = mpmath.inverse(tau.apply(mpmath.im))
-        wn = Yi * V.apply(mpmath.im)
-        wm = V.apply(mpmath.re) - tau.apply(mpmath.re) * wn
-        return dd_split_mp([wm[0], wm[1], wn[0], wn[1]])
+                              (motion.lattice_velocity(), np.zeros(4)), resid, setup.V[:, 0])

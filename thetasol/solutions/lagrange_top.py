@@ -215,12 +215,15 @@ def _mp_data(I, center, Q0, omega0, mgl):
     return P, S, A, C, beta, gamma, omega
 
 
-def _turning_points(A, C, B, g, w) -> _Roots:
-    """Roots of f about ``u0``, the elliptic parameters and the rates, all from the mp data."""
+def _turning_points(A, C, B, g, w, lam=0) -> _Roots:
+    """Roots of f about ``u0``, the elliptic parameters and the rates, all from the mp data.
+
+    ``lam`` is the axial rotor momentum of a Lagrange gyrostat (``M3 = C omega3 + lam``); it changes
+    ``a = M3 / A`` and ``kappa = omega3 - a`` (``phidot = omega3 - u psidot``), nothing else."""
     mf = mpmath.mpf
     g1, g2, g3 = g
     w1_, w2_, w3_ = w
-    am = C * w3_ / A
+    am = (C * w3_ + lam) / A
     wp2 = w1_ ** 2 + w2_ ** 2
     h = w1_ * g1 + w2_ * g2
     gp2 = g1 ** 2 + g2 ** 2
@@ -243,7 +246,7 @@ def _turning_points(A, C, B, g, w) -> _Roots:
     if D > 0:
         phi0 = mpmath.atan2(mpmath.sqrt(-xi1), mpmath.sqrt(xi2))
         x0 = mpmath.ellipf(phi0, m) * (1 if udot0 >= 0 else -1)
-    kappa = am * (A / C - 1)
+    kappa = am * (A / C - 1) if lam == 0 else w3_ - am
     K = mpmath.ellipk(m) if mc > 0 else mpmath.inf
     rp, rm = _mp_rates(kappa, K, lam, s_minus, s_plus, w1, v2, D, d31, mc)
     return _Roots(float(w1), float(v2), float(D), float(d31), float(m), float(mc), float(lam), float(x0),
@@ -439,17 +442,20 @@ def _fit_offsets(c: _Constants, Qp0, wp0, beta):
 
 
 def build_lagrange_top(I: np.ndarray, center: np.ndarray, Q0: np.ndarray, omega0: np.ndarray, mgl: float,
-                       up: np.ndarray) -> tuple[_Constants, dict]:
+                       up: np.ndarray, rotor_momentum: float = 0.0) -> tuple[_Constants, dict]:
     """The constants of the closed form (see the module docstring) for the inertia ``I`` symmetric
     about the axis of ``center`` (:func:`lagrange_frame`), ``mgl = mass |g| |center| > 0`` and ``up`` the
     upward vertical in space; the frames, moments, integrals, turning points and rates are formed in
     60-digit mpmath from the float64 data.
 
+    ``rotor_momentum`` is ``lam`` of a Lagrange gyrostat: a rotor momentum ``lam center/|center|``
+    along the axis (``I`` then excludes the rotor's axial moment); 0 for the top.
+
     Returns ``(constants, diagnostics)``; evaluate with :func:`lagrange_state`.
     """
     with mpmath.workdps(_DPS):
         Pm, Sm, A, C, B, g, w = _mp_data(I, center, Q0, omega0, (mpmath.mpf(float(mgl)), _unit_mp(up)))
-        R = _turning_points(A, C, B, g, w)
+        R = _turning_points(A, C, B, g, w, mpmath.mpf(float(rotor_momentum)))
         P = np.array([[float(Pm[j][i]) for j in range(3)] for i in range(3)])
         S = np.array([[float(Sm[j][i]) for j in range(3)] for i in range(3)])
         wp0 = np.array([float(x) for x in w])

@@ -17,10 +17,12 @@ The models (``method``), docs/neumann.md has the table:
   ``ds = dt / (u2 - u1)``: ``(du_k / ds)^2 = -4 A(u_k) B(u_k)``, ``B(z) = N(z) + sum_m L_m^2 (z - k_m)``,
   ``N(z) = sum_i x_i^2 prod_{j != i} (z - k_j)``, ``L = x cross xdot`` (Uhlenbeck's integrals
   ``sum F_i / (z - k_i) = B / A`` without their divisors ``k_i - k_j``): the curve ``y^2 = -4 A B``.
-  With ``u = lo + (hi - lo) sin^2(theta / 2)`` between neighbouring roots of ``A B``, ``s(theta)``, its
+  With ``u = lo + (hi - lo) sin^2(theta / 2)`` between neighbouring roots of ``A B`` (kept as offsets
+  from the nearest ``k_i``), ``s(theta)`` is a running integral on graded Gauss-Legendre panels, its
   inverse and ``t(s) = int (u2 - u1) ds`` are linear terms plus Fourier series, and
   ``x_i = prod_k sqrt(k_i - u_k) / sqrt(prod_{j != i} (k_i - k_j))`` (square roots smooth in theta).
-  A time is mapped to ``s`` by safeguarded Newton: a far time costs what ``t = 1`` costs.
+  A time is mapped to ``s`` by safeguarded Newton: a far time costs what ``t = 1`` costs.  The model
+  lives in :mod:`thetasol.solutions._neumann_torus` (:class:`NeumannTorus`, :class:`Oscillator`).
 * ``neumann/elliptic``, ``neumann/latitude`` (a repeated eigenvalue): ``z = x.n`` in a quartic well,
   the azimuth about ``n`` a quadrature on the same circle, or a uniform circle of latitude.
 * ``neumann/planar-*`` (an invariant great circle, or an isotropic ``a``): a pendulum in twice the
@@ -39,18 +41,19 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.panels import PeriodicIntegral
 from thetasol.core.periodic import (
-    HermiteTable,
     SeriesNotConverged,
     eval_series,
     fit_series,
     integrated,
     powers,
+    refined_fft,
     sum_series,
-    sum_series_derivative,
 )
-from thetasol.core.roots import monotone_newton, quadratic_roots
+from thetasol.core.roots import quadratic_roots
 from thetasol.core.threads import single_blas_thread
+from thetasol.solutions._neumann_torus import MIN_WIDTH, DegenerateTorus, NeumannTorus, Oscillator
 from thetasol.solutions._symmetry import SNAP_TOL
 from thetasol.solutions.base import ClosedFormUnavailable, Solution
 from thetasol.special.pendulum import pendulum_angle, pendulum_params
@@ -60,20 +63,12 @@ __all__ = ["NeumannSolution", "solve_neumann", "NeumannTorus", "Oscillator", "El
            "MIN_WIDTH", "PLANAR_TOL"]
 
 _EPS = np.finfo(float).eps
-#: Thinnest interval of a sphero-conical coordinate (relative to k3 - k1) that is accepted.
-MIN_WIDTH = 1e-8
 #: Out-of-plane size (|x_i|, |xdot_i| / sqrt(k3 - k1)) below which the point is put on the great circle.
 PLANAR_TOL = 64 * _EPS
 #: Relative tolerance on q0 . v0 (the velocity must be tangent to the sphere).
 TANGENT_TOL = 1e-12
 #: The numerical reference named where no closed form is built.
-_REFERENCE = "a numerical integration of qddot = -a q + lambda q, lambda = (q.aq - |qdot|^2) / |q|^2"
-
-
-class DegenerateTorus(ArithmeticError):
-    """The torus is too thin for the separated coordinates (the message says why); turned into
-    :class:`ClosedFormUnavailable` naming the caller's numerical reference by
-    :func:`series_or_unavailable`."""
+_REFERENCE = "thetasol.integrate_neumann (qddot = -a q + lambda q, lambda = (q.aq - |qdot|^2) / |q|^2)"
 
 
 @contextmanager
@@ -90,291 +85,6 @@ def series_or_unavailable(reference: str) -> Iterator[None]:
             f"to the reference axis; use {reference}") from None
 
 
-# -- one separated coordinate ----------------------------------------------------------------------
-
-class Oscillator:
-    """``u = lo + w sin^2(theta/2)`` on ``[lo, hi]`` with ``dtheta/dtau = sqrt(C prod_r |u - r|)``.
-
-    ``below``/``above``: gaps ``lo - r`` / ``r - hi`` to the other real roots (given accurately by the
-    caller); ``complex_roots``: the others.  ``alpha`` (the angle linear in tau, ``alpha = tau / fbar``
-    + const) and its inverse ``theta = alpha + B(alpha)`` are Fourier series.
-    """
-
-    def __init__(self, lo, hi, C, below=(), above=(), complex_roots=(), name="u"):
-        self.lo, self.hi, self.w = float(lo), float(hi), float(hi - lo)
-        self.C = float(C)
-        self.below = np.asarray(below, float)
-        self.above = np.asarray(above, float)
-        self.cplx = np.asarray(complex_roots, complex)
-        self.f = fit_series(lambda th: 1.0 / self.rate(th), f"d{name}/rate")
-        self.fbar = self.f[0].real
-        self.A = integrated(self.f) / self.fbar            # alpha = theta + A(theta)
-        # theta is known to eps * 2 pi at best: that is the noise floor of its series
-        self.B = fit_series(lambda al: self._invert(al) - al, f"the inverse angle of {name}",
-                            floor=2 * np.pi * _EPS)
-
-    def parts(self, th: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """``(u - lo, hi - u, sin(th/2), cos(th/2))``, each accurate near its zero."""
-        s, c = np.sin(0.5 * th), np.cos(0.5 * th)
-        return self.w * s * s, self.w * c * c, s, c
-
-    def u(self, th: np.ndarray) -> np.ndarray:
-        dlo, dhi, _, _ = self.parts(th)
-        return np.where(dlo <= dhi, self.lo + dlo, self.hi - dhi)
-
-    def dists(self, th: np.ndarray) -> np.ndarray:
-        """|u - r| for every other root, shape th.shape + (n_roots,)."""
-        dlo, dhi, _, _ = self.parts(th)
-        out = [d + dlo for d in self.below] + [d + dhi for d in self.above]
-        if self.cplx.size:
-            u = self.u(th)
-            out += [np.abs(u - r) for r in self.cplx]
-        return np.stack(out, -1)
-
-    def rate(self, th: np.ndarray) -> np.ndarray:
-        return np.sqrt(self.C * np.prod(self.dists(th), -1))
-
-    def _invert(self, al):
-        """theta with theta + A(theta) = al (safeguarded Newton; the map is increasing)."""
-        def fun(th):
-            g, dg = eval_series(self.A, th, derivative=True)
-            return th + g, 1.0 + dg
-
-        span = 2.0 * np.abs(self.A[1:]).sum() + 1e-300
-        return monotone_newton(fun, al, al.copy(), al - span, al + span,
-                                lambda new, th: np.abs(new - th) <= 1e-9, 100, 2)
-
-    def theta(self, al: np.ndarray) -> np.ndarray:
-        return al + eval_series(self.B, al)
-
-    def alpha(self, th: np.ndarray) -> np.ndarray:
-        return th + eval_series(self.A, th)
-
-
-# -- the genus-2 torus (distinct eigenvalues) ------------------------------------------------------
-
-_JL = [(1, 2), (0, 2), (0, 1)]                      # the other two indices of each eigenvalue
-
-
-class NeumannTorus:
-    """Neumann's problem ``xddot = -k x + (x.kx - |xdot|^2) x`` on the unit sphere (k ascending,
-    distinct) from ``(x0, y0)``: the separated solution ``x(t)``, ``xdot(t)``.
-
-    Public state read by the rotation: ``osc`` (the two :class:`Oscillator`), ``role[i][kk]`` (how
-    ``k_i`` sits in the interval of ``u_kk``: ``'lo'``/``'hi'`` endpoint or ``'below'``/``'above'`` with
-    its gap), ``norm``, ``th0``, ``alpha0``, ``fbar``, ``drift``, :meth:`state`, :meth:`s_of_t`.
-    """
-
-    method = "neumann/genus-2"
-
-    def __init__(self, k: np.ndarray, x0: np.ndarray, y0: np.ndarray):
-        zu, a2, a1 = self._separation(k, x0, y0)
-        self._oscillators()
-        self._roles()
-        self._initial_angles(x0, y0, zu, a2, a1)
-        self._signs(x0, y0)
-        self._time_series()
-
-    # -- set-up stages -----------------------------------------------------------------------------
-    def _separation(self, k, x0, y0):
-        """The sphero-conical coordinates zu = (u1, u2) and the roots of A B, shifted to k2 (exact)."""
-        d = k - k[1]
-        L = np.cross(x0, y0)
-        x2 = x0 * x0
-        a2 = x2.sum()
-        a1 = -sum(x2[i] * (d[j] + d[l]) for i, (j, l) in enumerate(_JL))
-        a0 = sum(x2[i] * d[j] * d[l] for i, (j, l) in enumerate(_JL))
-        zu = quadratic_roots(a2, a1, a0)              # u1 <= k2 <= u2 (shifted)
-        L2 = L * L
-        zb = quadratic_roots(a2, a1 + L2.sum(), a0 - (L2 * d).sum())
-        roots = sorted([(d[i], "k", i) for i in range(3)] + [(zb[j], "b", j) for j in range(2)],
-                       key=lambda r: r[0])
-        vals = np.array([r[0] for r in roots])
-        scale = max(abs(d[0]), abs(d[2]))
-        tol = 1e-9 * scale
-        if not (vals[1] - tol <= zu[0] <= vals[2] + tol and vals[3] - tol <= zu[1] <= vals[4] + tol):
-            raise ClosedFormUnavailable(f"Neumann solution: the sphero-conical coordinates {zu} are not in "
-                                        f"their oscillation intervals {vals} (internal inconsistency)")
-        self.d, self.zb, self.roots, self.vals, self.scale = d, zb, roots, vals, scale
-        self.ivals = [(1, 2), (3, 4)]
-        return zu, a2, a1
-
-    def _oscillators(self):
-        """One :class:`Oscillator` per coordinate; thin intervals bounded by a root of B are refused."""
-        vals, roots, scale = self.vals, self.roots, self.scale
-        self.osc = []
-        for kk, (i_lo, i_hi) in enumerate(self.ivals):
-            lo, hi = vals[i_lo], vals[i_hi]
-            if hi - lo <= MIN_WIDTH * scale and "b" in (roots[i_lo][1], roots[i_hi][1]):
-                # the width is a difference with a root of B known to eps * scale: the angle on a
-                # thin torus is known to ~eps / width (measured 5e-12 at width 1e-10, t = 40); an
-                # interval [k_i, k_j] (nearly repeated eigenvalues) is exact and kept
-                raise DegenerateTorus(
-                    f"Neumann solution: nearly degenerate torus (a sphero-conical coordinate stays within "
-                    f"{(hi - lo) / scale:.1e} of the span of k: the point within ~{np.sqrt((hi - lo) / scale):.0e} "
-                    "of an invariant great circle, or of a periodic orbit); the separated coordinates lose "
-                    "accuracy there (nearly planar motion is not handled)")
-            others = [vals[m] for m in range(5) if m not in (i_lo, i_hi)]
-            self.osc.append(Oscillator(lo, hi, 4.0, below=[lo - r for r in others if r < lo],
-                                       above=[r - hi for r in others if r >= hi], name=f"u{kk + 1}"))
-
-    def _roles(self):
-        """The role of each k_i in each interval: 'lo', 'hi' endpoint or a gap to the nearer endpoint."""
-        d, vals, roots = self.d, self.vals, self.roots
-        self.role = []
-        for i in range(3):
-            row = []
-            for i_lo, i_hi in self.ivals:
-                if roots[i_lo][1:] == ("k", i):
-                    row.append(("lo", 0.0))
-                elif roots[i_hi][1:] == ("k", i):
-                    row.append(("hi", 0.0))
-                elif d[i] < vals[i_lo]:
-                    row.append(("below", vals[i_lo] - d[i]))
-                else:
-                    row.append(("above", d[i] - vals[i_hi]))
-            self.role.append(row)
-        self.norm = np.array([np.sqrt(abs((d[i] - d[j]) * (d[i] - d[l]))) for i, (j, l) in enumerate(_JL)])
-
-    def _initial_angles(self, x0, y0, zu, a2, a1):
-        """theta_k at t = 0: cos from the position, sin from the velocity (both absolutely accurate):
-        du/ds = (u2 - u1) du/dt = (w/2) sin(theta) dtheta/ds = w sin(theta) sqrt(prod_others |u - r|)."""
-        d, vals = self.d, self.vals
-        th0 = []
-        gap0 = zu[1] - zu[0]
-        for kk, o in enumerate(self.osc):
-            z = zu[kk]
-            udot = -sum(2.0 * x0[i] * y0[i] * (z - d[j]) * (z - d[l])
-                        for i, (j, l) in enumerate(_JL)) / (2.0 * a2 * z + a1)
-            cos_th = ((o.hi - z) - (z - o.lo)) / o.w
-            dist = [abs(z - vals[m]) for m in range(5) if m not in self.ivals[kk]]
-            sin_th = gap0 * udot / (o.w * np.sqrt(np.prod(dist)))
-            th0.append(np.arctan2(sin_th, cos_th))
-        self.th0 = np.array(th0)
-
-    def _signs(self, x0, y0):
-        """The constant signs sigma_i of x_i fitted at t = 0, and how well the data are reproduced."""
-        self.sigma = np.ones(3)
-        xm, dxm, gm = self.state(self.th0[0], self.th0[1])
-        tau2 = 1.0 / self.scale
-        self.sigma = np.where(x0 * xm + tau2 * y0 * dxm / gm >= 0, 1.0, -1.0)
-        xm, dxm, gm = self.state(self.th0[0], self.th0[1])
-        self.fit_residual = float(max(np.abs(xm - x0).max(), np.sqrt(tau2) * np.abs(dxm / gm - y0).max()))
-
-    def _time_series(self):
-        """The time along the torus, t(s) = <u2 - u1> s + bounded, and cheap tables of the bounded
-        parts (to 1e-12 of the time scale 1/drift) for the first Newton steps."""
-        self.alpha0 = np.array([o.alpha(th) for o, th in zip(self.osc, self.th0, strict=True)])
-        self.cu = [fit_series(lambda al, o=o: o.u(o.theta(al)), f"u{kk + 1}(alpha)",
-                              floor=4 * _EPS * self.scale)
-                   for kk, o in enumerate(self.osc)]
-        self.P = [integrated(c) for c in self.cu]
-        self.fbar = np.array([o.fbar for o in self.osc])
-        self.drift = self.cu[1][0].real - self.cu[0][0].real
-        self.P0 = np.array([eval_series(P, a) for P, a in zip(self.P, self.alpha0, strict=True)])
-        self.Pspan = sum(2 * f * np.abs(P).sum() for f, P in zip(self.fbar, self.P, strict=True)) * 2
-        self.tables = [HermiteTable(f * P, 1e-12 / self.drift) for f, P in zip(self.fbar, self.P, strict=True)]
-        self.table0 = [tab(a)[0] for tab, a in zip(self.tables, self.alpha0, strict=True)]
-
-    # -- the state on the torus --------------------------------------------------------------------
-    def _rho(self, i, kk, th):
-        """Signed smooth sqrt|k_i - u_kk| and its theta-derivative."""
-        o = self.osc[kk]
-        kind, g = self.role[i][kk]
-        s, c = np.sin(0.5 * th), np.cos(0.5 * th)
-        rw = np.sqrt(o.w)
-        if kind == "lo":
-            return rw * s, 0.5 * rw * c
-        if kind == "hi":
-            return rw * c, -0.5 * rw * s
-        if kind == "below":
-            r = np.sqrt(g + o.w * s * s)
-            return r, o.w * s * c / (2.0 * r)
-        r = np.sqrt(g + o.w * c * c)
-        return r, -o.w * s * c / (2.0 * r)
-
-    def state(self, th1: np.ndarray, th2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """x, dx/ds and u2 - u1 at the angles (th1, th2) (broadcast: a grid costs two 1-d passes)."""
-        th1, th2 = np.asarray(th1, float), np.asarray(th2, float)
-        r1 = self.osc[0].rate(th1)
-        r2 = self.osc[1].rate(th2)
-        xs, dxs = [], []
-        for i in range(3):
-            p1, q1 = self._rho(i, 0, th1)
-            p2, q2 = self._rho(i, 1, th2)
-            xs.append(self.sigma[i] / self.norm[i] * p1 * p2)
-            dxs.append(self.sigma[i] / self.norm[i] * ((q1 * r1) * p2 + p1 * (q2 * r2)))
-        o1, o2 = self.osc
-        # u2 - u1 from the gap between the intervals (no cancellation)
-        gap = ((o2.lo - o1.hi) + o1.parts(th1)[1]) + o2.parts(th2)[0]
-        return np.stack(np.broadcast_arrays(*xs), -1), np.stack(np.broadcast_arrays(*dxs), -1), gap
-
-    def motion(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(x, xdot) at the times t (1-d)."""
-        _, _, th = self.s_of_t(t)
-        x, dx, gap = self.state(th[0], th[1])
-        return x, dx / gap[:, None]
-
-    # -- time -> s ---------------------------------------------------------------------------------
-    def _alpha(self, s):
-        """The two angles alpha_k(s), linear in s: shape (2, s.size)."""
-        return self.alpha0[:, None] + s[None, :] / self.fbar[:, None]
-
-    def time_of_s(self, s: np.ndarray, angles: bool = False) -> tuple[np.ndarray, ...]:
-        """t(s) and dt/ds = u2 - u1 at s (one set of powers e^{i n alpha} per coordinate); with
-        ``angles`` also theta_k(alpha_k(s)) and dtheta_k/dalpha_k."""
-        al = self._alpha(s)
-        t = self.drift * s
-        u, th, dth = [], [], []
-        for kk, (o, P) in enumerate(zip(self.osc, self.P, strict=True)):
-            E = powers(al[kk], max(P.size, o.B.size) - 1)
-            t = t + (1 if kk else -1) * self.fbar[kk] * (sum_series(E, P) - self.P0[kk])
-            th.append(al[kk] + sum_series(E, o.B))
-            u.append(o.u(th[-1]))
-            if angles:
-                dth.append(1.0 + sum_series_derivative(E, o.B))
-        if angles:
-            return t, u[1] - u[0], np.array(th), np.array(dth)
-        return t, u[1] - u[0]
-
-    def _time_model(self, s):
-        """t(s) and dt/ds from the Hermite tables of the bounded parts."""
-        t, dt = self.drift * s, self.drift
-        for kk, (tab, f, a0) in enumerate(zip(self.tables, self.fbar, self.alpha0, strict=True)):
-            g, dg = tab(a0 + s / f)
-            sgn = 1 if kk else -1
-            t, dt = t + sgn * (g - self.table0[kk]), dt + sgn * dg / f
-        return t, dt
-
-    def s_of_t(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """s with t(s) = t (t(s) is increasing) and alpha(s), theta(s): safeguarded Newton on the
-        tables of t(s), then one Newton step on the series; if a step is above 1e-9 / drift and the
-        rounding of s (64 eps |s|), a table was poor (it stopped at its node limit) and the
-        safeguarded Newton goes on on the series."""
-        lo, hi = (t - self.Pspan) / self.drift, (t + self.Pspan) / self.drift
-        unit = 1.0 / self.drift
-
-        def close(tol):
-            return lambda new, s: np.abs(new - s) <= np.maximum(tol * unit, 64 * _EPS * np.abs(s))
-
-        s0 = monotone_newton(self._time_model, t, t / self.drift, lo, hi, close(1e-10), 200, 0)
-        # the tables are good to 1e-12 unit: one series step lands at rounding (the step after it
-        # would be ~1e-24 unit), and theta follows to first order (the second is ~1e-24 too)
-        t0, dt0, th0, dth0 = self.time_of_s(s0, angles=True)
-        step = (t - t0) / dt0
-        s = s0 + step
-        if np.all(close(1e-9)(s, s0)):
-            return s, self._alpha(s), th0 + dth0 * (step / self.fbar[:, None])
-        s = monotone_newton(self.time_of_s, t, s0, lo, hi, close(1e-9), 200, 1)     # a poor table
-        al = self._alpha(s)
-        return s, al, np.array([o.theta(a) for o, a in zip(self.osc, al, strict=True)])
-
-    def info(self) -> dict:
-        """Periods and sizes of the series (for diagnostics)."""
-        return {"genus": 2, "torus_dimension": 2, "frequencies_s": 1.0 / self.fbar,
-                "time_drift": float(self.drift), "series_terms": [int(o.f.size) for o in self.osc]}
-
-
 # -- a repeated eigenvalue: an axis of symmetry n --------------------------------------------------
 
 def _axes_of_symmetry(idx: int):
@@ -386,15 +96,16 @@ def _axes_of_symmetry(idx: int):
 
 
 def _latitude_roots(kappa: float, h: float, ell: float):
-    """The roots in z of zdot^2 = kappa z^4 - (kappa + 2h) z^2 + 2h - ell^2, as (root, 1 - root when
-    known accurately): z^2 = 1 - v with kappa v^2 + (2h - kappa) v - ell^2 = 0 (v accurate near the poles)."""
+    """The roots in z of zdot^2 = kappa z^4 - (kappa + 2h) z^2 + 2h - ell^2, as (root, 1 - |root| for a
+    real root): z^2 = 1 - v with kappa v^2 + (2h - kappa) v - ell^2 = 0 (v, and so 1 - |z| = v / (1 + |z|),
+    accurate near the poles)."""
     v = quadratic_roots(kappa, 2.0 * h - kappa, -ell * ell)
     roots = []
     for vv in v:
         w = 1.0 - vv
         if w >= 0:
             rt = np.sqrt(w)
-            roots += [(rt, vv / (1.0 + rt)), (-rt, None)]
+            roots += [(rt, vv / (1.0 + rt)), (-rt, vv / (1.0 + rt))]
         else:
             roots += [(1j * np.sqrt(-w), None), (-1j * np.sqrt(-w), None)]
     return roots
@@ -466,30 +177,77 @@ class LatitudeCircle:
 class EllipticNeumann:
     """a with a repeated eigenvalue: ``K = k_perp + kappa n n^T`` with ``n = e_idx``.  ``z = x.n``
     oscillates in a quartic well, ``zdot^2 = kappa z^4 - (kappa + 2h) z^2 + 2h - ell^2``; the azimuth
-    ``int ell / (1 - z^2) dt`` is a Fourier series on the same circle."""
+    ``int ell / (1 - z^2) dt`` is a Fourier series on the same circle.  Where that series does not
+    converge (a small ``ell`` near a pole: the azimuth turns by ~pi in a short time) the horizontal
+    part ``rho e^{i lambda}``, smooth through the pole, is one instead (:meth:`_cartesian`)."""
 
     method = "neumann/elliptic"
 
     def __init__(self, ax: _Axial, roots, lo, hi, y0: np.ndarray):
         self.ax = ax
         zlo, zhi = float(lo[0].real), float(hi[0].real)
-        self.one_minus_hi = hi[1] if hi[1] is not None else 1.0 - zhi
-        self.one_plus_lo = 1.0 + zlo
+        # 1 - z_hi and 1 + z_lo from 1 - |z| where they are small (a turning point near a pole)
+        self.one_minus_hi = hi[1] if zhi > 0 else 1.0 - zhi
+        self.one_plus_lo = lo[1] if zlo < 0 else 1.0 + zlo
         others = [r[0] for r in roots if r is not lo and r is not hi]
         self.osc = osc = Oscillator(zlo, zhi, abs(ax.kappa),
                                     below=[zlo - r.real for r in others if np.isreal(r) and r.real < zlo],
                                     above=[r.real - zhi for r in others if np.isreal(r) and r.real >= zhi],
                                     complex_roots=[r for r in others if not np.isreal(r)], name="z")
-        self.c_lam = self.series(lambda th: ax.ell / self.rho2(th), "the azimuth rate")
         # initial angle theta0: cos from the position, sin from zdot = (w/2) sin(theta) rate
         z0, zd0 = ax.z0, y0[ax.idx]
         cos0 = ((zhi - z0) - (z0 - zlo)) / osc.w
         sin0 = 2.0 * zd0 / (osc.w * np.sqrt(osc.C * np.prod(np.abs(np.array(others) - z0))))
-        self.al0 = osc.alpha(np.arctan2(sin0, cos0))
+        th0 = np.arctan2(sin0, cos0)
+        self.al0 = osc.alpha(th0)
         self.fbar = osc.fbar
+        try:
+            self.c_lam = self.series(lambda th: ax.ell / self.rho2(th), "the azimuth rate")
+        except SeriesNotConverged:
+            self.c_lam = None
+            self._cartesian(th0)
+            return
         self.P_lam = integrated(self.c_lam)
         self.Pl0 = eval_series(self.P_lam, self.al0)
         self.n_pow = max(osc.B.size, self.P_lam.size) - 1
+
+    def _cartesian(self, th0: float) -> None:
+        """``W~(alpha) = rho e^{i (lambda - nu alpha)}`` as a complex Fourier series (``Wp``: m >= 0,
+        ``Wn``: m = -1, -2, ...), ``nu`` the azimuth's advance per unit alpha.  lambda on the grid is the
+        running integral of ``dlambda/dtheta = ell / ((1 - z^2) rate)`` on panels graded toward the
+        zeros of ``1 - z^2`` (``theta = pi +- 2i asinh sqrt((1 - z_hi) / w)``, ``+-2i asinh sqrt((1 + z_lo)
+        / w)``) and of the rate."""
+        ax, osc = self.ax, self.osc
+        poles = [np.pi + 2j * np.arcsinh(np.sqrt(self.one_minus_hi / osc.w)),
+                 2j * np.arcsinh(np.sqrt(self.one_plus_lo / osc.w))]
+        poles = np.array(poles + [p.conjugate() for p in poles])
+        lam = PeriodicIntegral(lambda th: ax.ell / (self.rho2(th) * osc.rate(th)),
+                               np.concatenate([osc.singularities(), poles, -poles]))
+        self.nu = lam.total / (2 * np.pi)
+        lam_start = ax.lam0 - lam(th0)
+        floor = 8 * _EPS * (1.0 + 2 * np.pi * abs(self.nu))
+
+        def transform(n):
+            al = 2 * np.pi * np.arange(n) / n
+            th = osc.theta_grid(n)
+            W = np.sqrt(self.rho2(th)) * np.exp(1j * (lam_start + lam(th) - self.nu * al))
+            return np.fft.fft(W) / n, slice((3 * n) // 8, (5 * n) // 8 + 1), floor
+
+        n, c, keep = refined_fft(transform, "the horizontal motion", 64, 2 ** 13)
+        m = np.abs(np.fft.fftfreq(n, 1.0 / n)[keep]).max() if keep.any() else 0
+        m = int(max(m, 1))
+        self.Wp, self.Wn = c[:m + 1].copy(), c[n - m:][::-1].copy()
+        self.n_pow = max(osc.B.size - 1, m)
+
+    def _horizontal(self, al: np.ndarray, E: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """rho e^{i lambda} and its time derivative from the Cartesian series (:meth:`_cartesian`)."""
+        m = self.Wp.size - 1
+        Ep, En = E[:m], E[:m].conj()
+        j = np.arange(1, m + 1)
+        Wt = self.Wp[0] + self.Wp[1:] @ Ep + self.Wn @ En
+        dWt = (1j * j * self.Wp[1:]) @ Ep - (1j * j * self.Wn) @ En
+        rot = np.exp(1j * self.nu * al)
+        return Wt * rot, (dWt + 1j * self.nu * Wt) * rot / self.fbar
 
     def rho2(self, th: np.ndarray) -> np.ndarray:
         """1 - z^2 without cancellation."""
@@ -497,8 +255,13 @@ class EllipticNeumann:
         return (self.one_minus_hi + dhi) * (self.one_plus_lo + dlo)
 
     def series(self, g: Callable[[np.ndarray], np.ndarray], what: str) -> np.ndarray:
-        """The Fourier series in alpha of g(theta(alpha)) (noise floor from ell)."""
-        return fit_series(lambda al: g(self.osc.theta(al)), what, floor=4 * _EPS * (abs(self.ax.ell) + 1.0))
+        """The Fourier series in alpha of g(theta(alpha)).  Noise floor: the rounding of g (from ell) and
+        that of theta (2 pi eps) times the largest |dg/dtheta|, by differences at the quadrature nodes
+        of the oscillator (dense where g is steep: near a pole with small ell, 1 / (1 - z^2) is)."""
+        th, h = self.osc.F.nodes, 1e-8
+        slope = np.abs(g(th + h) - g(th - h)).max() / (2 * h)
+        return fit_series(lambda al: g(self.osc.theta_grid(al.size)), what,
+                          floor=4 * _EPS * (abs(self.ax.ell) + 1.0) + 4 * np.pi * _EPS * slope)
 
     def angle(self, t: np.ndarray, n_pow: int = 0) -> tuple[np.ndarray, np.ndarray]:
         """alpha(t) and its powers e^{ij alpha}, j = 1..max(self.n_pow, n_pow) (shared by the series)."""
@@ -511,9 +274,18 @@ class EllipticNeumann:
         m1, m2, n = ax.basis()
         th = al + sum_series(E, osc.B)
         z = osc.u(th)
+        zd = 0.5 * osc.w * np.sin(th) * osc.rate(th)
+        if self.c_lam is None:
+            # the direction of W, its modulus from z (|x| = 1 to rounding at any t); the velocity
+            # made tangent (the series' error has a normal part)
+            W, dW = self._horizontal(al, E)
+            aW = np.abs(W)
+            W = np.sqrt(self.rho2(th)) * np.where(aW > 0, W / np.where(aW > 0, aW, 1.0), 1.0)
+            x = z[:, None] * n + W.real[:, None] * m1 + W.imag[:, None] * m2
+            xd = zd[:, None] * n + dW.real[:, None] * m1 + dW.imag[:, None] * m2
+            return x, xd - x * np.einsum("ij,ij->i", x, xd)[:, None], th
         rho = np.sqrt(self.rho2(th))
         lam = ax.lam0 + self.c_lam[0].real * t + self.fbar * (sum_series(E, self.P_lam) - self.Pl0)
-        zd = 0.5 * osc.w * np.sin(th) * osc.rate(th)
         cl, sl = np.cos(lam)[:, None], np.sin(lam)[:, None]
         radial = cl * m1 + sl * m2
         east = -sl * m1 + cl * m2
@@ -528,8 +300,9 @@ class EllipticNeumann:
 
     def info(self) -> dict:
         return {"torus_dimension": 1, "reference_axis": self.ax.idx, "period": float(2 * np.pi * self.fbar),
-                "azimuth_drift": float(self.c_lam[0].real),
-                "series_terms": [int(self.osc.f.size), int(self.c_lam.size)]}
+                "azimuth_drift": float(self.c_lam[0].real if self.c_lam is not None else self.nu / self.fbar),
+                "series_terms": [int(self.osc.B.size),
+                                 int(self.c_lam.size if self.c_lam is not None else self.Wp.size)]}
 
 
 def _repeated_model(k, x0, y0, idx):
@@ -757,8 +530,9 @@ def solve_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, *, reference: str 
     ValueError
         ``a`` not symmetric, NaN or inf in the data, ``q0 = 0``, ``v0`` not tangent.
     ClosedFormUnavailable
-        The torus within ~1e-4 (relative) of a separatrix or ~1e-8 of an invariant great circle
-        without being on it (the series would not converge or lose accuracy).
+        The torus on a separatrix within rounding (two branch points equal), thinner than
+        ``MIN_WIDTH`` (within ~1e-7 rad of an invariant great circle without being on it), or a
+        Fourier series that would need more terms than its limit: the message names ``reference``.
     """
     a, q0, v0, R = _validated(a, q0, v0)
     k, axes = np.linalg.eigh(a)

@@ -255,7 +255,7 @@ def _genus2_motion(T: NeumannTorus, e10: np.ndarray):
 
     info = {"genus": 2, "reference_axis": ref, "angle_modes": ang.n_modes, "angle_grid": ang.n,
             "frequencies_s": nu.copy(), "time_drift": float(T.drift),
-            "series_terms": [int(o_.f.size) for o_ in T.osc], "reference_margin": float(margin),
+            "series_terms": [int(o_.B.size) for o_ in T.osc], "reference_margin": float(margin),
             "torus_dimension": 2}
     return motion, info
 

@@ -272,14 +272,62 @@ def tail_bound(R: float, rho: float, g: int, order: int = 0, a: float = 1.0) -> 
     return val
 
 
+def _polymul(p: list, q: list) -> list:
+    out = [0.0] * (len(p) + len(q) - 1)
+    for i, x in enumerate(p):
+        for j, y in enumerate(q):
+            out[i + j] += x * y
+    return out
+
+
+def _tail_closed(R: float, rho: float, g: int, order: int, a: float) -> float | None:
+    """:func:`tail_bound` in closed form, or None where the weight's derivative changes sign beyond R.
+
+    The integrand is a polynomial in t times exp(-pi t^2) (no clipping where the polynomial is
+    positive on [R, inf): beyond the positive root of 2 pi t (1 + a t) - order a); with
+    ``I_k = int_R^inf t^k exp(-pi t^2) dt = (R^(k-1) exp(-pi R^2) + (k-1) I_(k-2)) / (2 pi)``.
+    The quadrature's upper limit R + 12 drops ``exp(-pi (R + 12)^2)``, far below double precision.
+    """
+    h = [0.0, 2 * math.pi]
+    if order:
+        t_star = (-2 * math.pi + math.sqrt(4 * math.pi ** 2 + 8 * math.pi * a * a * order)) / (4 * math.pi * a)
+        if R <= 1.01 * t_star:
+            return None
+        w = [1.0, a]
+        h = _polymul(w, h)
+        h[0] -= order * a
+        for _ in range(order - 1):
+            h = _polymul(h, w)
+    c = h
+    for _ in range(g):
+        c = _polymul(c, [1.0, 2.0 / rho])
+    ex = math.exp(-math.pi * R * R)
+    I = [0.5 * math.erfc(math.sqrt(math.pi) * R), ex / (2 * math.pi)]
+    for k in range(2, len(c)):
+        I.append((R ** (k - 1) * ex + (k - 1) * I[k - 2]) / (2 * math.pi))
+    return sum(ck * Ik for ck, Ik in zip(c, I))
+
+
+def _tail_above(R: float, tol: float, rho: float, g: int, order: int, a: float) -> bool:
+    """``tail_bound(R) > tol``, decided by the closed form where it is clear by a factor 1 +- 1e-4
+    (far beyond the quadrature's 1e-6), else by the quadrature: the same decisions, ~30x cheaper."""
+    v = _tail_closed(R, rho, g, order, a)
+    if v is not None and math.isfinite(v):
+        if v > tol * (1 + 1e-4):
+            return True
+        if v < tol * (1 - 1e-4):
+            return False
+    return tail_bound(R, rho, g, order, a) > tol
+
+
 def radius_for(tol: float, rho: float, g: int, order: int = 0, a: float = 1.0) -> float:
     """Smallest R (to 1e-3) with ``tail_bound(R) <= tol``."""
     lo, hi = 0.5, 2.0
-    while tail_bound(hi, rho, g, order, a) > tol:
+    while _tail_above(hi, tol, rho, g, order, a):
         lo, hi = hi, hi * 1.5
     while hi - lo > 1e-3:
         mid = 0.5 * (lo + hi)
-        if tail_bound(mid, rho, g, order, a) > tol:
+        if _tail_above(mid, tol, rho, g, order, a):
             lo = mid
         else:
             hi = mid

@@ -21,7 +21,7 @@ from thetasol.solutions.theta_rotation.node import local_branch, node_branch
 from thetasol.solutions.theta_rotation.riemann import ThetaShifts
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
 
-__all__ = ["N_CIRCLE", "N_RAY", "CauchyMeans", "cauchy_means", "auxiliary_rows"]
+__all__ = ["N_CIRCLE", "N_RAY", "CauchyMeans", "cauchy_means", "cauchy_means_at", "auxiliary_rows"]
 
 #: Points on the circles of the Cauchy means, and Gauss-Legendre nodes on their radii.
 N_CIRCLE = 32
@@ -69,27 +69,43 @@ def cauchy_means(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
 
     ``theta_d = (ed, vd, dlog_d)``: theta at ``d_k`` (exponent, value) and its log-derivative along U.
     """
+    return cauchy_means_at(sd, dv, ts, theta_d, (radius,))[0]
+
+
+def cauchy_means_at(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
+                    theta_d: tuple[np.ndarray, np.ndarray, np.ndarray], radii) -> list[CauchyMeans]:
+    """:func:`cauchy_means` at each of ``radii``, with theta on all the circles in one evaluation."""
     curve, th, U, Bc = sd.curve, sd.theta, sd.U, sd.Bc
     Jp, M, u, W0 = sd.frame.Jp, curve.M, curve.u, sd.frame.W0
     ed_, vd_, dlog_d = theta_d
-    X0 = np.zeros((3, 3), complex)
-    rho = np.zeros((3, 3), complex)                      # rho_k(P_s) theta(d_k), [s, k]
-    cst = np.zeros((3, 3), complex)
-    for s_ in range(3):
-        Ec, wc, local = circle_data(sd, s_, radius)
-        A_loc = dv.AP0[s_][None, :] + local @ sd.Ainv.T         # (N, g)
-        if sd.slopes[s_] is not None:
-            v = node_branch(curve, sd.slopes[s_], Ec)[1]
-        else:
-            v = right_eigenvector(lax_matrix(Jp, M, u, Ec), wc)
-        psi = v / (v @ dv.alpha)[:, None]
-        dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * Ec[:, None, None] + W0[None], psi) @ Bc
-        psi = psi @ Bc
-        X0[:, s_] = psi.mean(axis=0)
-        eb, vb, gb = th.jet(A_loc[:, None, :] - ts.e[None, :, :], order=1, separated=True)
-        rho[s_] = (psi / vb * np.exp(ed_[None, :] - eb)).mean(axis=0) * vd_
-        cst[s_] = (dpsi / psi - (gb @ U) / vb).mean(axis=0) + dlog_d
-    return CauchyMeans(X0=X0, rho=rho, nu=cst)
+    circles = []                                         # (psi, dpsi, A_loc) per radius and place
+    for radius in radii:
+        for s_ in range(3):
+            Ec, wc, local = circle_data(sd, s_, radius)
+            if sd.slopes[s_] is not None:
+                v = node_branch(curve, sd.slopes[s_], Ec)[1]
+            else:
+                v = right_eigenvector(lax_matrix(Jp, M, u, Ec), wc)
+            psi = v / (v @ dv.alpha)[:, None]
+            dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * Ec[:, None, None] + W0[None], psi) @ Bc
+            circles.append((psi @ Bc, dpsi, dv.AP0[s_][None, :] + local @ sd.Ainv.T))
+    A_all = np.concatenate([c[2] for c in circles])
+    eb_all, vb_all, gb_all = th.jet(A_all[:, None, :] - ts.e[None, :, :], order=1, separated=True)
+    out, pos = [], 0
+    for i in range(len(radii)):
+        X0 = np.zeros((3, 3), complex)
+        rho = np.zeros((3, 3), complex)                  # rho_k(P_s) theta(d_k), [s, k]
+        cst = np.zeros((3, 3), complex)
+        for s_ in range(3):
+            psi, dpsi, A_loc = circles[3 * i + s_]
+            sl = slice(pos, pos + len(A_loc))
+            pos += len(A_loc)
+            eb, vb, gb = eb_all[sl], vb_all[sl], gb_all[sl]
+            X0[:, s_] = psi.mean(axis=0)
+            rho[s_] = (psi / vb * np.exp(ed_[None, :] - eb)).mean(axis=0) * vd_
+            cst[s_] = (dpsi / psi - (gb @ U) / vb).mean(axis=0) + dlog_d
+        out.append(CauchyMeans(X0=X0, rho=rho, nu=cst))
+    return out
 
 
 def auxiliary_rows(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,

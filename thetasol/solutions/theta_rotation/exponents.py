@@ -20,7 +20,7 @@ import sympy as sp
 
 from thetasol.solutions._symmetry import SNAP_TOL
 from thetasol.solutions.base import ClosedFormUnavailable
-from thetasol.solutions.theta_rotation.cauchy import CauchyMeans, auxiliary_rows, cauchy_means
+from thetasol.solutions.theta_rotation.cauchy import CauchyMeans, auxiliary_rows, cauchy_means_at
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.infinity import velocity_at_infinity
 from thetasol.solutions.theta_rotation.riemann import ThetaShifts
@@ -244,8 +244,7 @@ def exponents(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts) -> Exp
     ed_, vd_, gd_ = sd.theta.jet(ts.d, order=1, separated=True)
     theta_d = (ed_, vd_, (gd_ @ sd.U) / vd_)
     r = dv.radius
-    means = cauchy_means(sd, dv, ts, theta_d, r)
-    meansb = cauchy_means(sd, dv, ts, theta_d, 0.5 * r)
+    means, meansb = cauchy_means_at(sd, dv, ts, theta_d, (r, 0.5 * r))
     aux = auxiliary_rows(sd, dv, ts, theta_d[2])
     nu_fit, resid, node_gap_change, nu_exact_change = _fixed_exponents(sd, means, meansb, aux)
     if resid > MAX_FIT_RESIDUAL:

@@ -31,6 +31,10 @@ if TYPE_CHECKING:
 
 __all__ = ["ThetaShifts", "theta_shifts"]
 
+#: Riemann constant: half-period candidates whose theta exceeds this at one divisor are dropped
+#: (the choice needs the best score below 1e-8 and the runner-up above 10 x that or below 1e-8).
+PRUNE = 1e-7
+
 
 @dataclass(frozen=True, eq=False)
 class ThetaShifts:
@@ -116,9 +120,13 @@ def riemann_constant(sd: SpectralData, canon: dict) -> np.ndarray:
     a_, b_ = np.repeat(bits, 2 ** g, axis=0), np.tile(bits, (2 ** g, 1))
     cands = -0.5 * AC + 0.5 * a_ + 0.5 * (b_ @ tau.T)
     score = np.zeros(len(cands))
+    live = np.arange(len(cands))
     for AD in A_all[len(places):].reshape(3, g - 1, g).sum(axis=1):
-        _, v = th(cands + AD[None, :], separated=True)
-        score = np.maximum(score, np.abs(v))
+        _, v = th(cands[live] + AD[None, :], separated=True)
+        score[live] = np.maximum(score[live], np.abs(v))
+        # a candidate scoring above PRUNE can be neither the choice nor the runner-up that decides
+        # the test below (both need a score < 1e-8 or 10 x the best): the later divisors skip it
+        live = live[score[live] <= PRUNE]
     order = np.argsort(score)
     # Near a pinched cycle two candidates differ only by exp(-pi Im tau_jj / 4) and give theta
     # functions equal to that size: the smallest is taken when both vanish to the accuracy of the

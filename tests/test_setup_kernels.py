@@ -1,0 +1,108 @@
+"""The fast kernels of the theta-function set-up against their plain forms.
+
+Each kernel must give the plain computation's values: the decisions of the theta radius (closed-form
+tail against the quadrature), the lattice points of the flow's ellipsoids (enumeration against the
+whole box), the compensated Horner scheme (stacked against per-component error-free transformations,
+including the rescaled path above 1e150) and the 3x3 mpmath solve of the pole polishing (against
+mpmath.lu_solve).
+"""
+import math
+
+import mpmath
+import numpy as np
+import pytest
+
+from thetasol.curves import _poly
+from thetasol.mechanics.lax import _solve3
+from thetasol.theta import lattice
+from thetasol.theta.flow import ellipsoid_candidates, lower_factor
+
+
+def _radius_by_quadrature(tol, rho, g, order, a):
+    lo, hi = 0.5, 2.0
+    while lattice.tail_bound(hi, rho, g, order, a) > tol:
+        lo, hi = hi, hi * 1.5
+    while hi - lo > 1e-3:
+        mid = 0.5 * (lo + hi)
+        if lattice.tail_bound(mid, rho, g, order, a) > tol:
+            lo = mid
+        else:
+            hi = mid
+    return hi
+
+
+def test_tail_closed_form_matches_quadrature_and_radii_agree():
+    rng = np.random.default_rng(3)
+    worst = 0.0
+    for _ in range(60):
+        rho, g = 10 ** rng.uniform(-1, 0.5), int(rng.integers(1, 6))
+        order, a = int(rng.integers(0, 3)), float(10 ** rng.uniform(0, 1.5))
+        R = float(rng.uniform(0.5, 9))
+        c, q = lattice._tail_closed(R, rho, g, order, a), lattice.tail_bound(R, rho, g, order, a)
+        if c is not None and q > 1e-300:
+            worst = max(worst, abs(c - q) / q)
+        tol = float(10 ** rng.uniform(-20, -12))
+        assert lattice.radius_for(tol, rho, g, order, a) == _radius_by_quadrature(tol, rho, g, order, a)
+    assert worst < 1e-9        # measured 1.6e-12 over 400 draws
+
+
+@pytest.mark.parametrize("g", [2, 3, 4])
+def test_ellipsoid_candidates_cover_the_box_points_in_order(g):
+    rng = np.random.default_rng(g)
+    for _ in range(5):
+        A = rng.normal(size=(g, g))
+        Y = A @ A.T + 0.3 * np.eye(g)
+        c = rng.normal(size=g) * 3
+        bound = 41.4 / math.pi
+        half = np.sqrt(bound * np.diag(np.linalg.inv(Y)))
+        box = [(math.floor(-c[i] - half[i]), math.ceil(-c[i] + half[i])) for i in range(g)]
+        ranges = [np.arange(lo, hi + 1) for lo, hi in box]
+        full = np.stack(np.meshgrid(*ranges, indexing="ij"), axis=-1).reshape(-1, g).astype(float)
+        inside = lambda m: (((m + c) @ Y) * (m + c)).sum(axis=1) <= bound  # noqa: E731
+        cand = ellipsoid_candidates(c, lower_factor(Y), bound, box)
+        assert len(cand) < len(full)
+        np.testing.assert_array_equal(cand[inside(cand)], full[inside(full)])
+
+
+def _horner_plain(chi, clo, z):
+    n = chi.shape[-1] - 1
+    s = np.broadcast_to(chi[..., n], z.shape).astype(complex)
+    comp = np.broadcast_to(clo[..., n], z.shape).astype(complex)
+    return _poly._comp_horner_general(chi, clo, z, s, comp, n)
+
+
+def test_stacked_compensated_horner_is_bit_identical():
+    rng = np.random.default_rng(1)
+    for trial in range(200):
+        K, m, n = rng.integers(1, 20), rng.integers(1, 5), rng.integers(0, 9)
+        chi = (rng.normal(size=(K, 1, n + 1)) + 1j * rng.normal(size=(K, 1, n + 1))) \
+            * 10.0 ** rng.uniform(-10, 10, size=(K, 1, n + 1))
+        clo = chi * 1e-17 * rng.normal(size=chi.shape)
+        z = (rng.normal(size=(K, m)) + 1j * rng.normal(size=(K, m))) * 10.0 ** rng.uniform(-30, 30)
+        if trial % 3 == 0:
+            chi, clo = chi[0, 0], clo[0, 0]
+        for a, b in zip(_horner_plain(chi, clo, z), _poly.comp_horner(chi, clo, z), strict=True):
+            np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("layout", ["row", "shared", "broadcast"])
+def test_compensated_horner_in_blocks_is_bit_identical(layout):
+    rng = np.random.default_rng(4)
+    K, m, n = 1677, 3, 3
+    shape = {"row": (K, 1, n + 1), "shared": (n + 1,), "broadcast": (1, m, n + 1)}[layout]
+    chi = rng.normal(size=shape) + 1j * rng.normal(size=shape)
+    clo = chi * 1e-17
+    z = rng.normal(size=(K, m)) + 1j * rng.normal(size=(K, m))
+    for a, b in zip(_horner_plain(chi, clo, z), _poly.comp_horner(chi, clo, z), strict=True):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_solve3_matches_mpmath_lu_solve():
+    rng = np.random.default_rng(2)
+    with mpmath.workdps(40):
+        for _ in range(20):
+            A = [[mpmath.mpc(*rng.normal(size=2)) for _ in range(3)] for _ in range(3)]
+            b = [mpmath.mpc(*rng.normal(size=2)) for _ in range(3)]
+            x = _solve3(A, b)
+            ref = mpmath.lu_solve(mpmath.matrix(A), mpmath.matrix(b))
+            assert max(abs(x[i] - ref[i]) for i in range(3)) < mpmath.mpf(10) ** -35 * (1 + mpmath.norm(ref))
