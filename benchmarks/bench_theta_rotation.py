@@ -1,24 +1,35 @@
-"""Speed against error: the theta-function rotation in a quadratic potential against numerical integrators.
+"""The theta-function rotation against heyoka and DOP853, per reference body, as ratios to heyoka.
 
-Everything is measured in one run on this machine:
+Measured in one run on this machine, for every reference body of tests/data/rotation/refs.json:
 
-* dense output on [0, 1000] (2001 times) and single far-time queries (t = 1e3, 1e4);
-* thetasol.solve_rotation (set-up and evaluation timed separately), scipy's DOP853 at several
-  tolerances (integrate_rotation), the symplectic splitting integrator, heyoka float64 (if
-  installed; its JIT compilation is timed separately);
-* errors against heyoka in 80-bit extended precision (tol 1e-19), within 4e-19..3.4e-14 of quadruple
-  precision (tol 1e-25) on the default cases and the symmetric body to t = 1e4; not adequate next to an
-  unstable relative equilibrium (5e-10 there, tests/data/rotation/make_refs.py).
+* **set-up**: solve_rotation (theta, or the body's closed form); heyoka's JIT compilation of one
+  parametric float64 integrator, once for all bodies, reported apart (it is not a per-body cost);
+* **dense**: the cost per output time on [0, 1000] with 20001 equally spaced times (and the
+  reference times below 1000): theta's evaluation; heyoka float64 (tol 1e-16) propagate_grid, without
+  compilation; scipy's DOP853 at rtol 1e-13 (integrate_rotation);
+* **far time** t = 1e6: theta's cost of one evaluation (it reduces the arguments modulo the periods),
+  and that cost in dense points; heyoka and DOP853 would integrate the whole way: their figure is
+  their measured time to t = 1000 times 1000 (marked "est.");
+* **errors**: max over the components of omega and Q against the stored 80-bit references
+  (heyoka in extended precision, tol 1e-19; tests/data/rotation/refs.json) at t = 0.7, 3.1, 17.3,
+  102, 997; theta also at t = 4002;
+* **cold start**: a fresh Python process importing thetasol and solving the generic body (imports,
+  caches and any compilation included).
 
-Run:  OPENBLAS_NUM_THREADS=1 python benchmarks/bench_theta_rotation.py [--quick] [--plot PNG]
-Writes a markdown table to stdout (docs/bench_theta_rotation.md holds a recorded run).
+Ratios are to heyoka: set-up / heyoka's propagation to t = 1000, dense theta / dense heyoka.
+
+Run:  python benchmarks/bench_theta_rotation.py [--quick] [--cases a,b] [--plot PNG] [--clock cpu]
+(``--quick``: five bodies, no DOP853.)  docs/bench_theta_rotation.md holds a recorded run.
 """
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import pathlib
+import subprocess
 import sys
+import time
 
 import numpy as np
 from _common import best_of, machine_info
@@ -26,119 +37,177 @@ from _common import best_of, machine_info
 from thetasol import integrate_rotation, solve_rotation
 
 REFS = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "rotation" / "refs.json"
+QUICK = "generic,saddle,rank_one,near_unstable_equilibrium,symmetric_oblate"
+T_END, N_DENSE, T_FAR = 1000.0, 20001, 1e6
+#: the clock of every timing: wall (perf_counter) or this process's CPU time (--clock cpu, for a shared
+#: machine: every method here runs on one thread, so on a quiet machine the two agree)
+CLOCK = [time.perf_counter]
 
 
-def have_heyoka():
-    try:
-        import heyoka  # noqa: F401
-        return True
-    except ImportError:
-        return False
+# -- heyoka float64, compiled once: the body enters through runtime parameters -------------------
+
+def heyoka_integrator():
+    """(taylor_adaptive in float64 at tol 1e-16 with J, I^-1 and a as parameters, compile seconds)."""
+    import heyoka as hy
+
+    start = CLOCK[0]()
+    xs = hy.make_vars(*[f"m{i}" for i in range(3)], *[f"q{i}{j}" for i in range(3) for j in range(3)])
+    m, Q = xs[:3], [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]
+    p = [hy.par[k] for k in range(27)]
+    Iinv, J, A = ([p[o + 3 * i: o + 3 * i + 3] for i in range(3)] for o in (0, 9, 18))
+    w = [sum(Iinv[i][k] * m[k] for k in range(3)) for i in range(3)]
+    aQ = [[sum(A[i][k] * Q[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+    ap = [[sum(Q[k][i] * aQ[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+    JA = [[sum(J[i][k] * ap[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+    tau = [JA[2][1] - JA[1][2], JA[0][2] - JA[2][0], JA[1][0] - JA[0][1]]
+    mdot = [m[1] * w[2] - m[2] * w[1] + tau[0], m[2] * w[0] - m[0] * w[2] + tau[1],
+            m[0] * w[1] - m[1] * w[0] + tau[2]]
+    W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
+    Qdot = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
+    ta = hy.taylor_adaptive(list(zip(xs, mdot + Qdot, strict=True)), np.zeros(12), tol=1e-16,
+                            pars=np.zeros(27))
+    return ta, CLOCK[0]() - start
 
 
-def err(w, Q, ref):
-    wr, Qr = ref
+def heyoka_run(ta, J, a, Q0, w0, grid):
+    """(omega, Q) on ``grid`` (starting at 0): the float64 data as integrate_rotation's heyoka path sets them."""
+    I = np.trace(J) * np.eye(3) - J
+    Iinv = np.linalg.inv(I)
+    ta.pars[:] = np.concatenate([Iinv.ravel(), J.ravel(), a.ravel()])
+    ta.time = 0.0
+    ta.state[:] = np.concatenate([I @ w0, Q0.ravel()])
+    st = ta.propagate_grid(grid)[-1]
+    return st[:, :3] @ Iinv.T, st[:, 3:].reshape(-1, 3, 3)
+
+
+# -- one body -------------------------------------------------------------------------------------
+
+def err(w, Q, wr, Qr):
     return float(max(np.abs(w - wr).max(), np.abs(Q - Qr).max()))
 
 
-def bench_case(name, data, quick):
+def bench_body(name, data, ta, quick):
     J, a, Q0, w0 = (np.diag(data["J"]), np.array(data["a"]), np.array(data["Q0"]), np.array(data["omega0"]))
-    rows = []
-    t_dense = np.linspace(0.0, 1000.0, 2001)
-    ref_dense = integrate_rotation(J, a, Q0, w0, t_dense, method="heyoka", dtype="ldbl", rtol=1e-19)
-    # theta functions
-    ts, sol = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=1)
-    te, (w, Q) = best_of(lambda: sol(t_dense), repeat=3)
-    rows.append(("dense", f"theta ({sol.method})", ts, te, err(w, Q, ref_dense)))
-    for rtol in ((1e-10, 1e-13) if quick else (1e-8, 1e-10, 1e-12, 1e-13)):
-        tt, (w, Q) = best_of(lambda r=rtol: integrate_rotation(J, a, Q0, w0, t_dense, rtol=r), repeat=1)
-        rows.append(("dense", f"DOP853 rtol {rtol:g}", 0.0, tt, err(w, Q, ref_dense)))
+    tr, wr, Qr = np.array(data["t"]), np.array(data["omega"]), np.array(data["Q"])
+    near = tr <= T_END
+    grid = np.union1d(np.linspace(0.0, T_END, N_DENSE), tr[near])
+    at_refs = np.searchsorted(grid, tr[near])
+    row = {"case": name}
+    row["setup"], sol = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=1, clock=CLOCK[0])
+    row["method"] = sol.method
+    row["dense"], (w, Q) = best_of(lambda: sol(grid), repeat=3, clock=CLOCK[0])
+    row["dense"] /= grid.size
+    row["far"], _ = best_of(lambda: sol(np.array([T_FAR])), repeat=7, clock=CLOCK[0])
+    row["err"] = err(w[at_refs], Q[at_refs], wr[near], Qr[near])
+    w4, Q4 = sol(tr)
+    row["err_4002"] = err(w4, Q4, wr, Qr)
+    hy_run, (w, Q) = best_of(lambda: heyoka_run(ta, J, a, Q0, w0, grid), repeat=3, clock=CLOCK[0])
+    row["hy_run"], row["hy_dense"], row["hy_err"] = hy_run, hy_run / grid.size, err(w[at_refs], Q[at_refs], wr[near],
+                                                                                     Qr[near])
     if not quick:
-        tt, (w, Q) = best_of(lambda: integrate_rotation(J, a, Q0, w0, t_dense, method="splitting", step=1e-2), repeat=1)
-        rows.append(("dense", "splitting (order 6, h = 0.01)", 0.0, tt, err(w, Q, ref_dense)))
-    if have_heyoka():
-        tc, _ = best_of(lambda: integrate_rotation(J, a, Q0, w0, t_dense[:2], method="heyoka", rtol=1e-16), repeat=1)
-        tt, (w, Q) = best_of(lambda: integrate_rotation(J, a, Q0, w0, t_dense, method="heyoka", rtol=1e-16), repeat=1)
-        rows.append(("dense", "heyoka float64 tol 1e-16", tc, tt, err(w, Q, ref_dense)))
-    # single far-time queries
-    for tf in (1e3, 1e4):
-        tq = np.array([tf])
-        ref = integrate_rotation(J, a, Q0, w0, tq, method="heyoka", dtype="ldbl", rtol=1e-19)
-        te, (w, Q) = best_of(lambda: sol(tq), repeat=5)
-        rows.append((f"t = {tf:g}", f"theta ({sol.method})", ts, te, err(w, Q, ref)))
-        tt, (w, Q) = best_of(lambda: integrate_rotation(J, a, Q0, w0, tq, rtol=1e-13), repeat=1)
-        rows.append((f"t = {tf:g}", "DOP853 rtol 1e-13", 0.0, tt, err(w, Q, ref)))
-        if have_heyoka():
-            tt, (w, Q) = best_of(lambda: integrate_rotation(J, a, Q0, w0, tq, method="heyoka", rtol=1e-16), repeat=1)
-            rows.append((f"t = {tf:g}", "heyoka float64 tol 1e-16", 0.0, tt, err(w, Q, ref)))
-    tq = np.array([1e6])
-    te, (w, Q) = best_of(lambda: sol(tq), repeat=5)
-    rows.append(("t = 1e6", f"theta ({sol.method})", ts, te, float("nan")))
-    return rows
+        dop, (w, Q) = best_of(lambda: integrate_rotation(J, a, Q0, w0, grid, rtol=1e-13), repeat=1, clock=CLOCK[0])
+        row["dop_run"], row["dop_dense"], row["dop_err"] = dop, dop / grid.size, err(w[at_refs], Q[at_refs],
+                                                                                  wr[near], Qr[near])
+    return row
 
 
-def plot(allrows, path):
-    """Error against total cost of the dense query: colour = case, marker = method."""
+def cold_start(data) -> float:
+    """Seconds for a fresh process to import thetasol and solve the body (interpreter start excluded)."""
+    clock = "process_time" if CLOCK[0] is time.process_time else "perf_counter"
+    code = (f"import time; t0 = time.{clock}(); import numpy as np; from thetasol import solve_rotation; "
+            f"d = {json.dumps({k: data[k] for k in ('J', 'a', 'Q0', 'omega0')})}; "
+            "solve_rotation(np.diag(d['J']), np.array(d['a']), np.array(d['Q0']), np.array(d['omega0'])); "
+            f"print(time.{clock}() - t0)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    return float(out.stdout.split()[-1])
+
+
+# -- output ---------------------------------------------------------------------------------------
+
+def print_header(quick):
+    print("| case | method | set-up (ms) | set-up / heyoka to 1000 | dense theta (us/time) | dense heyoka (us/time) "
+          "| dense theta / heyoka | t = 1e6 theta (us) | t = 1e6 in dense points | heyoka to 1000 (ms) "
+          + ("" if quick else "| DOP853 dense (us/time) | DOP853 / heyoka ") + "| error theta | error heyoka "
+          + ("" if quick else "| error DOP853 ") + "| theta error to t = 4002 |")
+    print("|---" * (14 if quick else 17) + "|", flush=True)
+
+
+def print_row(r, quick):
+    dop = "" if quick else f"| {r['dop_dense'] * 1e6:.3g} | {r['dop_dense'] / r['hy_dense']:.3g} "
+    dop_err = "" if quick else f"| {r['dop_err']:.1e} "
+    print(f"| {r['case']} | {r['method']} | {r['setup'] * 1e3:.0f} | {r['setup'] / r['hy_run']:.2f} | "
+          f"{r['dense'] * 1e6:.2f} | {r['hy_dense'] * 1e6:.2f} | {r['dense'] / r['hy_dense']:.2f} | "
+          f"{r['far'] * 1e6:.0f} | {r['far'] / r['dense']:.1f} | {r['hy_run'] * 1e3:.1f} {dop}| "
+          f"{r['err']:.1e} | {r['hy_err']:.1e} {dop_err}| {r['err_4002']:.1e} |", flush=True)
+
+
+def print_summary(rows, compile_s, cold, quick):
+    su = np.array([r["setup"] / r["hy_run"] for r in rows])
+    de = np.array([r["dense"] / r["hy_dense"] for r in rows])
+    fa = np.array([r["far"] / r["dense"] for r in rows])
+    print(f"\nheyoka: one compilation for all bodies {compile_s:.2f} s (not in any figure above); "
+          f"far time t = 1e6 by integration (est. 1000 x its time to 1000): "
+          f"{np.median([r['hy_run'] for r in rows]) * 1e3:.0f} s median")
+    if not quick:
+        print(f"DOP853 rtol 1e-13 to t = 1e6 (est. 1000 x its time to 1000): "
+              f"{np.median([r['dop_run'] for r in rows]) * 1e3:.0f} s median")
+    print(f"set-up / heyoka's propagation to 1000: median {np.median(su):.2f}, max {su.max():.2f} "
+          "(targets: median <= 2, every body <= 6)")
+    print(f"dense theta / heyoka: median {np.median(de):.2f}, max {de.max():.2f} (targets: median <= 0.5, every "
+          "body <= 2)")
+    print(f"t = 1e6 in dense points: median {np.median(fa):.1f}, max {fa.max():.1f} (target <= 3)")
+    print(f"cold start (fresh process: import + generic set-up): {cold:.2f} s (target <= 3 s)")
+
+
+def plot(rows, path):
+    """Set-up and dense cost of theta as ratios to heyoka, per body, with the targets."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.lines import Line2D
-    kinds = [("theta", "o", 9), ("DOP853", "s", 6), ("splitting", "D", 6), ("heyoka", "^", 7)]
-    cases = list(dict.fromkeys(nm for nm, *_ in allrows))
-    colour = {nm: plt.cm.tab10(i) for i, nm in enumerate(cases)}
-    fig, ax = plt.subplots(figsize=(8, 4.8))
-    for nm, q, m, ts, tr, e in allrows:
-        if q == "dense":
-            marker, size = next((mk, sz) for key, mk, sz in kinds if m.startswith(key))
-            ax.loglog(ts + tr, max(e, 1e-16), marker, color=colour[nm], markersize=size, alpha=0.85)
-    ax.set_xlabel("total time for 2001 outputs on [0, 1000] (s)")
-    ax.set_ylabel("max error in omega and Q")
-    ax.grid(True, which="both", alpha=0.3)
-    first = ax.legend([Line2D([], [], ls="", marker="o", color=colour[nm]) for nm in cases], cases,
-                      fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), title="case")
-    ax.add_artist(first)
-    ax.legend([Line2D([], [], ls="", marker=mk, color="0.3") for _, mk, _ in kinds],
-              ["theta (set-up + run)", "DOP853 rtol 1e-8 .. 1e-13", "splitting, order 6", "heyoka float64"],
-              fontsize=7, loc="lower left", bbox_to_anchor=(1.01, 0.0), title="method")
+    names = [r["case"] for r in rows]
+    x = np.arange(len(rows))
+    fig, ax = plt.subplots(figsize=(9, 4.2))
+    ax.bar(x - 0.2, [r["setup"] / r["hy_run"] for r in rows], 0.4, label="set-up / heyoka to t = 1000")
+    ax.bar(x + 0.2, [r["dense"] / r["hy_dense"] for r in rows], 0.4, label="dense per time / heyoka's")
+    for y, style, lab in ((2, "--", "set-up target (median)"), (6, ":", "set-up target (each)"),
+                          (0.5, "-.", "dense target (median)")):
+        ax.axhline(y, color="0.3", ls=style, lw=1, label=lab)
+    ax.axhline(1, color="k", lw=0.6)
+    ax.set_yscale("log")
+    ax.set_xticks(x, names, rotation=35, ha="right", fontsize=8)
+    ax.set_ylabel("theta cost / heyoka cost")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0))
+    ax.grid(True, axis="y", which="both", alpha=0.3)
     fig.savefig(path, dpi=130, bbox_inches="tight")
     print(f"\nplot written to {path}")
 
 
-def _rows_from_table(text):
-    """The rows of a table this script printed (for --replot)."""
-    rows = []
-    for line in text.splitlines():
-        f = [c.strip() for c in line.strip().strip("|").split("|")]
-        if len(f) == 7 and f[0] not in ("case", "---"):
-            rows.append((f[0], f[1], f[2], float(f[3]), float(f[4]), float(f[6])))
-    return rows
-
-
 def main(argv=None):
     ap = argparse.ArgumentParser()
-    ap.add_argument("--quick", action="store_true", help="fewer tolerances, no splitting")
-    ap.add_argument("--cases", default="generic,saddle,rank_one,near_stable_equilibrium,symmetric_oblate")
-    ap.add_argument("--plot", default=None, help="write an error-against-cost plot (needs matplotlib)")
-    ap.add_argument("--replot", default=None, help="only redraw --plot from a saved output of this script")
+    ap.add_argument("--quick", action="store_true", help=f"five bodies ({QUICK}), no DOP853")
+    ap.add_argument("--cases", default=None, help="comma-separated reference bodies (default: all)")
+    ap.add_argument("--plot", default=None, help="write the ratio plot (needs matplotlib)")
+    ap.add_argument("--clock", choices=("wall", "cpu"), default="wall",
+                    help="wall time, or this process's CPU time (on a shared, loaded machine)")
     args = ap.parse_args(argv)
-    if args.replot:
-        plot(_rows_from_table(open(args.replot).read()), args.plot or "bench_theta_rotation.png")
-        return
+    CLOCK[0] = time.process_time if args.clock == "cpu" else time.perf_counter
     refs = json.loads(REFS.read_text())
-    print(f"machine: {machine_info('heyoka')}")
-    print("errors: max over omega and Q against heyoka 80-bit (tol 1e-19); time in seconds (best of runs)\n")
-    print("| case | query | method | set-up (s) | run (s) | per time (us) | max error |")
-    print("|---|---|---|---|---|---|---|")
-    allrows = []
-    for name in args.cases.split(","):
-        rows = bench_case(name, refs[name], args.quick)
-        for q, m, ts, tr, e in rows:
-            n = 2001 if q == "dense" else 1
-            print(f"| {name} | {q} | {m} | {ts:.3g} | {tr:.3g} | {tr / n * 1e6:.3g} | {e:.1e} |")
-            allrows.append((name, q, m, ts, tr, e))
-        sys.stdout.flush()
+    names = (args.cases or (QUICK if args.quick else ",".join(refs))).split(",")
+    print(f"machine: {machine_info('heyoka')}; load average at start {os.getloadavg()[0]:.1f}")
+    print(f"clock: {args.clock} time")
+    print(f"dense: {N_DENSE} times on [0, {T_END:g}] plus the reference times; heyoka float64 tol 1e-16; "
+          "errors against the 80-bit references at t <= 1000; best of 3 (evaluation, propagation), "
+          "one set-up each\n")
+    cold = cold_start(refs["generic"])
+    ta, compile_s = heyoka_integrator()
+    rows = []
+    print_header(args.quick)
+    for name in names:
+        rows.append(bench_body(name, refs[name], ta, args.quick))
+        print_row(rows[-1], args.quick)
+    print_summary(rows, compile_s, cold, args.quick)
     if args.plot:
-        plot(allrows, args.plot)
+        plot(rows, args.plot)
 
 
 if __name__ == "__main__":

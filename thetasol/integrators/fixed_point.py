@@ -26,6 +26,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize
+from thetasol.core.threads import single_blas_thread
 from thetasol.integrators._common import both_ways, solve_ivp_mQ
 from thetasol.mechanics.equations import inertia_from_moments, torque
 from thetasol.solutions.base import RotationSolution
@@ -54,6 +55,7 @@ def fixed_point_energy(J: ArrayLike, R: ArrayLike, a: ArrayLike, b: ArrayLike, Q
     return kin + quad + 0.5 * (Q @ np.asarray(R, float)) @ np.asarray(b, float)
 
 
+@single_blas_thread
 def integrate_fixed_point(J: ArrayLike, R: ArrayLike, a: ArrayLike, b: ArrayLike, Q0: ArrayLike,
                           omega0: ArrayLike, t: ArrayLike, *, rtol: float = 1e-12, atol: float | None = None,
                           method: str = "DOP853") -> tuple[np.ndarray, np.ndarray]:

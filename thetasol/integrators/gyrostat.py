@@ -32,6 +32,7 @@ from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize, vee
+from thetasol.core.threads import single_blas_thread
 from thetasol.integrators._common import extended_inertia
 from thetasol.mechanics.heavy_top import heavy_top_data
 from thetasol.solutions.base import RotationSolution
@@ -115,6 +116,7 @@ def _scipy_run(rhs, y0, rtol, atol, method):
     return run
 
 
+@single_blas_thread
 def integrate_gyrostat(J: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, *,
                        rotors: Sequence[Mapping] | None = None, a: ArrayLike | None = None,
                        orbit: KeplerOrbit | None = None, rtol: float = 1e-12, atol: float | None = None,
@@ -191,6 +193,7 @@ def integrate_gyrostat(J: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0:
     return _finish(Y, inv, tt, Im, axes, A, p)
 
 
+@single_blas_thread
 def integrate_heavy_gyrostat(I: ArrayLike, center: ArrayLike, N: ArrayLike, Q0: ArrayLike, omega0: ArrayLike,
                              t: ArrayLike, *, mass: float = 1.0, gravity: ArrayLike = (0.0, 0.0, -9.81),
                              rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",

@@ -24,12 +24,14 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize
+from thetasol.core.threads import single_blas_thread
 from thetasol.integrators._common import both_ways, extended_inertia, solve_ivp_mQ
 from thetasol.mechanics.heavy_top import heavy_top_data
 
 __all__ = ["integrate_heavy_top"]
 
 
+@single_blas_thread
 def integrate_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, *,
                         mass: float = 1.0, gravity: ArrayLike = (0.0, 0.0, -9.81),
                         rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",

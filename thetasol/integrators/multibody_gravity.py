@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross
+from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.multibody import integrate_multibody
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration
@@ -149,6 +150,7 @@ def _tidal_force(mu: float, m: np.ndarray, q: np.ndarray, d: np.ndarray) -> np.n
     return (-mu * m / r3)[:, None] * (d - g[:, None] * q)
 
 
+@single_blas_thread
 def integrate_multibody_gravity(config: Configuration, mu: float, q0: ArrayLike, v0: ArrayLike,
                                 Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike], t: ArrayLike, *,
                                 points: Mapping | None = None, torques: Callable | None = None,

@@ -33,6 +33,7 @@ from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize, vee
+from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.rotors import GyrostatConfiguration, MasslessCarrier
 from thetasol.mechanics.trajectories import Trajectories
 
@@ -192,6 +193,7 @@ class _System:
         return self.pack(v, acc[:, :3], Qdot, acc[:, 3:])
 
 
+@single_blas_thread
 def integrate_gyrostat_multibody(gc: GyrostatConfiguration, a: ArrayLike, b: ArrayLike, q0: ArrayLike,
                                  v0: ArrayLike, Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike],
                                  t: ArrayLike, *, rtol: float = 1e-12, atol: float | None = None,

@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
+from thetasol.core.threads import single_blas_thread
 from thetasol.solutions.base import Solution
 
 __all__ = ["integrate_neumann", "NumericalNeumann", "numerical_neumann"]
@@ -37,6 +38,7 @@ def _prepare(a, q0, v0):
     return a, q0, v0, R
 
 
+@single_blas_thread
 def integrate_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, t: ArrayLike, rtol: float = 1e-12,
                       method: str = "DOP853") -> tuple[np.ndarray, np.ndarray]:
     """Integrate Neumann's problem on ``|q| = |q0|`` numerically (module docstring).

@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
+from thetasol.core.threads import single_blas_thread
 from thetasol.integrators._common import both_ways, solve_ivp_mQ
 from thetasol.solutions.base import RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
@@ -45,6 +46,7 @@ from thetasol.solutions.kepler import KeplerOrbit
 __all__ = ["integrate_orbiting_rotation", "NumericalOrbitingRotation", "numerical_orbiting_rotation"]
 
 
+@single_blas_thread
 def integrate_orbiting_rotation(J: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, *,
                                 rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
                                 dtype: str = "dbl") -> tuple[np.ndarray, np.ndarray]:

@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
+from thetasol.core.threads import single_blas_thread
 from thetasol.integrators._common import both_ways, extended_inertia, solve_ivp_mQ
 from thetasol.mechanics.equations import inertia_from_moments, invariants, rotation_rhs
 from thetasol.solutions.base import RotationSolution
@@ -44,6 +45,7 @@ def _prepare(J, a, Q0, omega0, t) -> tuple[np.ndarray, ...]:
     return Jm, am, Q0, w0, tt
 
 
+@single_blas_thread
 def integrate_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, rtol: float = 1e-12, atol: float | None = None,
                        method: str = "DOP853", step: float | None = None,
                        dtype: str = "dbl") -> tuple[np.ndarray, np.ndarray]:

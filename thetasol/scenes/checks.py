@@ -14,6 +14,9 @@ class Check:
     deviation: float
     tolerance: float
     seconds: str
+    #: the effective body of a rotation against integrate_rotation, and that integration's seconds
+    body: str = ""
+    reference_seconds: float | None = None
 
     @property
     def ok(self) -> bool:

@@ -37,6 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.fixed_point import fixed_point_energy, numerical_fixed_point
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Pivot, pivot_mass_center
@@ -198,6 +199,7 @@ def _invariants(config: Configuration, pb: PivotedBody, a: np.ndarray, b: np.nda
             "mass_center": {}, "rotations": rot}
 
 
+@single_blas_thread
 def solve_fixed_point(config: Configuration, a: ArrayLike, b: ArrayLike, pivot: Pivot,
                       Q0: dict, omega0: dict, *, rotation: str = "auto", rtol: float = 1e-12,
                       method: str = "DOP853", check_central: bool = True) -> FixedPointSolution:

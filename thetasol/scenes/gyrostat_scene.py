@@ -36,6 +36,7 @@ import numpy as np
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import rodrigues
+from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.gyrostat import numerical_gyrostat
 from thetasol.integrators.multibody_rotors import integrate_gyrostat_multibody, relative_rotor_angles
 from thetasol.integrators.rotation import numerical_rotation
@@ -190,6 +191,7 @@ def _part(e, a, Q0, w0, p, rotation, rtol) -> _Part:
     return _Part("numerical", sol, f"gyrostat (8.32): integrate_gyrostat (DOP853, rtol={rtol:g})", axes, A, p, specs)
 
 
+@single_blas_thread
 def solve_gyrostat_configuration(config: GyrostatConfiguration, a: Any, b: Any, q0: Any, v0: Any,
                                  Q0: Mapping[str, Any], omega0: Mapping[str, Any], *, rotation: str = "auto",
                                  rtol: float = 1e-12) -> GyrostatSplit:

@@ -31,6 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.multibody_gravity import box_mass_points
 from thetasol.integrators.orbiting_rotation import numerical_orbiting_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
@@ -215,6 +216,7 @@ def _orbiting_rotation(J, orbit, Q0, w0, rotation, rtol, method):
     return numerical_orbiting_rotation(J, orbit, Q0, w0, rtol=rtol, method=method), False, why
 
 
+@single_blas_thread
 def solve_orbiting_configuration(config: Configuration, orbit: KeplerOrbit, Q0: Mapping[str, ArrayLike],
                                  omega0: Mapping[str, ArrayLike], *, rotation: str = "auto", rtol: float = 1e-12,
                                  method: str = "DOP853") -> OrbitingConfigurationSolution:

@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.neumann import NumericalNeumann, numerical_neumann
 from thetasol.integrators.rotation import numerical_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
@@ -165,6 +166,7 @@ class ConfigurationSolution(Solution):
         """
         return super().__call__(t)
 
+    @single_blas_thread
     def __call__(self, t: ArrayLike) -> Trajectories:
         """:class:`Trajectories` of every body at the 1-d times ``t``.
 
@@ -266,6 +268,7 @@ def _first_integrals(config: Configuration, a: np.ndarray, mc: Any, Qa: np.ndarr
     return {"energy": float(energy), "mass_center": mc.invariants, "rotations": rot}
 
 
+@single_blas_thread
 def solve_configuration(config: Configuration, a: ArrayLike, b: ArrayLike, q0: ArrayLike, v0: ArrayLike,
                         Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike], *,
                         rotation: str = "auto", rtol: float = 1e-12, method: str = "DOP853",

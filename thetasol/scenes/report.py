@@ -16,10 +16,14 @@ that do not use them, each with its max deviation, a stated tolerance and timing
   no mass-centre check, the pivot fixes it), and the unsplit system with the pivot as a spherical
   joint to the ground;
 
-and the drift of the first integrals (4.9), (4.13), (4.12) along each rotation.
+and the drift of the first integrals (4.9), (4.13), (4.12) along each rotation; then when the closed
+form pays off: from this run's set-up, evaluation and integration times, the horizon beyond which the
+split is cheaper than the multibody integration and each closed-form rotation cheaper than
+integrate_rotation (at the scene's output density and for one far time), and the accuracy argument.
 """
 from __future__ import annotations
 
+import importlib
 import io
 import time
 from collections.abc import Callable
@@ -39,7 +43,7 @@ from thetasol.scenes.fixed_point import pivoted_body
 from thetasol.scenes.format import Scene
 from thetasol.scenes.gyrostat_scene import GyrostatScene, run_gyrostat_scene
 from thetasol.scenes.orbit_report import run_orbit
-from thetasol.scenes.pipeline import ConfigurationSolution
+from thetasol.scenes.pipeline import ConfigurationSolution, rotation_kind
 
 __all__ = ["Check", "run"]
 
@@ -166,7 +170,8 @@ def _rotation_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectorie
         ref_seconds = time.perf_counter() - start
         dev = max(float(np.max(np.abs(Qn - traj.attitude[i]))), float(np.max(np.abs(wn - traj.omega[i]))))
         checks.append(Check(f"rotation of {n}: {sol.rotations[n].method} vs integrate_rotation (DOP853, rtol 1e-13)",
-                            dev, 1e-8, f"{r['seconds'] * 1e3:.1f} ms vs {ref_seconds * 1e3:.1f} ms"))
+                            dev, 1e-8, f"{r['seconds'] * 1e3:.1f} ms vs {ref_seconds * 1e3:.1f} ms",
+                            body=n, reference_seconds=ref_seconds))
     return checks
 
 
@@ -207,8 +212,11 @@ def _drift(scene: Scene, traj: Trajectories, say: _Text) -> None:
             f"spectral curve (4.12) {cd:.1e}")
 
 
-def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say: _Text) -> Check:
-    """The split against the unsplit multibody integration up to the scene's ``check_t_end``."""
+def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say: _Text) -> tuple[Check, float, float]:
+    """The split against the unsplit multibody integration up to the scene's ``check_t_end``.
+
+    Also returns the multibody integration's seconds and the end time it reached.
+    """
     s, t = scene.solver, scene.t
     t_end = min(float(s.get("check_t_end", t[-1])), float(t[-1]))
     sel = t <= t_end
@@ -234,7 +242,72 @@ def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say
     check = Check("split vs unsplit multibody: positions and attitudes", max(dv["position"], dv["attitude"]), tol,
                   f"split {split_seconds:.2f} s vs multibody {mb.info['seconds']:.2f} s")
     say(check.line())
-    return check
+    return check, mb.info["seconds"], t_end
+
+
+def _load_closed_forms(scene: Scene) -> float:
+    """Import the theta-function machinery (and the curve engine's sympy and mpmath) once, if the scene needs it.
+
+    Seconds spent: a one-off cost per process, reported apart from the split's time as the integrators'
+    imports are from theirs.
+    """
+    if rotation_kind(scene.a) == "elliptic":
+        return 0.0
+    start = time.perf_counter()
+    for name in ("thetasol.solutions.rotation", "thetasol.solutions.theta_rotation", "sympy", "mpmath"):
+        importlib.import_module(name)
+    return time.perf_counter() - start
+
+
+def _dur(seconds: float) -> str:
+    """A duration in s, ms or us, three digits."""
+    for unit, scale in (("s", 1.0), ("ms", 1e-3)):
+        if seconds >= scale:
+            return f"{seconds / scale:.3g} {unit}"
+    return f"{seconds * 1e6:.3g} us"
+
+
+def _break_even(setup: float, per_time: float, rate: float, density: float) -> str:
+    """The horizon beyond which ``setup + per_time * density * T`` is below ``rate * T``."""
+    gain = rate - per_time * density
+    return f"T > {setup / gain:.3g}" if gain > 0 else "never at this output density"
+
+
+#: The generic reference body against its 80-bit reference (docs/bench_theta_rotation.md): errors over
+#: t <= 1000 of DOP853 at rtol 1e-13, heyoka float64 at tol 1e-16 and the theta solution, and theta's to t = 4002.
+_ACCURACY = ("accuracy: an integrator's error grows with the horizon and a closed form's stays near its set-up "
+             "accuracy (generic reference body, t <= 1000: DOP853 at rtol 1e-13 4.5e-11, heyoka float64 1.8e-12, "
+             "theta 1.8e-13, and 6.3e-13 to t = 4002; docs/bench_theta_rotation.md); matching it over long horizons "
+             "costs an integrator a tighter tolerance or extended precision, so at equal accuracy the closed form "
+             "pays off before the horizons above")
+
+
+def _pays_off(scene: Scene, sol: ConfigurationSolution, traj: Trajectories, ref_seconds: dict,
+              multibody: tuple[float, float] | None, say: _Text) -> None:
+    """When the closed form pays off: set-up against horizon and accuracy, from this run's timings."""
+    t = scene.t
+    span = float(t[-1] - min(t[0], 0.0))
+    if span <= 0 or not ref_seconds:
+        return
+    density = t.size / span
+    d, ev = sol.diagnostics, traj.info["evaluation_seconds"]
+    say()
+    say(f"when the closed form pays off (this run's costs, taken as linear in the horizon T; output at "
+        f"{density:.3g} times per unit time):")
+    if multibody is not None:
+        mb_seconds, mb_end = multibody
+        rate, setup = mb_seconds / mb_end, d["setup_seconds"]
+        per_time = sum(ev.values()) / t.size
+        say(f"  the split against the unsplit multibody integration ({_dur(rate)} per unit time): set-up "
+            f"{_dur(setup)}, evaluation {_dur(per_time)} per time: cheaper for "
+            f"{_break_even(setup, per_time, rate, density)} (this scene: T = {span:g})")
+    say("  each closed-form rotation against integrate_rotation (DOP853, rtol 1e-13), for output at this density "
+        "and for one time at T:")
+    for n, ref in ref_seconds.items():
+        setup, per_time, rate = d["rotations"][n]["setup_seconds"], ev[n] / t.size, ref / span
+        say(f"    {n}: set-up {_dur(setup)}, {_dur(per_time)} per time against {_dur(rate)} per unit time: "
+            f"{_break_even(setup, per_time, rate, density)}, one time {_break_even(setup, 0.0, rate, 1.0)}")
+    say("  " + _ACCURACY)
 
 
 def _stepper(progress: Callable[[str, int, int], None] | None, multibody: bool) -> Callable[[], None]:
@@ -286,9 +359,11 @@ def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = N
     multibody = check and scene.solver.get("check_multibody", True)
     step = _stepper(progress, multibody)
     _describe_scene(scene, say)
+    import_seconds = _load_closed_forms(scene)
     step()
     start = time.perf_counter()
     sol = scene.solution()
+    setup_seconds = time.perf_counter() - start
     traj = sol(scene.t)
     split_seconds = time.perf_counter() - start
     _describe_models(sol, say)
@@ -301,13 +376,21 @@ def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = N
     if not any(r["closed_form"] for r in traj.info["rotations"].values()):
         say("  rotations: no closed form applies to these data; they ARE the numerical reference")
     _drift(scene, traj, say)
+    mb_cost = None
     if multibody:
         step()
-        checks.append(_multibody_check(scene, traj, split_seconds, say))
+        mb_check, *mb_cost = _multibody_check(scene, traj, split_seconds, say)
+        checks.append(mb_check)
+    ref_seconds = {c.body: c.reference_seconds for c in checks if c.body and c.reference_seconds is not None}
+    _pays_off(scene, sol, traj, ref_seconds, mb_cost, say)
     step()
     say()
-    say(f"timings: split solution {split_seconds:.3f} s (mass centre {traj.info['mass_center_seconds'] * 1e3:.2f} ms; "
-        + ", ".join(f"{n} {r['seconds'] * 1e3:.0f} ms" for n, r in traj.info["rotations"].items()) + ")")
+    say(f"timings: split solution {split_seconds:.3f} s = set-up {setup_seconds:.3f} s + evaluation "
+        f"{split_seconds - setup_seconds:.3f} s at {scene.t.size} times (mass centre "
+        f"{traj.info['mass_center_seconds'] * 1e3:.2f} ms; "
+        + ", ".join(f"{n} {r['seconds'] * 1e3:.0f} ms" for n, r in traj.info["rotations"].items()) + ")"
+        + (f"; one-off imports of the closed-form machinery {import_seconds:.2f} s, not counted" if import_seconds
+           else ""))
     say("verdict: " + ("all checks passed" if all(c.ok for c in checks) else
                        "FAILED: " + "; ".join(c.what for c in checks if not c.ok)))
     return traj, say.buf.getvalue(), checks

@@ -10,6 +10,9 @@ times afterwards, in any order, without time stepping:
 * ``sol.diagnostics`` says how the solution checked itself: error estimates, periods, the
   characteristic constants of the closed form.
 
+Evaluation runs with the BLAS on one thread (:mod:`thetasol.core.threads`; the user's setting is
+restored after the call).
+
 ``ClosedFormUnavailable`` is raised for valid data outside the closed forms (its message names the
 numerical reference to use instead); ``ValueError`` for bad data, naming the problem.
 """
@@ -22,6 +25,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import hat
+from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.equations import inertia_from_moments
 
 __all__ = ["ClosedFormUnavailable", "Solution", "RotationSolution", "CHUNK"]
@@ -58,6 +62,7 @@ class Solution:
             return tuple(np.concatenate(p, axis=0) for p in zip(*parts))
         return np.concatenate(parts, axis=0)
 
+    @single_blas_thread
     def __call__(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
         """The state at times ``t`` (any shape): a tuple of arrays with ``t.shape`` leading."""
         tt, flat = self._times(t)
@@ -128,6 +133,7 @@ class RotationSolution(Solution):
         """``(omega(t), Q(t))`` with shapes ``t.shape + (3,)`` and ``t.shape + (3, 3)``."""
         return super().__call__(t)
 
+    @single_blas_thread
     def omega(self, t: ArrayLike) -> np.ndarray:
         """Body angular velocity, shape ``t.shape + (3,)``."""
         tt, flat = self._times(t)

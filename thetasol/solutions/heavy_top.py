@@ -25,6 +25,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core.attitude import uniform_rotation
+from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants, kovalevskaya_integral
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.heavy_top_base import HeavyTopSolution
@@ -87,6 +88,7 @@ def _is_kovalevskaya(I, center, rtol=SYMMETRY_RTOL):
     return False
 
 
+@single_blas_thread
 def solve_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *, mass: float = 1.0,
                     gravity: ArrayLike = (0.0, 0.0, -9.81)) -> HeavyTopSolution | RotationSolution:
     """Exact motion of a heavy top (Section 5) when a closed form is known.

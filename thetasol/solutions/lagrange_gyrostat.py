@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.gyrostat import solve_gyrostat
@@ -40,6 +41,7 @@ def _invariants(Im, c, N, mass, g, w0, Q0) -> dict:
             "axial_momentum": float(h @ (c / np.linalg.norm(c)))}
 
 
+@single_blas_thread
 def solve_lagrange_gyrostat(I: ArrayLike, center: ArrayLike, N: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *,
                             mass: float = 1.0, gravity: ArrayLike = (0.0, 0.0, -9.81)
                             ) -> HeavyTopSolution | RotationSolution:

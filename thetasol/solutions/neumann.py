@@ -52,6 +52,7 @@ from thetasol.core.periodic import (
     sum_series,
 )
 from thetasol.core.roots import quadratic_roots
+from thetasol.core.threads import single_blas_thread
 from thetasol.solutions._neumann_torus import MIN_WIDTH, DegenerateTorus, NeumannTorus, Oscillator
 from thetasol.solutions._symmetry import SNAP_TOL
 from thetasol.solutions.base import ClosedFormUnavailable, Solution
@@ -500,6 +501,7 @@ def _validated(a, q0, v0):
     return a, q0, v0, R
 
 
+@single_blas_thread
 def solve_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, *, reference: str = _REFERENCE) -> NeumannSolution:
     """Exact motion of a point on the sphere ``|q| = |q0|`` in the potential ``phi = 1/2 q^T a q``
     (Section 6, (6.1)-(6.2); Theorem 3: the mass centre of the configuration).

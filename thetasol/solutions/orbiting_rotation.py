@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.attitude import angle_mod_2pi, principal_frame, uniform_rotation
 from thetasol.core.so3 import rotation_about
+from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability, orbit_frame
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
@@ -163,6 +164,7 @@ def _pitch_setup(Ip, k, s, Qp, wp, F0, n):
     return c, "pitch/" + pend["kind"]
 
 
+@single_blas_thread
 def solve_orbiting_rotation(J: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, omega0: ArrayLike) -> OrbitingRotation:
     """The closed-form rotation about the mass centre on ``orbit`` where one exists.
 

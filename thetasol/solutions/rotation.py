@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.threads import single_blas_thread
 from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
 from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame, symmetry_axis
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
@@ -131,6 +132,7 @@ def _potential_branch(J, a, Q0, omega0, dps):
 _BRANCHES: list[Callable] = [_free_branch, _pendulum_branch, _neumann_branch, _potential_branch]
 
 
+@single_blas_thread
 def solve_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *,
                    dps: int | None = None) -> RotationSolution:
     """Exact rotation of a rigid body in the potential ``phi = 1/2 x^T a x`` (closed form).

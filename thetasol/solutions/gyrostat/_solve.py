@@ -14,6 +14,7 @@ import numpy as np
 
 from thetasol.core import validate as V
 from thetasol.core.attitude import norm3 as _norm, principal_frame as _principal_frame
+from thetasol.core.threads import single_blas_thread
 from thetasol.solutions.gyrostat._elliptic import EllipticMotion, reanchor
 from thetasol.solutions.gyrostat._forms import Axisymmetric, BodyMap, Delegate, Scaled, Sphere, Steady
 from thetasol.solutions.gyrostat._rotors import RotorAngles, parse_rotors
@@ -199,6 +200,7 @@ def _elliptic_form(d: _Data) -> _Form:
 
 # -- entry point -------------------------------------------------------------------------------
 
+@single_blas_thread
 def solve_gyrostat(J, N, Q0, omega0, *, rotors=None) -> GyrostatSolution:
     """Exact motion of a free gyrostat, (8.39)-(8.40) (Zhukovsky-Volterra case), with the
     angles of its rotors when they are given.

@@ -1,0 +1,98 @@
+"""The library's BLAS threads: one thread inside its entry points, the user's settings restored after."""
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+
+from thetasol.core import threads
+from thetasol.core.threads import blas_threads, single_blas_thread
+from thetasol.solutions.base import Solution
+
+threadpoolctl = pytest.importorskip("threadpoolctl")
+
+
+def _blas_threads() -> list[int]:
+    import scipy.linalg  # noqa: F401  (scipy's own BLAS is counted too)
+
+    return [i["num_threads"] for i in threadpoolctl.threadpool_info() if i["user_api"] == "blas"]
+
+
+@pytest.fixture
+def two_threads():
+    """The user's setting: every BLAS on 2 threads (skipped where a BLAS cannot have 2)."""
+    import scipy.linalg  # noqa: F401  (loaded first, so that the limit reaches scipy's BLAS too)
+
+    with threadpoolctl.threadpool_limits(limits=2, user_api="blas"):
+        if not _blas_threads() or min(_blas_threads()) < 2:
+            pytest.skip("this BLAS cannot be set to 2 threads")
+        yield
+
+
+def test_limit_inside_and_restored_after(two_threads):
+    with blas_threads():
+        assert set(_blas_threads()) == {1}
+        with blas_threads():                       # nested: still 1, and the outer exit restores
+            assert set(_blas_threads()) == {1}
+        assert set(_blas_threads()) == {1}
+    assert set(_blas_threads()) == {2}
+
+
+def test_restored_when_the_call_raises(two_threads):
+    @single_blas_thread
+    def fails():
+        assert set(_blas_threads()) == {1}
+        raise ValueError("bad data")
+
+    with pytest.raises(ValueError, match="bad data"):
+        fails()
+    assert set(_blas_threads()) == {2}
+
+
+def test_solution_evaluation_runs_on_one_thread(two_threads):
+    seen = []
+
+    class Probe(Solution):
+        def _evaluate(self, t):
+            seen.append(_blas_threads())
+            return (t[:, None] * np.ones(3),)
+
+    (x,) = Probe()(np.linspace(0.0, 1.0, 5))
+    assert x.shape == (5, 3) and seen == [[1] * len(seen[0])]
+    assert set(_blas_threads()) == {2}
+
+
+def test_solve_rotation_leaves_the_users_setting(two_threads):
+    from thetasol import solve_rotation
+
+    sol = solve_rotation([1.0, 2.0, 3.5], np.zeros((3, 3)), np.eye(3), [0.1, 1.0, 0.2])
+    sol(np.linspace(0.0, 10.0, 7))
+    assert set(_blas_threads()) == {2}
+
+
+def test_limit_none_leaves_the_blas_alone(two_threads, monkeypatch):
+    monkeypatch.setattr(threads, "LIMIT", None)
+    with blas_threads():
+        assert set(_blas_threads()) == {2}
+
+
+def test_several_python_threads(two_threads):
+    """A thread leaving while another is still inside does not restore; the last one out does.
+
+    (Set from the main thread: OpenBLAS ignores a worker thread's setting once the main thread has
+    set one, so the limit itself is checked from the main thread.)
+    """
+    done = []
+
+    def work():
+        with blas_threads():
+            done.append(True)
+
+    with blas_threads():
+        assert set(_blas_threads()) == {1}
+        worker = threading.Thread(target=work)
+        worker.start()
+        worker.join()
+        assert done == [True] and set(_blas_threads()) == {1}
+    assert set(_blas_threads()) == {2}

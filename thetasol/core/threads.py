@@ -1,0 +1,110 @@
+"""BLAS threads for the library's small-matrix work: one thread inside the library's entry points.
+
+The library's linear algebra is on 3x3 .. 8x8 matrices and stacks of them, far below the size at
+which a multi-threaded BLAS gains; with the BLAS's default threads (one per core) its calls pay the
+threads' wake-up and synchronisation instead.  Measured on the 13 reference bodies on 2 cores, both
+settings in one run (benchmarks/bench_blas_threads.py, docs/bench_theta_rotation.md): with the
+default threads dense evaluation is 1.9-3.9x slower (median 2.9x), the set-up 1.1-2.7x slower, and a
+far time 13-16 ms instead of 0.1-0.3 ms on four genus-4 bodies.
+
+:func:`blas_threads` (a context manager) and :func:`single_blas_thread` (a decorator) set every
+loaded BLAS to :data:`LIMIT` threads for the duration of the call, with threadpoolctl, and restore the
+user's settings afterwards, also when the call raises.  Calls nest (only the outermost sets and
+restores) and are safe from several Python threads at once (a process-wide count: the limit holds
+while any thread is inside).  They do nothing without threadpoolctl, with ``LIMIT = None``, or with
+``THETASOL_BLAS_THREADS=keep`` in the environment (read at the first call).  A BLAS already at
+``LIMIT`` threads or fewer is left alone, so the cost is a sub-microsecond query per call then, a few
+microseconds otherwise.
+
+OpenBLAS (0.3.31 measured, tests/test_threads.py) ignores a setting made from a thread other than the
+main one once the main thread has set one: called from worker threads of such a process, the library
+runs with the BLAS as it finds it (Dask's worker processes start with ``OPENBLAS_NUM_THREADS=1``).
+"""
+from __future__ import annotations
+
+import functools
+import os
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from typing import Any, TypeVar
+
+__all__ = ["LIMIT", "blas_threads", "single_blas_thread"]
+
+#: Threads the library's BLAS calls run on; ``None`` leaves the BLAS as the user set it.
+LIMIT: int | None = 1
+
+F = TypeVar("F", bound=Callable[..., Any])
+
+_lock = threading.Lock()
+_state: dict[str, Any] = {"depth": 0, "saved": [], "controllers": None}
+
+
+def _blas_controllers() -> list:
+    """threadpoolctl's controllers of the loaded BLAS libraries (numpy's and scipy's), found once."""
+    if _state["controllers"] is None:
+        if os.environ.get("THETASOL_BLAS_THREADS", "").lower() == "keep":
+            _state["controllers"] = []
+            return []
+        try:
+            import scipy.linalg  # noqa: F401  (loads scipy's own BLAS, so that it is found too)
+            from threadpoolctl import ThreadpoolController
+        except ImportError:
+            _state["controllers"] = []
+            return []
+        _state["controllers"] = [c for c in ThreadpoolController().lib_controllers if c.user_api == "blas"]
+    return _state["controllers"]
+
+
+def _enter() -> None:
+    with _lock:
+        _state["depth"] += 1
+        if _state["depth"] > 1:
+            return
+        saved = []
+        for c in (_blas_controllers() if LIMIT is not None else ()):
+            n = c.num_threads
+            if n is not None and n > LIMIT:
+                c.set_num_threads(LIMIT)
+                saved.append((c, n))
+        _state["saved"] = saved
+
+
+def _exit() -> None:
+    with _lock:
+        _state["depth"] -= 1
+        if _state["depth"] > 0:
+            return
+        for c, n in _state["saved"]:
+            c.set_num_threads(n)
+        _state["saved"] = []
+
+
+@contextmanager
+def blas_threads() -> Iterator[None]:
+    """Run the block with every loaded BLAS on :data:`LIMIT` threads; the user's settings come back after.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> with blas_threads():
+    ...     x = np.linalg.solve(np.eye(3), np.ones(3))
+    """
+    _enter()
+    try:
+        yield
+    finally:
+        _exit()
+
+
+def single_blas_thread(fun: F) -> F:
+    """Decorator: ``fun`` runs inside :func:`blas_threads`."""
+    @functools.wraps(fun)
+    def wrapper(*args: Any, **kwargs: Any) -> Any:
+        _enter()
+        try:
+            return fun(*args, **kwargs)
+        finally:
+            _exit()
+
+    return wrapper  # type: ignore[return-value]
