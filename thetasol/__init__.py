@@ -58,6 +58,7 @@ _group("thetasol.integrators.multibody_rotors", "integrate_gyrostat_multibody")
 _group("thetasol.scenes.format", "Scene", "load_scene", "demo_scene_path")
 _group("thetasol.scenes.pipeline", "solve_configuration", "ConfigurationSolution")
 _group("thetasol.scenes.report", "run")
+_group("thetasol.ensembles", "solve_many")
 _group("thetasol.scenes.orbit", "solve_orbiting_configuration", "OrbitingConfigurationSolution")
 _group("thetasol.scenes.fixed_point", "solve_fixed_point", "FixedPointSolution")
 _group("thetasol.scenes.gyrostat_scene", "solve_gyrostat_configuration", "GyrostatSplit", "load_gyrostat_scene")
@@ -89,6 +90,7 @@ if TYPE_CHECKING:
     from thetasol import reference
     from thetasol.curves.plane_curve import Place, PlaneCurve
     from thetasol.curves.spectral import SpectralCurve, spectral_curve
+    from thetasol.ensembles import solve_many
     from thetasol.integrators.fixed_point import integrate_fixed_point
     from thetasol.integrators.gyrostat import integrate_gyrostat, integrate_heavy_gyrostat
     from thetasol.integrators.heavy_top import integrate_heavy_top
