@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from typing import Any
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -70,3 +71,18 @@ def extended_inertia(M: np.ndarray, w0: np.ndarray, fp: type, *, from_moments: b
         Iinv = Imp ** -1
         m0 = Imp * mpmath.matrix([mpmath.mpf(float(x)) for x in w0])
         return [[to_fp(Iinv[i, k]) for k in range(3)] for i in range(3)], [to_fp(m0[i]) for i in range(3)]
+
+
+def heyoka_and_type(dtype: str) -> tuple[Any, type]:
+    """The heyoka module and the float type of ``dtype`` ('dbl', 'ldbl' or 'f128') for method='heyoka'.
+
+    heyoka is optional: its absence is an ImportError naming the extra; a wrong ``dtype`` a ValueError.
+    """
+    try:
+        import heyoka as hy
+    except ImportError as exc:  # pragma: no cover - exercised only without the extra
+        raise ImportError("method='heyoka' needs the optional extra: pip install 'thetasol[bench]'") from exc
+    fp = {"dbl": float, "ldbl": np.longdouble, "f128": hy.real128}
+    if dtype not in fp:
+        raise ValueError(f"dtype must be 'dbl', 'ldbl' or 'f128', got {dtype!r}")
+    return hy, fp[dtype]

@@ -33,7 +33,7 @@ from scipy.integrate import solve_ivp
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize, vee
 from thetasol.core.threads import single_blas_thread
-from thetasol.integrators._common import extended_inertia
+from thetasol.integrators._common import extended_inertia, heyoka_and_type
 from thetasol.mechanics.heavy_top import heavy_top_data
 from thetasol.solutions.base import RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
@@ -282,14 +282,7 @@ def numerical_gyrostat(J: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0:
 
 def _heyoka_run(Jm, w0, Nv, Q0, rtol, dtype, torque_spec):
     """heyoka's Taylor integrator of the same equations (state m, Q, Phi), at ``dtype`` precision."""
-    try:
-        import heyoka as hy
-    except ImportError as exc:  # pragma: no cover - exercised only without the extra
-        raise ImportError("method='heyoka' needs the optional extra: pip install 'thetasol[bench]'") from exc
-    fp = {"dbl": float, "ldbl": np.longdouble, "f128": hy.real128}
-    if dtype not in fp:
-        raise ValueError(f"dtype must be 'dbl', 'ldbl' or 'f128', got {dtype!r}")
-    ft = fp[dtype]
+    hy, ft = heyoka_and_type(dtype)
     xs = hy.make_vars(*[f"m{i}" for i in range(3)], *[f"q{i}{j}" for i in range(3) for j in range(3)],
                       *[f"f{i}" for i in range(3)])
     m, Q = xs[:3], [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]

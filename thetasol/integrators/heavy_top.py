@@ -25,7 +25,7 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize
 from thetasol.core.threads import single_blas_thread
-from thetasol.integrators._common import both_ways, extended_inertia, solve_ivp_mQ
+from thetasol.integrators._common import both_ways, extended_inertia, heyoka_and_type, solve_ivp_mQ
 from thetasol.mechanics.heavy_top import heavy_top_data
 
 __all__ = ["integrate_heavy_top"]
@@ -104,14 +104,7 @@ def _solve_ivp(Im, c, F, Q0, m0, grid, rtol, atol, method):
 
 
 def _heyoka(Im, c, F, Q0, w0, grid, rtol, dtype):
-    try:
-        import heyoka as hy
-    except ImportError as exc:  # pragma: no cover - exercised only without the extra
-        raise ImportError("method='heyoka' needs the optional extra: pip install 'thetasol[bench]'") from exc
-    fp = {"dbl": float, "ldbl": np.longdouble, "f128": hy.real128}
-    if dtype not in fp:
-        raise ValueError(f"dtype must be 'dbl', 'ldbl' or 'f128', got {dtype!r}")
-    ft = fp[dtype]
+    hy, ft = heyoka_and_type(dtype)
     names = [f"m{i}" for i in range(3)] + [f"q{i}{j}" for i in range(3) for j in range(3)]
     xs = hy.make_vars(*names)
     m = xs[:3]

@@ -39,7 +39,7 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
 from thetasol.core.threads import single_blas_thread
-from thetasol.integrators._common import both_ways, solve_ivp_mQ
+from thetasol.integrators._common import both_ways, heyoka_and_type, solve_ivp_mQ
 from thetasol.solutions.base import RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
 
@@ -151,16 +151,9 @@ def _to_fp(x, fp, mpmath):
 
 
 def _heyoka(Jm, orbit, Q0, w0, tgrid, rtol, dtype):
-    try:
-        import heyoka as hy
-    except ImportError as exc:  # pragma: no cover - exercised only without the extra
-        raise ImportError("method='heyoka' needs the optional extra: pip install 'thetasol[bench]'") from exc
     import mpmath
 
-    fps = {"dbl": float, "ldbl": np.longdouble, "f128": hy.real128}
-    if dtype not in fps:
-        raise ValueError(f"dtype must be 'dbl', 'ldbl' or 'f128', got {dtype!r}")
-    ft = fps[dtype]
+    hy, ft = heyoka_and_type(dtype)
     with mpmath.workdps(60):     # I^-1 and m0 of the float64 data, rounded once to the working type
         Jmp = mpmath.matrix([[mpmath.mpf(float(x)) for x in row] for row in Jm])
         Imp = (Jmp[0, 0] + Jmp[1, 1] + Jmp[2, 2]) * mpmath.eye(3) - Jmp

@@ -29,7 +29,7 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
 from thetasol.core.threads import single_blas_thread
-from thetasol.integrators._common import both_ways, extended_inertia, solve_ivp_mQ
+from thetasol.integrators._common import both_ways, extended_inertia, heyoka_and_type, solve_ivp_mQ
 from thetasol.mechanics.equations import inertia_from_moments, invariants, rotation_rhs
 from thetasol.solutions.base import RotationSolution
 
@@ -273,18 +273,11 @@ class _SplitState:
 # -- heyoka ----------------------------------------------------------------------------------
 
 def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0):
-    try:
-        import heyoka as hy
-    except ImportError as exc:  # pragma: no cover - exercised only without the extra
-        raise ImportError("method='heyoka' needs the optional extra: pip install 'thetasol[bench]'") from exc
+    hy, ft = heyoka_and_type(dtype)
     names = [f"m{i}" for i in range(3)] + [f"q{i}{j}" for i in range(3) for j in range(3)]
     xs = hy.make_vars(*names)
     m = xs[:3]
     Q = [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]
-    fp = {"dbl": float, "ldbl": np.longdouble, "f128": hy.real128}
-    if dtype not in fp:
-        raise ValueError(f"dtype must be 'dbl', 'ldbl' or 'f128', got {dtype!r}")
-    ft = fp[dtype]
     if dtype == "dbl":
         Iw, m0w = [[float(x) for x in row] for row in I_inv], [float(x) for x in m0]
     else:
