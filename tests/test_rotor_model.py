@@ -12,19 +12,14 @@ import numpy as np
 import pytest
 from conftest import rand_Q
 
-from thetasol.core.so3 import hat
+from thetasol.core.so3 import complete_frame, hat
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Joint
 from thetasol.mechanics.rotors import GyrostatConfiguration, MasslessCarrier, Rotor, axis_rotation, gyrostat_energy
 
 
 def _frame(l):
-    k = int(np.argmin(np.abs(l)))
-    e = np.zeros(3)
-    e[k] = 1.0
-    e1 = e - (e @ l) * l
-    e1 /= np.linalg.norm(e1)
-    return e1, np.cross(l, e1)
+    return tuple(complete_frame(l)[:, :2].T)
 
 
 def _ring_rotor(name, carrier, axis, point, rng):

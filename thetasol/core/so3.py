@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["hat", "vee", "cross", "rotation_about", "rodrigues", "polar_orthonormalize"]
+__all__ = ["hat", "vee", "cross", "rotation_about", "rodrigues", "polar_orthonormalize", "complete_frame"]
 
 
 def hat(v: np.ndarray) -> np.ndarray:
@@ -71,3 +71,16 @@ def polar_orthonormalize(Q: np.ndarray) -> np.ndarray:
     """Nearest rotation matrix (polar factor) of nearly orthogonal matrices ``(..., 3, 3)``."""
     U, _, Vt = np.linalg.svd(Q)
     return U @ Vt
+
+
+def complete_frame(e3: np.ndarray) -> np.ndarray:
+    """Right-handed orthonormal frame (columns) whose third column is the unit vector ``e3``.
+
+    The first column is the coordinate axis least aligned with ``e3``, made orthogonal to it.
+    """
+    k = int(np.argmin(np.abs(e3)))
+    t = np.zeros(3)
+    t[k] = 1.0
+    e1 = t - (t @ e3) * e3
+    e1 /= np.linalg.norm(e1)
+    return np.column_stack([e1, np.cross(e3, e1), e3])

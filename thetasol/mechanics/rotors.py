@@ -49,7 +49,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
-from thetasol.core.so3 import hat
+from thetasol.core.so3 import complete_frame, hat
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import CENTRAL_RTOL, Joint
 from thetasol.mechanics.equations import inertia_from_moments
@@ -274,7 +274,7 @@ def _check_rotor(r: Rotor, m: float, c: np.ndarray, J: np.ndarray) -> EffectiveR
         raise ValueError(f"rotor {r.name!r}: its (effective) mass centre {c.tolist()} is off its axis by "
                          f"{np.linalg.norm(off):.3g}; Theorem 5 assumes it on the axis (the paper's (8.12) setting): "
                          "the rotor would shift the gyrostat's mass centre as it turns")
-    S = np.column_stack([*_perp(l), l])
+    S = complete_frame(l)
     Js = S.T @ J @ S
     scale = max(float(np.max(np.abs(np.linalg.eigvalsh(J)))), np.finfo(float).tiny)
     asym = max(abs(Js[0, 2]), abs(Js[1, 2]), abs(Js[0, 1]), 0.5 * abs(Js[0, 0] - Js[1, 1]))
@@ -286,15 +286,6 @@ def _check_rotor(r: Rotor, m: float, c: np.ndarray, J: np.ndarray) -> EffectiveR
     Jsym = S @ np.diag([B2, B2, Js[2, 2]]) @ S.T
     return EffectiveRotor(name=r.name, axis=l, mass=m, center=c, J=0.5 * (Jsym + Jsym.T), A=2.0 * B2, B=B2,
                           transverse_inertia=B2 + float(Js[2, 2]), z=-hat(l))
-
-
-def _perp(l):
-    k = int(np.argmin(np.abs(l)))
-    e = np.zeros(3)
-    e[k] = 1.0
-    e1 = e - (e @ l) * l
-    e1 /= np.linalg.norm(e1)
-    return e1, np.cross(l, e1)
 
 
 class GyrostatConfiguration:

@@ -60,6 +60,7 @@ from scipy import special as sp
 
 from thetasol.core.attitude import angle_mod_2pi
 from thetasol.core.dd import two_prod
+from thetasol.core.so3 import complete_frame
 from thetasol.special.elliptic import ellipj
 
 __all__ = ["lagrange_frame", "build_lagrange_top", "lagrange_state", "SYMMETRY_RTOL"]
@@ -75,17 +76,6 @@ FIT_WARN = 1e-12
 
 # -- frames -------------------------------------------------------------------------------------
 
-def _complete_frame(e3):
-    """Right-handed orthonormal frame (columns) with third column ``e3``."""
-    k = int(np.argmin(np.abs(e3)))
-    t = np.zeros(3)
-    t[k] = 1.0
-    e1 = t - (t @ e3) * e3
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(e3, e1)
-    return np.column_stack([e1, e2, e3])
-
-
 def lagrange_frame(I: np.ndarray, center: np.ndarray, rtol: float = SYMMETRY_RTOL
                    ) -> tuple[float, float, np.ndarray] | None:
     """``(A, C, P)`` when ``I`` is symmetric about the axis through ``center``, else None.
@@ -93,7 +83,7 @@ def lagrange_frame(I: np.ndarray, center: np.ndarray, rtol: float = SYMMETRY_RTO
     ``P`` (columns) is a right-handed body frame whose third axis is ``center/|center|``:
     ``P^T I P = diag(A, A, C)`` up to ``rtol |I|``.
     """
-    P = _complete_frame(center / np.linalg.norm(center))
+    P = complete_frame(center / np.linalg.norm(center))
     Ip = P.T @ I @ P
     scale = np.max(np.abs(np.linalg.eigvalsh(I)))
     off = max(abs(Ip[0, 2]), abs(Ip[1, 2]), abs(Ip[0, 1]), 0.5 * abs(Ip[0, 0] - Ip[1, 1]))
