@@ -1,9 +1,11 @@
-"""One line of a scene report: a measured deviation against a stated tolerance."""
+"""Scene reports: a measured deviation against a stated tolerance, and the text being written."""
 from __future__ import annotations
 
+import io
 from dataclasses import dataclass
+from typing import TextIO
 
-__all__ = ["Check"]
+__all__ = ["Check", "ReportText"]
 
 
 @dataclass
@@ -27,3 +29,20 @@ class Check:
         """The report line of this check."""
         return (f"  {self.what}: {self.deviation:.2e} (tolerance {self.tolerance:.1e}) [{self.seconds}]  "
                 f"{'ok' if self.ok else 'FAILED'}")
+
+
+class ReportText:
+    """The report as it is written: kept (``text()``), and echoed line by line to ``out`` when given."""
+
+    def __init__(self, out: TextIO | None):
+        self.buf = io.StringIO()
+        self.out = out
+
+    def __call__(self, line: str = "") -> None:
+        self.buf.write(line + "\n")
+        if self.out is not None:
+            print(line, file=self.out, flush=True)
+
+    def text(self) -> str:
+        """Everything written so far."""
+        return self.buf.getvalue()

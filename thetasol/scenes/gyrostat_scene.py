@@ -24,7 +24,6 @@ rigid-body rotation of :mod:`thetasol.scenes.pipeline`.  :func:`run_gyrostat_sce
 """
 from __future__ import annotations
 
-import io
 import time
 import tomllib
 from collections.abc import Mapping
@@ -44,6 +43,7 @@ from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Joint
 from thetasol.mechanics.rotors import GyrostatConfiguration, MasslessCarrier, Rotor, axis_rotation, gyrostat_energy
 from thetasol.mechanics.trajectories import Trajectories
+from thetasol.scenes.checks import ReportText
 from thetasol.scenes.pipeline import closed_form_rotation, rotation_kind
 from thetasol.solutions.base import Solution
 from thetasol.solutions.gyrostat import solve_gyrostat
@@ -453,12 +453,7 @@ def run_gyrostat_scene(scene: GyrostatScene, check: bool = True, out: TextIO | N
     The tolerance of the comparison is ``10 check_rtol (1 + t_end) (1 + max |x|)``, the reference's
     own error (docs/gyrostat.md).
     """
-    buf = io.StringIO()
-
-    def say(line=""):
-        buf.write(line + "\n")
-        if out is not None:
-            print(line, file=out, flush=True)
+    say = ReportText(out)
 
     start = time.perf_counter()
     sol = scene.solution()
@@ -484,4 +479,4 @@ def run_gyrostat_scene(scene: GyrostatScene, check: bool = True, out: TextIO | N
             say(f"  {what}: {dev:.2e} (tolerance {tl:.1e})  {'ok' if dev <= tl else 'FAILED'}")
         say(f"timings: split {split_seconds:.3f} s, multibody {mb.info['seconds']:.2f} s")
     say("verdict: " + ("all checks passed" if all(d <= t for _, d, t in checks) else "FAILED"))
-    return traj, buf.getvalue(), checks
+    return traj, say.text(), checks

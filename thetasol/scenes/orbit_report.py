@@ -19,7 +19,6 @@
 """
 from __future__ import annotations
 
-import io
 import time
 from dataclasses import replace
 from typing import TextIO
@@ -33,7 +32,7 @@ from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.mechanics.gravity_gradient import orbit_frame
 from thetasol.mechanics.trajectories import Trajectories
-from thetasol.scenes.checks import Check
+from thetasol.scenes.checks import Check, ReportText
 from thetasol.scenes.orbit import OrbitingConfigurationSolution
 
 __all__ = ["run_orbit", "scaled_station", "station_size", "jacobi_integral"]
@@ -222,12 +221,7 @@ def run_orbit(scene, check: bool = True, out: TextIO | None = None) -> tuple[Tra
     trajectories, report, checks
         As :func:`thetasol.scenes.report.run`.
     """
-    buf = io.StringIO()
-
-    def say(line: str = "") -> None:
-        buf.write(line + "\n")
-        if out is not None:
-            print(line, file=out, flush=True)
+    say = ReportText(out)
 
     start = time.perf_counter()
     sol = scene.solution()
@@ -244,4 +238,4 @@ def run_orbit(scene, check: bool = True, out: TextIO | None = None) -> tuple[Tra
         + ", ".join(f"{n} {r['seconds'] * 1e3:.1f} ms" for n, r in traj.info["rotations"].items()) + ")")
     say("verdict: " + ("all checks passed" if all(c.ok for c in checks) else
                        "FAILED: " + "; ".join(c.what for c in checks if not c.ok)))
-    return traj, buf.getvalue(), checks
+    return traj, say.text(), checks

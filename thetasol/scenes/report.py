@@ -24,7 +24,6 @@ integrate_rotation (at the scene's output density and for one far time), and the
 from __future__ import annotations
 
 import importlib
-import io
 import time
 from collections.abc import Callable
 from typing import TextIO
@@ -38,7 +37,7 @@ from thetasol.integrators.rotation import integrate_rotation
 from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import invariants
 from thetasol.mechanics.trajectories import Trajectories
-from thetasol.scenes.checks import Check
+from thetasol.scenes.checks import Check, ReportText
 from thetasol.scenes.fixed_point import pivoted_body
 from thetasol.scenes.format import Scene
 from thetasol.scenes.gyrostat_scene import GyrostatScene, run_gyrostat_scene
@@ -46,19 +45,6 @@ from thetasol.scenes.orbit_report import run_orbit
 from thetasol.scenes.pipeline import ConfigurationSolution, rotation_kind
 
 __all__ = ["Check", "run"]
-
-
-class _Text:
-    """The report as it is written: kept, and echoed to ``out`` when given."""
-
-    def __init__(self, out: TextIO | None):
-        self.buf = io.StringIO()
-        self.out = out
-
-    def __call__(self, line: str = "") -> None:
-        self.buf.write(line + "\n")
-        if self.out is not None:
-            print(line, file=self.out, flush=True)
 
 
 def _fmt(x) -> str:
@@ -83,7 +69,7 @@ def _mass_center_numerical(a, b, q0, v0, t, constraint: Sphere | None = None) ->
     return sol.y[:3].T, sol.y[3:].T
 
 
-def _describe_scene(scene: Scene, say: _Text) -> None:
+def _describe_scene(scene: Scene, say: ReportText) -> None:
     cfg, t = scene.config, scene.t
     say(f"scene: {scene.name or '(unnamed)'}" + (f"  -- {scene.description}" if scene.description else ""))
     viol = max((v.relative for v in cfg.violations()), default=0.0)
@@ -105,7 +91,7 @@ def _describe_scene(scene: Scene, say: _Text) -> None:
     say()
 
 
-def _describe_pivot(scene: Scene, say: _Text) -> None:
+def _describe_pivot(scene: Scene, say: ReportText) -> None:
     """The fixed point and the main effective body about it, (5.1)-(5.3)."""
     p = scene.fixed_point
     pb = pivoted_body(scene.config, p, scene.a, scene.b)
@@ -115,7 +101,7 @@ def _describe_pivot(scene: Scene, say: _Text) -> None:
     say(f"  potential about the pivot: a as given, b + 2 a x_P = {_fmt(pb.b)}; case: {pb.case}")
 
 
-def _describe_models(sol: ConfigurationSolution, say: _Text) -> None:
+def _describe_models(sol: ConfigurationSolution, say: ReportText) -> None:
     say("models:")
     if "pivoted_body" in sol.diagnostics:
         say(f"  mass centre: {sol.diagnostics['models']['mass_center']}")
@@ -191,7 +177,7 @@ def _pivot_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectories) 
     return checks + _rotation_checks(scene, sol, traj, skip_root=True)
 
 
-def _drift(scene: Scene, traj: Trajectories, say: _Text) -> None:
+def _drift(scene: Scene, traj: Trajectories, say: ReportText) -> None:
     say()
     say("first integrals of each effective rotation along the solution (max relative drift):")
     for i, n in enumerate(traj.names):
@@ -212,7 +198,7 @@ def _drift(scene: Scene, traj: Trajectories, say: _Text) -> None:
             f"spectral curve (4.12) {cd:.1e}")
 
 
-def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say: _Text) -> tuple[Check, float, float]:
+def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say: ReportText) -> tuple[Check, float, float]:
     """The split against the unsplit multibody integration up to the scene's ``check_t_end``.
 
     Also returns the multibody integration's seconds and the end time it reached.
@@ -283,7 +269,7 @@ _ACCURACY = ("accuracy: an integrator's error grows with the horizon and a close
 
 
 def _pays_off(scene: Scene, sol: ConfigurationSolution, traj: Trajectories, ref_seconds: dict,
-              multibody: tuple[float, float] | None, say: _Text) -> None:
+              multibody: tuple[float, float] | None, say: ReportText) -> None:
     """When the closed form pays off: set-up against horizon and accuracy, from this run's timings."""
     t = scene.t
     span = float(t[-1] - min(t[0], 0.0))
@@ -355,7 +341,7 @@ def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = N
         return traj, text, [Check(f"split (Theorem 5) vs unsplit multibody: {w}", d, tl, "-") for w, d, tl in raw]
     if scene.orbit is not None:
         return run_orbit(scene, check=check, out=out)
-    say = _Text(out)
+    say = ReportText(out)
     multibody = check and scene.solver.get("check_multibody", True)
     step = _stepper(progress, multibody)
     _describe_scene(scene, say)
@@ -393,4 +379,4 @@ def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = N
            else ""))
     say("verdict: " + ("all checks passed" if all(c.ok for c in checks) else
                        "FAILED: " + "; ".join(c.what for c in checks if not c.ok)))
-    return traj, say.buf.getvalue(), checks
+    return traj, say.text(), checks
