@@ -23,19 +23,10 @@ from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
 from thetasol.core.threads import single_blas_thread
+from thetasol.mechanics.constraints import point_on_sphere
 from thetasol.solutions.base import Solution
 
 __all__ = ["integrate_neumann", "NumericalNeumann", "numerical_neumann"]
-
-
-def _prepare(a, q0, v0):
-    a = V.symmetric_matrix(a, "a")
-    q0 = V.vector3(q0, "q0")
-    v0 = V.vector3(v0, "v0")
-    R = float(np.linalg.norm(q0))
-    if R == 0.0:
-        raise ValueError("q0 must be non-zero: it fixes the radius of the sphere")
-    return a, q0, v0, R
 
 
 @single_blas_thread
@@ -61,7 +52,7 @@ def integrate_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, t: ArrayLike, 
     q, v : ndarray, ``t.shape + (3,)``
         Projected onto the sphere and its tangent plane at output.
     """
-    a, q0, v0, R = _prepare(a, q0, v0)
+    a, q0, v0, R = point_on_sphere(a, q0, v0)
     if not (0 < rtol < 1):
         raise ValueError(f"rtol must be in (0, 1), got {rtol}")
     v0 = v0 - q0 * (q0 @ v0) / (R * R)
@@ -126,7 +117,7 @@ def numerical_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, rtol: float = 
     ``method`` is ``"numerical/<method>"``; ``invariants`` holds the energy per unit mass
     ``1/2 |v0|^2 + 1/2 q0.a q0``; ``diagnostics`` the integrator, its tolerance and the radius.
     """
-    a, q0, v0, R = _prepare(a, q0, v0)
+    a, q0, v0, R = point_on_sphere(a, q0, v0)
     if not (0 < rtol < 1):
         raise ValueError(f"rtol must be in (0, 1), got {rtol}")
     inv = {"energy": float(0.5 * (v0 @ v0) + 0.5 * (q0 @ a @ q0))}

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 
-__all__ = ["Sphere", "SPHERE_TOL", "Pivot", "pivot_mass_center"]
+__all__ = ["Sphere", "SPHERE_TOL", "Pivot", "pivot_mass_center", "point_on_sphere"]
 
 #: Relative tolerance on ``|q0| = R`` and on ``q0 . v0 = 0`` (the initial state must satisfy the constraint).
 SPHERE_TOL = 1e-12
@@ -138,3 +138,16 @@ def pivot_mass_center(pivot: Pivot, center: ArrayLike, Q: ArrayLike, omega: Arra
     Q = np.asarray(Q, dtype=float)
     w = np.asarray(omega, dtype=float)
     return pivot.position + Q @ d, (Q @ np.cross(w, d)[..., None])[..., 0]
+
+
+def point_on_sphere(a: ArrayLike, q0: ArrayLike, v0: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """``(a, q0, v0, radius)`` of Neumann's problem checked: ``a`` symmetric, ``q0`` and ``v0`` finite
+    3-vectors, ``q0 != 0`` (it fixes the radius ``|q0|``); ``ValueError`` naming the problem otherwise.
+    Tangency of ``v0`` is the caller's rule (the closed form refuses, the integrator projects)."""
+    a = V.symmetric_matrix(a, "a")
+    q0 = V.vector3(q0, "q0")
+    v0 = V.vector3(v0, "v0")
+    R = float(np.linalg.norm(q0))
+    if R == 0.0:
+        raise ValueError("q0 must be non-zero: it fixes the radius of the sphere")
+    return a, q0, v0, R

@@ -40,7 +40,6 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from thetasol.core import validate as V
 from thetasol.core.panels import PeriodicIntegral
 from thetasol.core.periodic import (
     SeriesNotConverged,
@@ -53,6 +52,7 @@ from thetasol.core.periodic import (
 )
 from thetasol.core.roots import quadratic_roots
 from thetasol.core.threads import single_blas_thread
+from thetasol.mechanics.constraints import point_on_sphere
 from thetasol.solutions._neumann_torus import MIN_WIDTH, DegenerateTorus, NeumannTorus, Oscillator
 from thetasol.solutions._symmetry import SNAP_TOL
 from thetasol.solutions.base import ClosedFormUnavailable, Solution
@@ -488,12 +488,7 @@ def _uhlenbeck(k: np.ndarray, x: np.ndarray, y: np.ndarray, R: float, snapped: b
 
 def _validated(a, q0, v0):
     """(a, q0, v0, radius) checked: a symmetric, q0 != 0, v0 tangent within TANGENT_TOL relative."""
-    a = V.symmetric_matrix(a, "a")
-    q0 = V.vector3(q0, "q0")
-    v0 = V.vector3(v0, "v0")
-    R = float(np.linalg.norm(q0))
-    if R == 0.0:
-        raise ValueError("q0 must be non-zero: it fixes the radius of the sphere")
+    a, q0, v0, R = point_on_sphere(a, q0, v0)
     vn = float(np.linalg.norm(v0))
     if abs(q0 @ v0) > TANGENT_TOL * R * vn:
         raise ValueError(f"v0 must be tangent to the sphere |q| = |q0|: q0.v0 / (|q0| |v0|) = "
