@@ -18,7 +18,6 @@ torque of the uniform force ``-b/2`` per unit mass.  ``b = 0`` or ``R = 0`` is t
 """
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -118,8 +117,7 @@ class NumericalFixedPoint(RotationSolution):
     rtol: float = 1e-12
     integrator: str = "DOP853"
 
-    def _chunk_size(self) -> int:
-        return sys.maxsize  # one integration over all requested times
+    _AT_ONCE = True  # one integration over all requested times
 
     def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return integrate_fixed_point(self.J, self.R, self.a, self.b, self.Q0, self.omega0, t, rtol=self.rtol,

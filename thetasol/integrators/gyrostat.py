@@ -22,7 +22,6 @@ pivot the energy, the vertical momentum ``(m + N) . gamma`` and, for a Lagrange 
 """
 from __future__ import annotations
 
-import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 
@@ -238,8 +237,7 @@ class NumericalGyrostat(RotationSolution):
     rtol: float = 1e-12
     integrator: str = "DOP853"
 
-    def _chunk_size(self) -> int:
-        return sys.maxsize
+    _AT_ONCE = True  # one integration over all requested times
 
     def evaluate_with_angles(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(omega, Q, rotor angles)`` at times ``t`` of any shape, one integration."""

@@ -14,7 +14,6 @@ a separatrix) and by the split of a scene with the sphere constraint in that cas
 """
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -103,8 +102,7 @@ class NumericalNeumann(Solution):
     rtol: float = 1e-12
     integrator: str = "DOP853"
 
-    def _chunk_size(self) -> int:
-        return sys.maxsize  # one integration over all requested times
+    _AT_ONCE = True  # one integration over all requested times
 
     def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return integrate_neumann(self.a, self.q0, self.v0, t, rtol=self.rtol, method=self.integrator)

@@ -30,7 +30,6 @@ on time through the orbit.
 """
 from __future__ import annotations
 
-import sys
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -200,8 +199,7 @@ class NumericalOrbitingRotation(RotationSolution):
     rtol: float = 1e-12
     integrator: str = "DOP853"
 
-    def _chunk_size(self) -> int:
-        return sys.maxsize  # one integration over all requested times
+    _AT_ONCE = True  # one integration over all requested times
 
     def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return integrate_orbiting_rotation(self.J, self.orbit, self.Q0, self.omega0, t, rtol=self.rtol,

@@ -20,7 +20,6 @@ protocol, for bodies whose rotation has no closed form.
 from __future__ import annotations
 
 import math
-import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -132,8 +131,7 @@ class NumericalRotation(RotationSolution):
     rtol: float = 1e-12
     integrator: str = "DOP853"
 
-    def _chunk_size(self) -> int:
-        return sys.maxsize  # one integration over all requested times
+    _AT_ONCE = True  # one integration over all requested times
 
     def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         return integrate_rotation(self.J, self.a, self.Q0, self.omega0, t, rtol=self.rtol, method=self.integrator)

@@ -124,8 +124,7 @@ class GyrostatSplit(Solution):
         """Carrier -> the method of its effective gyrostat."""
         return self.diagnostics["models"]
 
-    def _chunk_size(self) -> int:
-        return 1 << 62   # the parts chunk themselves; a numerical one integrates once
+    _AT_ONCE = True   # the parts chunk themselves; a numerical one integrates once
 
     def evaluate_parts(self, t: np.ndarray) -> tuple[dict, dict, dict, dict]:
         """Per carrier ``omega``, ``Q`` and per rotor ``phi``, ``phidot`` at the flat times ``t``."""

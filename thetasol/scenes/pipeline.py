@@ -127,8 +127,7 @@ class ConfigurationSolution(Solution):
         """Body names, root first (the body axis of the outputs)."""
         return tuple(self.config.order)
 
-    def _chunk_size(self) -> int:
-        return 1 << 62  # the parts chunk themselves; a numerical rotation integrates once
+    _AT_ONCE = True  # the parts chunk themselves; a numerical rotation integrates once
 
     def _parts(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, dict, dict, dict, dict]:
         """Mass centre, attitudes, angular velocities, placed bodies and seconds per part at 1-d ``t``."""

@@ -45,6 +45,10 @@ class Solution:
     def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, ...]:  # pragma: no cover - abstract
         raise NotImplementedError
 
+    #: Evaluate all requested times in one call (a numerical reference integrates once over them, a
+    #: composite solution lets its parts chunk themselves) instead of in chunks of ``_chunk_size()``.
+    _AT_ONCE = False
+
     def _chunk_size(self) -> int:
         """Times per chunk; models whose evaluation needs much memory per time lower it."""
         return CHUNK
@@ -54,7 +58,10 @@ class Solution:
         return tt, tt.ravel()
 
     def _chunked(self, fn, flat: np.ndarray):
-        n, step = flat.size, max(1, int(self._chunk_size()))
+        n = flat.size
+        if self._AT_ONCE:
+            return fn(flat)
+        step = max(1, int(self._chunk_size()))
         if n <= step:
             return fn(flat)
         parts = [fn(flat[i:i + step]) for i in range(0, n, step)]
