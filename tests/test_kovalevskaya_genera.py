@@ -21,8 +21,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_kovalevskaya_top import _top
 
-from thetasol.core.so3 import rodrigues
 from thetasol.solutions.kovalevskaya_top import (
     kovalevskaya_curve,
     kovalevskaya_frame,
@@ -41,15 +41,6 @@ def _generapy():
     if tuple(int(x) for x in mpmath.__version__.split(".")[:3]) < (1, 4, 1):
         pytest.skip(f"generapy needs mpmath >= 1.4.1 (found {mpmath.__version__})")
     return generapy, mpmath
-
-
-def _top(seed):
-    """The random Kovalevskaya tops of tests/test_kovalevskaya_top.py."""
-    rng = np.random.default_rng(seed)
-    R = rodrigues(rng.normal(size=3))
-    I = R @ np.diag([2.0, 2.0, 1.0]) @ R.T * rng.uniform(0.3, 2.0)
-    c = R @ [np.cos(seed), np.sin(seed), 0.0] * rng.uniform(0.2, 1.0)
-    return I, c, rodrigues(rng.normal(size=3)), rng.normal(size=3) * rng.uniform(0.2, 4.0)
 
 
 def _sdot(frame, I, c, Q0, w0, h=1e-6):

@@ -31,22 +31,14 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_kovalevskaya_top import _top
 
-from thetasol.core.so3 import hat, rodrigues
+from thetasol.core.so3 import hat
 from thetasol.solutions.kovalevskaya_top import kovalevskaya_frame
 
 G = dict(mass=1.0, gravity=(0.0, 0.0, -9.81))
 E = np.array([[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]])
 JJ = np.array([[0.0, 1.0], [-1.0, 0.0]])
-
-
-def _top(seed):
-    """The random Kovalevskaya tops of tests/test_kovalevskaya_top.py."""
-    rng = np.random.default_rng(seed)
-    R = rodrigues(rng.normal(size=3))
-    I = R @ np.diag([2.0, 2.0, 1.0]) @ R.T * rng.uniform(0.3, 2.0)
-    c = R @ [np.cos(seed), np.sin(seed), 0.0] * rng.uniform(0.2, 1.0)
-    return I, c, rodrigues(rng.normal(size=3)), rng.normal(size=3) * rng.uniform(0.2, 4.0)
 
 
 def memoir_state(frame, omega, Q):
