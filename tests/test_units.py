@@ -272,8 +272,8 @@ def test_rank_one_with_isotropic_part_found_by_the_sweep():
 @pytest.mark.parametrize("gap", [8e-13, 1e-13, 1e-14])
 def test_nearly_symmetric_between_snap_and_engine_refused_at_once(gap):
     """J gaps above SNAP_TOL (8 eps) and below MIN_J_GAP, relative axial spin 0.2: refused before the
-    curve is built, naming integrate_rotation (snapping them moved the answer 130-2000 x the
-    conditioning, benchmarks/bench_snapping.py)."""
+    curve is built, naming integrate_rotation (the snapped, exactly symmetric model is 14-1400 x the
+    conditioning off at these gaps, benchmarks/bench_snapping.py)."""
     J = np.array([0.7, 0.7 * (1 + gap), 1.3])
     t0 = time.perf_counter()
     with pytest.raises(ClosedFormUnavailable, match="nearly symmetric body.*integrate_rotation"):

@@ -14,9 +14,10 @@ __all__ = ["SNAP_TOL", "sorted_principal_frame", "symmetry_axis"]
 
 #: Relative size below which a near-degeneracy of the data is snapped to an exact one: 8 ulps, the
 #: rounding of an eigen-decomposition.  Snapping a gap d moves the trajectory by about d / eps times
-#: the float64 conditioning (error and conditioning both grow like t): measured against heyoka 80-bit
-#: at t <= 4002 on a body with J gaps 5e-14 / 5e-15 / 5e-16, 130 / 12 / 1.7 x the conditioning
-#: (benchmarks/bench_snapping.py).  Gaps above it and below the engines' own limits are refused.
+#: the float64 conditioning (error and conditioning both grow like t): the exactly symmetric model of a
+#: body with J gaps 5e-13 / 5e-14 / 5e-15 / 5e-16 is 1400 / 140 / 14 / 2.0 x the conditioning off
+#: heyoka 80-bit at t <= 4002 (benchmarks/bench_snapping.py).  Gaps above it and below the engines' own
+#: limits are refused.
 SNAP_TOL = 8 * float(np.finfo(float).eps)
 
 
