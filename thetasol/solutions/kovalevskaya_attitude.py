@@ -22,7 +22,6 @@ plus the dropped sum) is ``diagnostics["phase_tail"]``.
 from __future__ import annotations
 
 from dataclasses import dataclass
-from itertools import product
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -43,7 +42,7 @@ def _torus_lattice(motion, box=4):
     """Two integer vectors ``k1, k2`` (lattice coordinates) spanning the periods of the state on the real torus."""
     W = np.stack([_lattice_coords(motion, motion.V1), motion.lattice_velocity()], 1)   # (4, 2)
     Qw, _ = np.linalg.qr(W)
-    k = np.array(list(product(range(-box, box + 1), repeat=4)), float)
+    k = np.indices((2 * box + 1,) * 4).reshape(4, -1).T - float(box)   # the box in lexicographic order
     k = k[np.any(k != 0, 1)]
     k = k[np.linalg.norm(k - (k @ Qw) @ Qw.T, axis=1) <= 1e-6 * np.linalg.norm(k, axis=1)]
     for a, b in motion.chars1 + motion.chars2:

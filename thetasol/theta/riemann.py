@@ -164,43 +164,34 @@ class RiemannTheta:
         red, g = self.reduction, self.g
         mp = red.mp
         ctx = mp["ctx"]
-        # (alpha', beta') = gamma^{-T} (alpha, beta) + (a_s, b_s): exact in mpmath (integer map;
-        # general characteristics are not multiples of 1/2), then split into [0, 1) + integers
+        # (alpha', beta') = gamma^{-T} (alpha, beta) + (a_s, b_s), split into [0, 1) + integers: exact, in
+        # integers for half characteristics, in mpmath for general ones
         Lam = red.lattice_map
         shift = np.concatenate([red.a_s, red.b_s])
-        a1 = np.empty_like(alpha, dtype=object)
-        b1 = np.empty_like(beta, dtype=object)
-        for ci in range(alpha.shape[0]):
-            ab = [ctx.mpf(float(x)) for x in np.concatenate([alpha[ci], beta[ci]])]
-            img = [ctx.fsum(int(Lam[i, j]) * ab[j] for j in range(2 * g)) + ctx.mpf(shift[i]) for i in range(2 * g)]
-            a1[ci], b1[ci] = img[:g], img[g:]
-        # exact floor, no snapping: a characteristic 1e-13 off an integer is a different
-        # characteristic (theta changes by ~2 pi |z| 1e-13), and the constant K below uses
-        # the exact a1 - p; half-integer images are exact, so ar, br in {0, 1/2} for "all"
-        p = np.vectorize(ctx.floor)(a1)
-        q = np.vectorize(ctx.floor)(b1)
-        ar = np.vectorize(float)(a1 - p).astype(float)
-        br = np.vectorize(float)(b1 - q).astype(float)
-        # K carries phases of size ~1e3 (large Q, c0 after inversions): sum it in mpmath
-        tau0, taur, Qm, lm, Mm = mp["tau0"], mp["tau"], mp["Q"], mp["l"], mp["M"]
+        v2 = 2 * np.concatenate([alpha, beta], axis=1)
+        if np.array_equal(v2, np.round(v2)):
+            a1, b1, p, q, ar, br = _half_images(v2, Lam, shift, ctx)
+        else:
+            a1, b1, p, q, ar, br = _general_images(alpha, beta, Lam, shift, ctx)
+        # K carries phases of size ~1e3 (large Q, c0 after inversions): sum it in mpmath, as the quadratic
+        # form of (alpha, beta) assembled once (_char_form) and evaluated per characteristic
+        tau0, Qm, lm, Mm = mp["tau0"], mp["Q"], mp["l"], mp["M"]
+        H, h, c = _char_form(mp, Lam, shift)
         n = alpha.shape[0]
         K = np.empty(n, dtype=complex)
         two_pi_i = 2j * ctx.pi
-        rg = range(g)
+        rg, r2 = range(g), range(2 * g)
         for ci in range(n):
-            al, be = [ctx.mpf(x) for x in alpha[ci]], [ctx.mpf(x) for x in beta[ci]]
-            a1c, b1c = list(a1[ci]), list(b1[ci])
-            d0 = [ctx.fdot(tau0[i], al) + be[i] for i in rg]
-            Qd0 = [ctx.fdot(Qm[i], d0) for i in rg]
-            Ta1 = [ctx.fdot(taur[i], a1c) for i in rg]
-            Kc = (ctx.pi * 1j * ctx.fdot(al, [ctx.fdot(tau0[i], al) for i in rg])
-                  + two_pi_i * ctx.fdot(al, be) + mp["c0"] + two_pi_i * ctx.fdot(lm, d0)
-                  + ctx.pi * 1j * ctx.fdot(d0, Qd0) - ctx.pi * 1j * ctx.fdot(a1c, Ta1)
-                  - two_pi_i * ctx.fdot(a1c, b1c) + two_pi_i * ctx.fdot(list(a1[ci] - p[ci]), list(q[ci])))
+            v = [ctx.mpf(x) for x in np.concatenate([alpha[ci], beta[ci]])]
+            nz = [i for i in r2 if v[i]]
+            Kc = (c + ctx.fsum(v[i] * (h[i] + ctx.fsum(H[i][j] * v[j] for j in nz)) for i in nz)
+                  + two_pi_i * ctx.fsum((a1[ci][i] - p[ci][i]) * q[ci][i] for i in rg))
             # Im K is a phase of size up to ~1e3: reduce it mod 2 pi before rounding to float64
             K[ci] = complex(float(Kc.real), float(ctx.fmod(Kc.imag, 2 * ctx.pi)))
             if ci == 0:  # linear coefficient of log(prefactor) in z: zero by the modular law
-                L = [abs(al[j] + lm[j] + Qd0[j] - ctx.fdot(a1c, [Mm[i][j] for i in rg])) for j in rg]
+                al, be, a1c = v[:g], v[g:], list(a1[ci])
+                d0 = [ctx.fdot(tau0[i], al) + be[i] for i in rg]
+                L = [abs(al[j] + lm[j] + ctx.fdot(Qm[j], d0) - ctx.fdot(a1c, [Mm[i][j] for i in rg])) for j in rg]
                 if max(L) > 1e-20:  # pragma: no cover - would mean a broken reduction
                     raise RuntimeError(f"internal error: theta transformation has a linear term {L}")
         return {"alpha": alpha, "beta": beta, "ar": ar, "br": br, "K": K}
@@ -409,6 +400,65 @@ class RiemannTheta:
         """Hessian ``d^2 theta / d z_i d z_j``, shape ``z.shape[:-1] + (g, g)``."""
         res = self.jet(z, char, 2, separated)
         return (res[0], res[3]) if separated else res[2]
+
+
+def _half_images(v2: np.ndarray, Lam: np.ndarray, shift: np.ndarray, ctx) -> tuple:
+    """:func:`_general_images` for half-integer characteristics (``v2 = 2 (alpha, beta)`` integer), exactly
+    in integers: the images are half-integers, ``a1 - p`` and ``b1 - q`` in ``{0, 1/2}``."""
+    g = v2.shape[1] // 2
+    img2 = np.rint(v2).astype(np.int64) @ Lam.astype(np.int64).T + np.rint(2 * shift).astype(np.int64)
+    fl = img2 // 2
+    half = lambda m: np.vectorize(lambda x: ctx.mpf(int(x)) / 2, otypes=[object])(m)  # noqa: E731
+    whole = lambda m: np.vectorize(lambda x: ctx.mpf(int(x)), otypes=[object])(m)  # noqa: E731
+    fr = (img2 - 2 * fl) / 2.0
+    return half(img2[:, :g]), half(img2[:, g:]), whole(fl[:, :g]), whole(fl[:, g:]), fr[:, :g], fr[:, g:]
+
+
+def _general_images(alpha: np.ndarray, beta: np.ndarray, Lam: np.ndarray, shift: np.ndarray, ctx) -> tuple:
+    """``(a1, b1, p, q, ar, br)``: the images ``(a1, b1) = Lam (alpha, beta) + shift`` in mpmath, their floors
+    ``p, q`` and the reduced characteristics ``a1 - p, b1 - q`` in float64."""
+    g = alpha.shape[1]
+    a1 = np.empty_like(alpha, dtype=object)
+    b1 = np.empty_like(beta, dtype=object)
+    for ci in range(alpha.shape[0]):
+        ab = [ctx.mpf(float(x)) for x in np.concatenate([alpha[ci], beta[ci]])]
+        img = [ctx.fsum(int(Lam[i, j]) * ab[j] for j in range(2 * g)) + ctx.mpf(shift[i]) for i in range(2 * g)]
+        a1[ci], b1[ci] = img[:g], img[g:]
+    # exact floor, no snapping: a characteristic 1e-13 off an integer is a different
+    # characteristic (theta changes by ~2 pi |z| 1e-13), and the constant K uses the exact a1 - p
+    p = np.vectorize(ctx.floor)(a1)
+    q = np.vectorize(ctx.floor)(b1)
+    return a1, b1, p, q, np.vectorize(float)(a1 - p).astype(float), np.vectorize(float)(b1 - q).astype(float)
+
+
+def _char_form(mp: dict, Lam: np.ndarray, shift: np.ndarray) -> tuple[list, list, object]:
+    """``(H, h, c)`` in mpmath with ``K(v) = c + v.H.v + h.v + 2 pi i (a1 - p).q`` for ``v = (alpha, beta)``:
+    the sum of the prefactor's terms ``pi i al.tau0.al + 2 pi i al.be + c0 + 2 pi i l.d0 + pi i d0.Q.d0
+    - pi i a1.taur.a1 - 2 pi i a1.b1`` with ``d0 = tau0 al + be`` and ``(a1, b1) = Lam v + shift``."""
+    ctx = mp["ctx"]
+    tau0, taur, Qm, lm = mp["tau0"], mp["tau"], mp["Q"], mp["l"]
+    g = len(tau0)
+    r2 = range(2 * g)
+    pi_i = ctx.pi * 1j
+    D = [[tau0[i][j] if j < g else ctx.mpf(int(i == j - g)) for j in r2] for i in range(g)]      # d0 = D v
+    A = [[ctx.mpf(int(Lam[i, j])) for j in r2] for i in range(2 * g)]                             # a1, b1 = A v
+    sa, sb = [ctx.mpf(x) for x in shift[:g]], [ctx.mpf(x) for x in shift[g:]]
+    QD = [[ctx.fdot(Qm[i], [D[k][j] for k in range(g)]) for j in r2] for i in range(g)]
+    TA = [[ctx.fdot(taur[i], [A[k][j] for k in range(g)]) for j in r2] for i in range(g)]
+    H = [[pi_i * (ctx.fdot([D[k][i] for k in range(g)], [QD[k][j] for k in range(g)])
+                  - ctx.fdot([A[k][i] for k in range(g)], [TA[k][j] for k in range(g)]))
+          - 2 * pi_i * ctx.fdot([A[k][i] for k in range(g)], [A[g + k][j] for k in range(g)])
+          for j in r2] for i in r2]
+    for i in range(g):
+        H[i][g + i] += 2 * pi_i
+        for j in range(g):
+            H[i][j] += pi_i * tau0[i][j]
+    Ts = [ctx.fdot(taur[i], sa) for i in range(g)]
+    h = [2 * pi_i * (ctx.fdot(lm, [D[k][j] for k in range(g)]) - ctx.fdot(Ts, [A[k][j] for k in range(g)])
+                     - ctx.fdot(sa, [A[g + k][j] for k in range(g)]) - ctx.fdot(sb, [A[k][j] for k in range(g)]))
+         for j in r2]
+    c = mp["c0"] - pi_i * ctx.fdot(sa, Ts) - 2 * pi_i * ctx.fdot(sa, sb)
+    return H, h, c
 
 
 def riemann_theta(z: ArrayLike, tau: ArrayLike, char: str | tuple[ArrayLike, ArrayLike] | None = None,
