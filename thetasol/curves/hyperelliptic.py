@@ -45,6 +45,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike
 
+from thetasol.theta.lattice import lll_gram
 from thetasol.theta.riemann import RiemannTheta
 
 __all__ = ["HyperellipticCurve"]
@@ -115,6 +116,28 @@ def _symplectic_reduction(J0: np.ndarray) -> np.ndarray:
         A.append(a)
         B.append(b)
     return np.array(A + B)
+
+
+def _siegel_basis(Om: np.ndarray, M: np.ndarray, max_iter: int = 100) -> np.ndarray:
+    """The symplectic basis ``M`` changed so that ``tau`` is Siegel-reduced (Frauendiener, Jaber & Klein 2019:
+    LLL on ``Im tau``, ``|Re tau_ij| <= 1/2``, ``a_1 <-> b_1`` while ``|tau_11| < 1``): the theta sums and the
+    lattice reductions of the callers then see short periods."""
+    g = len(M) // 2
+    for _ in range(max_iter):
+        P = Om @ M.T
+        tau = np.linalg.solve(P[:, :g], P[:, g:])
+        U = lll_gram(0.5 * (tau.imag + tau.imag.T))          # tau -> U tau U^T
+        Ma = np.rint(np.linalg.inv(U)).astype(np.int64).T @ M[:g]
+        M = np.concatenate([Ma, U @ M[g:]])
+        tau = U @ tau @ U.T
+        S = -np.rint(0.5 * (tau.real + tau.real.T)).astype(np.int64)    # tau -> tau + S
+        M = np.concatenate([M[:g], M[g:] + S.T @ M[:g]])
+        t11 = tau[0, 0] + S[0, 0]
+        if abs(t11) >= 1.0 - 1e-12:
+            return M
+        M = M.copy()
+        M[[0, g]] = np.stack([M[g], -M[0]])
+    raise RuntimeError("Siegel reduction did not terminate (internal error)")
 
 
 @dataclass(frozen=True)
@@ -202,7 +225,7 @@ class HyperellipticCurve:
             s = int(np.sign((np.conj(-segs[k].reach) * segs[k + 1].leave).imag))
             J0[k, k + 1], J0[k + 1, k] = s, -s
         Om = 2 * np.stack([s.integrals for s in segs], 1)
-        M = _symplectic_reduction(J0)
+        M = _siegel_basis(Om, _symplectic_reduction(J0))
         D = np.concatenate([np.zeros((1, g), complex), np.cumsum([s.integrals for s in segs], axis=0)])
         return cls(e, complex(lead), g, Om, J0, M, D - D.sum(axis=0))
 
