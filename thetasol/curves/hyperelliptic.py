@@ -1,7 +1,12 @@
 """Hyperelliptic curves ``y^2 = f(x)``, ``deg f = 2g + 1``: periods, Riemann matrix, Abel map from the
 branch point at infinity, Riemann constant, from the branch points alone (no sympy, no path graph).
 
-Method (after Molin & Neurohr, Math. Comp. 88 (2019) 847-888, written here from the mathematics).
+Method (after Molin & Neurohr, Math. Comp. 88 (2019) 847-888, written here from the mathematics).  For
+``y^2 = f(x)`` the sheets are ``+-y``, so nothing has to be tracked: every integral runs along a straight
+segment that starts or ends at a branch point, with the square root's singularity taken into the
+quadrature weight (or a substitution) and the rest analytic in an ellipse whose size is known from the
+branch points; the node count follows from it in advance, the cost is that of a few hundred
+evaluations of a product, and no path graph, sympy or sheet matching (as in PlaneCurve) is needed.
 
 * **Cycles.**  The finite branch points are sorted by ``(Re, Im)`` into a chain ``e_1, ..., e_{2g+1}``;
   the polyline through them is x-monotone, so its segments meet only at shared ends and no other
@@ -10,7 +15,9 @@ Method (after Molin & Neurohr, Math. Comp. 88 (2019) 847-888, written here from 
   only at a shared end, where ``y`` is a local coordinate: there each cycle is a straight line through
   ``y = 0`` and ``gamma_k . gamma_{k+1}`` is the sign of the angle between the two lines, read from the
   branches ``y_k, y_{k+1}`` at the vertex.  Integer symplectic reduction of this tridiagonal form
-  gives ``a_1..a_g, b_1..b_g`` with ``a_i . b_j = delta_ij``.
+  gives ``a_1..a_g, b_1..b_g`` with ``a_i . b_j = delta_ij``, then changed (integer symplectic steps on the
+  cycles) until ``tau`` is Siegel-reduced, so that theta sums and lattice reductions of callers see short
+  periods (for Kovalevskaya's top this basis gives the same errors against heyoka as PlaneCurve's, or better).
 * **Periods.**  On ``x = m + h cos(th)`` the branch is ``y = C_k sin(th) P_k(th)``, ``P_k`` the product of
   ``sqrt((x - e_j)/(m - e_j))`` over the other branch points (principal roots: continuous because no
   ``e_j`` lies on the segment), so ``int x^i dx / y = (h / C_k) int_0^pi x^i / P_k dth``: the square-root
@@ -30,12 +37,18 @@ Method (after Molin & Neurohr, Math. Comp. 88 (2019) 847-888, written here from 
   vanishing theorem), one theta call for all.
 
 Everything is built from differences of branch points, so nothing depends on the units of ``x``.
-Measured (tests/test_hyperelliptic.py): periods against mpmath ``quad`` at 30 digits to 1e-15
-relative; against :class:`~thetasol.curves.plane_curve.PlaneCurve` the bases differ by an integer
-symplectic matrix (integral to 1e-12); branch points 1e-5 apart (relative) lose nothing measurable
-(3e-15 against mpmath).  Cost: ~0.6 ms for the periods and ~2 ms with the Riemann constant
-(one theta scan), against ~100 ms for a PlaneCurve of the same quintic; used by
-:mod:`thetasol.solutions.kovalevskaya_top`.
+Measured (tests/test_hyperelliptic.py): periods against mpmath ``quad`` at 30 digits to <= 5.1e-16
+relative, also with two branch points 1e-3 or 1e-5 apart (relative to their spread); against
+:class:`~thetasol.curves.plane_curve.PlaneCurve` the bases differ by an integer symplectic matrix
+(integral to 1.4e-14, Abel maps equal modulo the lattice to 1.4e-14); tau symmetric to 1.4e-15;
+Jacobi inversion (Kleinian functions from theta give back ``x1 + x2``, ``x1 x2``) to 2.1e-13.  Three
+branch points within 6e-5 (a cusp forming) cost ~2 digits: vanishing-cycle periods ~150 against
+``tau ~ 1`` (tau symmetric to 2.2e-14, the Kleinian functions to 8e-10).
+Cost (CPU, one core, tests' quintics): 0.5-0.9 ms for the periods and tau, 0.13 ms for the Abel map of
+two points, ~1.7 ms more for the Riemann constant (one theta call; the theta set-up, ~1.1 ms, can be
+shared through ``theta=``), against ~75 ms for a PlaneCurve of the same quintic.  In
+:mod:`thetasol.solutions.kovalevskaya_top` the curve set-up went from 74/85 ms to 6.1/6.2 ms
+(benchmarks/bench_heavy_top.py tops, seeds 2/17).
 """
 from __future__ import annotations
 
@@ -52,7 +65,7 @@ __all__ = ["HyperellipticCurve"]
 
 GAUSS_MAX = 64          # nodes of a Gauss rule before tanh-sinh takes over
 DE_T = 4.0              # tanh-sinh truncation: weights below 1e-37 beyond
-DE_LEVELS = (3, 11)     # step 2^-3 .. 2^-11 (65 .. 16385 nodes)
+DE_LEVELS = (3, 11)     # steps 2^-3 .. 2^-10 (65 .. 8193 nodes)
 EPS = 1e-16
 
 
@@ -290,6 +303,8 @@ class HyperellipticCurve:
         shape = X.shape
         X, Y = X.ravel(), Y.ravel()
         e, c, g = self.branch_points, self.lead, self.genus
+        if X.size == 0:
+            return np.zeros(shape + (g,), complex)
         near = np.argmin(np.abs(X[:, None] - e[None, :]), axis=1)
         en, dX = e[near], X - e[near]
         other = np.arange(len(e))[None, :] != near[:, None]
@@ -348,13 +363,11 @@ class HyperellipticCurve:
             theta = RiemannTheta(tau) if theta is None else theta
             rng = np.random.default_rng(12345)
             center, spread = np.mean(e), np.max(np.abs(e - np.mean(e)))
-            D = [np.zeros(g, complex)]
-            for _ in range(3 if g > 1 else 0):
-                x = center + spread * (rng.uniform(-1, 1, g - 1) + 1j * rng.uniform(-1, 1, g - 1))
-                D.append(self.abel_map(x, np.sqrt(self.f(x))).sum(axis=0))
+            x = center + spread * (rng.uniform(-1, 1, (3, g - 1)) + 1j * rng.uniform(-1, 1, (3, g - 1)))
+            D = np.concatenate([np.zeros((1, g), complex), self.abel_map(x, np.sqrt(self.f(x))).sum(axis=1)])
             bits = (np.arange(4 ** g)[:, None] >> np.arange(2 * g)[None, :]) & 1
             cand = 0.5 * bits[:, :g] + 0.5 * bits[:, g:] @ tau.T
-            score = np.max(np.abs(theta.separated(cand[None, :, :] + np.array(D)[:, None, :])[1]), axis=0)
+            score = np.max(np.abs(theta.separated(cand[None, :, :] + D[:, None, :])[1]), axis=0)
             order = np.argsort(score)
             best, second = score[order[0]], score[order[1]]
             if not (best < 1e-8 and second > 10 * best):
