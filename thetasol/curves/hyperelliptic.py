@@ -17,7 +17,7 @@ evaluations of a product, and no path graph, sympy or sheet matching (as in Plan
   branches ``y_k, y_{k+1}`` at the vertex.  Integer symplectic reduction of this tridiagonal form
   gives ``a_1..a_g, b_1..b_g`` with ``a_i . b_j = delta_ij``, then changed (integer symplectic steps on the
   cycles) until ``tau`` is Siegel-reduced, so that theta sums and lattice reductions of callers see short
-  periods (for Kovalevskaya's top this basis gives the same errors against heyoka as PlaneCurve's, or better).
+  periods (Kovalevskaya's top against heyoka: 1.3e-13 with it, 8.4e-13 with the chain's basis, seed 4).
 * **Periods.**  On ``x = m + h cos(th)`` the branch is ``y = C_k sin(th) P_k(th)``, ``P_k`` the product of
   ``sqrt((x - e_j)/(m - e_j))`` over the other branch points (principal roots: continuous because no
   ``e_j`` lies on the segment), so ``int x^i dx / y = (h / C_k) int_0^pi x^i / P_k dth``: the square-root
@@ -101,7 +101,7 @@ def _gauss_nodes(rho: float) -> int:
     return max(8, -(-n // 8) * 8) if n <= GAUSS_MAX else 0
 
 
-def _adaptive(rule, scale_axis=-1):
+def _adaptive(rule):
     """tanh-sinh: the rule evaluated at levels 3, 4, ... until two levels agree to 1e-8 (the error of the
     finer one is then about the square, 1e-16) relative to the integral of |integrand|."""
     prev = None

@@ -101,7 +101,7 @@ class SeparatedFlow:
     ``s1 + s2 = d_2 d_2 log theta(z + K) + c22`` and ``s1 s2 = -d_1 d_2 log theta(z + K) + c12``
     (the Kleinian functions wp_22, wp_12 of the curve up to constants), ``z = z0 + V2 t`` the
     normalized Abel image of the divisor ``{(s1, y1), (s2, y2)}`` from the branch point at infinity,
-    ``d_i`` the derivative along ``V_i = N[:, i]/2`` (``N`` the normalization, ``f_y = 2 y``), ``K`` the
+    ``d_i`` the derivative along ``V_i = N[:, i]`` (``N`` the normalization of ``s^(i-1) ds / y``), ``K`` the
     vector of Riemann constants; the constants ``c12, c22`` are fitted at ``t = 0``.
     """
 
@@ -185,7 +185,7 @@ def _curve_setup(I, center, Q0, omega0, mass, gravity) -> _CurveSetup:
     d1, d2 = _s_sign_derivative(frame, I, center, mass, gravity, omega0, Q0)
     y1 = d1 * np.sign(s1 - s2) * np.sqrt(max(np.polyval(coef, s1), 0.0))   # y = (s1 - s2) s1'
     y2 = -d2 * np.sign(s1 - s2) * np.sqrt(max(np.polyval(coef, s2), 0.0))
-    curve = HyperellipticCurve.from_roots(np.where(np.abs(roots.imag) > 0, roots, roots.real), -4.0)
+    curve = HyperellipticCurve.from_roots(roots, -4.0)
     theta = RiemannTheta(curve.riemann_matrix())
     z0 = curve.abel_map([s1, s2], [y1, y2]).sum(axis=0)
     # the curve's differentials are s^i ds / y = 2 s^i ds / f_y: V_i = N[:, i] / 2 in PlaneCurve's terms
