@@ -190,7 +190,7 @@ def _segment(e: np.ndarray, k: int, lead: complex, g: int) -> _Segment:
     return _Segment(h / C * val, complex(leave / abs(leave)), complex(reach / abs(reach)))
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class HyperellipticCurve:
     """The compact Riemann surface of ``y^2 = lead * prod_j (x - e_j)``, ``2g + 1`` distinct finite branch
     points ``e_j`` (real or complex) and one at infinity.
@@ -250,8 +250,6 @@ class HyperellipticCurve:
         for _ in range(2):   # Newton: np.roots' eigenvalues to the last bit where the roots are simple
             dp = np.polyval(np.polyder(c), r)
             r = r - np.where(dp != 0, np.polyval(c, r) / np.where(dp != 0, dp, 1), 0)
-        if np.all(np.isreal(c)):
-            r = np.where(np.abs(r.imag) <= 1e-14 * np.max(np.abs(r)), r.real, r)
         return cls.from_roots(r, complex(c[0]))
 
     def f(self, x: ArrayLike) -> np.ndarray:
