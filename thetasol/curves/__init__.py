@@ -5,6 +5,7 @@ One module per concept, after abelfunctions: polynomial data (``_poly``), the pa
 (``_places``), homology (``_homology``), the curve object with differentials, periods, Abel map
 and Riemann constant (:mod:`thetasol.curves.plane_curve`), the half-period scan behind the
 Riemann constant (:mod:`thetasol.curves.riemann_constant`), the real homology basis of a Liouville torus
-(:mod:`thetasol.curves.adapted_basis`), and the spectral curve of a body in a quadratic potential
-(:mod:`thetasol.curves.spectral`).  Depends on :mod:`thetasol.theta` and below.
+(:mod:`thetasol.curves.adapted_basis`), the spectral curve of a body in a quadratic potential
+(:mod:`thetasol.curves.spectral`), and hyperelliptic curves ``y^2 = f(x)`` of odd degree built from their
+branch points alone, ~100x faster than the general path (:mod:`thetasol.curves.hyperelliptic`).  Depends on :mod:`thetasol.theta` and below.
 """

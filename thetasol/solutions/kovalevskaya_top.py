@@ -101,7 +101,7 @@ class SeparatedFlow:
     ``s1 + s2 = d_2 d_2 log theta(z + K) + c22`` and ``s1 s2 = -d_1 d_2 log theta(z + K) + c12``
     (the Kleinian functions wp_22, wp_12 of the curve up to constants), ``z = z0 + V2 t`` the
     normalized Abel image of the divisor ``{(s1, y1), (s2, y2)}`` from the branch point at infinity,
-    ``d_i`` the derivative along ``V_i = N[:, i]/2`` (``N`` the normalization, ``f_y = 2 y``), ``K`` the
+    ``d_i`` the derivative along ``V_i = N[:, i]`` (``N`` the normalization of ``s^(i-1) ds / y``), ``K`` the
     vector of Riemann constants; the constants ``c12, c22`` are fitted at ``t = 0``.
     """
 
@@ -152,25 +152,32 @@ class _CurveSetup:
     l: float
     k: float
     curve: object
-    inf: object
     theta: object
     z0: np.ndarray
     V: np.ndarray
     K: np.ndarray
 
 
+def _branch_points(l1, l, k, c0):
+    """The roots of ``R1``: ``e_a`` (the cubic's, Newton-polished) and ``k1,2 = (l1 +- k)/2``."""
+    cub = np.array([4.0, 0.0, -(k * k - c0 * c0 + 3 * l1 * l1), -(l1 * (k * k - c0 * c0 - l1 * l1) + l * l * c0 * c0)])
+    e = np.roots(cub).astype(complex)
+    for _ in range(2):
+        dp = np.polyval(np.polyder(cub), e)
+        e = e - np.where(dp != 0, np.polyval(cub, e) / np.where(dp != 0, dp, 1), 0)
+    return np.concatenate([e, [(l1 + k) / 2, (l1 - k) / 2]])
+
+
 def _curve_setup(I, center, Q0, omega0, mass, gravity) -> _CurveSetup:
     """The curve of the data, its theta function and the Abel image ``z0`` of the initial divisor."""
-    import sympy
-
-    from thetasol.curves.plane_curve import PlaneCurve
+    from thetasol.curves.hyperelliptic import HyperellipticCurve
     from thetasol.theta.riemann import RiemannTheta
 
     frame = kovalevskaya_frame(I, center, mass, gravity)
     Q0, omega0 = np.asarray(Q0, float), np.asarray(omega0, float)
     s1, s2, l1, l, k = (float(x) for x in kovalevskaya_variables(frame, gravity, omega0, Q0))
     coef = kovalevskaya_curve(l1, l, k, frame.c0)
-    roots = np.roots(coef)
+    roots = _branch_points(l1, l, k, frame.c0)
     gap = np.min(np.where(np.eye(5, dtype=bool), np.inf, np.abs(roots[:, None] - roots[None, :])))
     if not np.isfinite(s1 * s2) or gap <= DEGENERATE_GAP * np.max(np.abs(roots)):
         raise RuntimeError(f"the curve is degenerate or the divisor at infinity (branch points {gap:.2g} apart, "
@@ -178,17 +185,17 @@ def _curve_setup(I, center, Q0, omega0, mass, gravity) -> _CurveSetup:
     d1, d2 = _s_sign_derivative(frame, I, center, mass, gravity, omega0, Q0)
     y1 = d1 * np.sign(s1 - s2) * np.sqrt(max(np.polyval(coef, s1), 0.0))   # y = (s1 - s2) s1'
     y2 = -d2 * np.sign(s1 - s2) * np.sqrt(max(np.polyval(coef, s2), 0.0))
-    S, Y = sympy.symbols("s y")
-    curve = PlaneCurve(Y ** 2 - sum(sympy.Float(float(cf), 30) * S ** (5 - i) for i, cf in enumerate(coef)), S, Y)
-    inf = curve.places_at_infinity()[0]
-    z0 = curve.abel_map([(complex(s1), complex(y1)), (complex(s2), complex(y2))], base=inf).sum(axis=0)
-    return _CurveSetup(frame, (s1, s2), l1, l, k, curve, inf, RiemannTheta(curve.riemann_matrix()), z0,
-                       curve.normalization() / 2, curve.riemann_constant(base=inf))
+    curve = HyperellipticCurve.from_roots(roots, -4.0)
+    theta = RiemannTheta(curve.riemann_matrix())
+    z0 = curve.abel_map([s1, s2], [y1, y2]).sum(axis=0)
+    # the curve's differentials are s^i ds / y = 2 s^i ds / f_y: V_i = N[:, i] / 2 in PlaneCurve's terms
+    return _CurveSetup(frame, (s1, s2), l1, l, k, curve, theta, z0, curve.normalization(),
+                       curve.riemann_constant(theta))
 
 
 def kovalevskaya_separated_flow(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, mass: float,
                                 gravity: ArrayLike) -> SeparatedFlow:
-    """Set up :class:`SeparatedFlow` from the data (the curve, its periods and Abel map: ~0.1 s)."""
+    """Set up :class:`SeparatedFlow` from the data (the curve, its periods and Abel map: ~6 ms)."""
     st = _curve_setup(I, center, Q0, omega0, mass, gravity)
     s1, s2 = st.s
     coef = kovalevskaya_curve(st.l1, st.l, st.k, st.frame.c0)
@@ -403,8 +410,8 @@ def _char_index(ch) -> int:
     return int(bits @ (1 << np.arange(len(bits) - 1, -1, -1)))
 
 
-def _half_characteristic(curve, base, tau, x):
-    A = curve.abel_map([curve.places_over(complex(x))[0]], base=base).sum(axis=0)
+def _half_characteristic(curve, tau, x):
+    A = curve.branch_images()[np.argmin(np.abs(curve.branch_points - x))]
     al = np.linalg.solve(tau.imag, A.imag)
     be = np.real(A - tau @ al)
     return np.round(2 * al) / 2 % 1, np.round(2 * be) / 2 % 1
@@ -422,10 +429,10 @@ def kovalevskaya_motion(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: 
                         gravity: ArrayLike) -> KovalevskayaMotion:
     """Set up :class:`KovalevskayaMotion` from the data (the curve, its periods and Abel map)."""
     setup = _curve_setup(I, center, Q0, omega0, mass, gravity)
-    curve, inf, tau = setup.curve, setup.inf, setup.theta.tau
+    curve, tau = setup.curve, setup.theta.tau
     c0, l1, l, k = setup.frame.c0, setup.l1, setup.l, setup.k
     cub = np.roots([4.0, 0.0, -(k * k - c0 * c0 + 3 * l1 * l1), -(l1 * (k * k - c0 * c0 - l1 * l1) + l * l * c0 * c0)])
-    ch1 = tuple(_half_characteristic(curve, inf, tau, x) for x in cub)
+    ch1 = tuple(_half_characteristic(curve, tau, x) for x in cub)
     ch2 = tuple(((ch1[a][0] + ch1[b][0]) % 1, (ch1[a][1] + ch1[b][1]) % 1) for a, b in ((1, 2), (0, 2), (0, 1)))
     z0 = setup.z0 + setup.K
     V2 = setup.V[:, 1]
