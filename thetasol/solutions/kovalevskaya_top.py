@@ -273,12 +273,13 @@ class KovalevskayaMotion:
     fit_residual: float = 0.0
     V1: np.ndarray = None   # the other real flow of the torus (``sum_i ds_i/y_i``)
 
-    def _jets(self, z, chars):
+    def _jets(self, z, chars, order=1):
         # one pass over the lattice for all 16 half characteristics (the reduction of z done once): at 4096
         # points 0.6x the time of seven passes, at one point 0.12x
-        e, v, gr = self.theta.jet(z, char="all", order=1, separated=True)
+        e, v, gr, *H = self.theta.jet(z, char="all", order=max(order, 1), separated=True)
         dv = gr @ self.V2
-        return [(e, v[..., i], dv[..., i]) for i in map(_char_index, chars)]
+        d2v = np.einsum("i,...cij,j->...c", self.V2, H[0], self.V2) if order == 2 else dv
+        return [(e, v[..., i], dv[..., i], d2v[..., i]) for i in map(_char_index, chars)]
 
     def _values(self, t, order=0):
         """The seven theta values (and their t-derivatives) in a common unit.
@@ -301,9 +302,10 @@ class KovalevskayaMotion:
         return np.concatenate([self.V2.real - tau.real @ wn, wn])
 
     def values_at(self, x: ArrayLike, order: int = 0, shift: np.ndarray | None = None, reduce: bool = True
-                  ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+                  ) -> np.ndarray | tuple[np.ndarray, ...]:
         """The seven theta values at ``z0 + x_m + tau x_n`` (``x`` real lattice coordinates, ``(..., 4)``), plus
-        ``shift`` (integers, tracked only through the characteristics' signs)."""
+        ``shift`` (integers, tracked only through the characteristics' signs); with ``order`` 1 or 2 also their
+        first (and second) derivatives along ``V2``."""
         x = np.asarray(x, float)
         if reduce:
             k = np.round(x)
@@ -311,17 +313,15 @@ class KovalevskayaMotion:
             shift = k if shift is None else shift + k
         z = self.z0 + x[..., :2] + x[..., 2:] @ self.theta.tau.T
         chars = (None,) + self.chars1 + self.chars2
-        jets = self._jets(z, chars)
+        jets = self._jets(z, chars, order)
         e = jets[0][0]
         sg = np.ones(x.shape[:-1] + (7,))
         if shift is not None:
             par = np.mod(shift, 2.0)
             for i, ch in enumerate(chars[1:], 1):
                 sg[..., i] = 1 - 2 * np.mod(np.rint(par[..., :2] @ (2 * ch[0]) + par[..., 2:] @ (2 * ch[1])), 2)
-        val = np.stack([np.exp(j[0] - e) * j[1] for j in jets], -1) * sg
-        if order == 0:
-            return val
-        return val, np.stack([np.exp(j[0] - e) * j[2] for j in jets], -1) * sg
+        out = tuple(np.stack([np.exp(j[0] - e) * j[i] for j in jets], -1) * sg for i in range(1, order + 2))
+        return out[0] if order == 0 else out
 
     def memoir_state(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
         """``(p, q, r, g1, g2, g3)`` in the memoir's frame and normalization (downward ``g``)."""
@@ -417,14 +417,6 @@ def _half_characteristic(curve, tau, x):
     return np.round(2 * al) / 2 % 1, np.round(2 * be) / 2 % 1
 
 
-def _theta_taylor(theta, z, V, chars):
-    """Taylor coefficients (orders 0, 1, 2) of ``theta[ch](z + V t)`` at ``t = 0``, one row per characteristic, in a
-    common unit ``exp(e)``."""
-    _, v, gr, H = theta.jet(z, char="all", order=2, separated=True)
-    idx = [_char_index(ch) for ch in chars]
-    return np.stack([v[idx], gr[idx] @ V, np.einsum("i,cij,j->c", V, H[idx], V) / 2], 1)
-
-
 def kovalevskaya_motion(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, mass: float,
                         gravity: ArrayLike) -> KovalevskayaMotion:
     """Set up :class:`KovalevskayaMotion` from the data (the curve, its periods and Abel map)."""
@@ -436,16 +428,19 @@ def kovalevskaya_motion(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: 
     ch2 = tuple(((ch1[a][0] + ch1[b][0]) % 1, (ch1[a][1] + ch1[b][1]) % 1) for a, b in ((1, 2), (0, 2), (0, 1)))
     z0 = setup.z0 + setup.K
     V2 = setup.V[:, 1]
-    T = list(_theta_taylor(setup.theta, z0, V2, (None,) + ch1 + ch2))
+    motion = KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, np.zeros((4, 3), complex), c0, l1, setup.frame.P)
+    # one theta pass: the Taylor coefficients at t = 0 (the first point) and the fit's sample points
+    tj = np.arange(1, 41) * (0.61803398875 / np.max(np.abs(V2)))
+    val, der, der2 = motion.values_at(np.concatenate([np.zeros((1, 4)), tj[:, None] * motion.lattice_velocity()]),
+                                      2, reduce=False)
+    T = list(np.stack([val[0], der[0], der2[0] / 2], 1))
+    val, der = val[1:], der[1:]
     g = np.asarray(gravity, float)
     x = np.concatenate([np.asarray(omega0, float) @ setup.frame.P,
                         (np.asarray(Q0, float).T @ (g / np.linalg.norm(g))) @ setup.frame.P])
     X = _state_taylor(x, c0)
     qB = [_series_mul(X[:, 1], _series_div(Tj, T[0])) for Tj in T[1:]]
     A1, A2 = np.stack(qB[:3], -1), np.stack(qB[3:], -1)
-    motion = KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, np.zeros((4, 3), complex), c0, l1, setup.frame.P)
-    tj = np.arange(1, 41) * (0.61803398875 / np.max(np.abs(V2)))
-    val, der = motion._values(tj, 1)
     rows = [(A1, np.eye(TAYLOR_ORDER + 1)[0]), (A1, X[:, 0]), (A2, X[:, 2]), (A2, X[:, 5])]
     coef = np.stack([np.linalg.solve(A, b + 0j) for A, b in rows])
     coef, resid = _refine(coef, val, der, rows, c0, l1, setup.l, k)
