@@ -464,19 +464,14 @@ class PlaneCurve:
 
     # ------------------------------------------------------------------ places
     def _site_places(self, k):
-        """The places over critical value k (or over infinity for k = -1), one per cycle of the monodromy."""
-        ck = ("places", k)
-        if ck not in self._cache:
+        """The places over critical value k (over infinity for k = -1), one per cycle of the monodromy."""
+        if ("places", k) not in self._cache:
             lds = local_sites(self)
             ld = lds[k if k >= 0 else len(lds) - 1]
-            if ld.kind == "critical":
-                out = [Place(self, "critical", ld.center, len(cyc), site=ld.site, ref=ld.ref, label=cyc[0],
-                             cycle=cyc) for cyc in ld.cycles]
-            else:
-                out = [Place(self, "infinity", INF, len(cyc), site=-1, ref=ld.ref, label=cyc[0], cycle=cyc)
-                       for cyc in ld.cycles]
-            self._cache[ck] = out
-        return self._cache[ck]
+            x, kind = (ld.center, "critical") if ld.kind == "critical" else (INF, "infinity")
+            self._cache["places", k] = [Place(self, kind, x, len(cyc), site=ld.site, ref=ld.ref, label=cyc[0],
+                                              cycle=cyc) for cyc in ld.cycles]
+        return self._cache["places", k]
 
     def _all_places(self):
         """(places over the critical values in order, places at infinity)."""
