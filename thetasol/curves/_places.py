@@ -157,6 +157,13 @@ class LocalSites:
         self.compute_all()
         return iter(self._data)
 
+    def prefetch(self, which):
+        """Compute the entries of ``which`` not yet computed, in one batch."""
+        missing = sorted({range(len(self._meta))[p] for p in which} - {p for p, ld in enumerate(self._data)
+                                                                        if ld is not None})
+        if missing:
+            self._compute(missing)
+
     def compute_all(self):
         """Compute every entry not yet computed (one tracking call for all of them)."""
         missing = [p for p, ld in enumerate(self._data) if ld is None]
@@ -201,6 +208,29 @@ def _local_entry(curve, meta, p, y1, tr2, q):
     ld.ys, ld.fys = _accurate_samples(curve, ld.xs, ld.ys, rel, center=b if kind == "critical" else None,
                                       xi=xi, center_lo=blo)
     return ld
+
+
+def prefetch_local(curve, targets):
+    """Compute in one batch the local data that the Abel map of ``targets`` (places and (x, y)
+    pairs) will read: the circles under critical and infinite places, and those whose series
+    PlaneCurve._near_place takes for a point close to a critical value or far out."""
+    lds = local_sites(curve)
+    sites = curve._sites
+    which = []
+    for t in targets:
+        kind = getattr(t, "kind", None)
+        if kind in ("critical", "infinity"):
+            which.append(t._site if kind == "critical" else -1)
+            continue
+        x0 = t.x if kind == "regular" else t[0]
+        if len(sites):
+            kk = int(np.argmin(np.abs(sites - x0)))
+            if abs(x0 - sites[kk]) < 0.25 * abs(lds.x1(kk) - sites[kk]):
+                which.append(kk)
+                continue
+        if abs(x0) > 4 * abs(lds.x1(len(lds) - 1)):
+            which.append(-1)
+    lds.prefetch(which)
 
 
 def local_of(curve, place):

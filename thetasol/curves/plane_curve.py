@@ -37,6 +37,7 @@ from thetasol.curves._places import (
     noise_level,
     perm_cycles,
     place_series,
+    prefetch_local,
     regular_samples,
     series_eval,
     series_integral,
@@ -473,10 +474,6 @@ class PlaneCurve:
                                               cycle=cyc) for cyc in ld.cycles]
         return self._cache["places", k]
 
-    def _all_places(self):
-        """(places over the critical values in order, places at infinity)."""
-        return [P for k in range(len(self._sites)) for P in self._site_places(k)], self._site_places(-1)
-
     def _place_limits(self, places):
         for P in places:
             ld = local_of(self, P)
@@ -655,6 +652,7 @@ class PlaneCurve:
         n = self.n
         phi = self._potentials(P, key)
         out = np.zeros((len(targets), P.shape[0]), dtype=complex)
+        prefetch_local(self, targets)
         pts_idx, pieces1, starts = [], [], []
         for i, t in enumerate(targets):
             if isinstance(t, Place) and t.kind != "regular":
@@ -756,9 +754,8 @@ class PlaneCurve:
     # ------------------------------------------------------------------ Riemann constant
     def canonical_divisor(self) -> dict:
         """The divisor of dx: finite ramification points (multiplicity e - 1) minus (e + 1) at infinity."""
-        sites, infs = self._all_places()
-        D = {P: P.e - 1 for P in sites if P.e > 1}
-        for P in infs:
+        D = {P: P.e - 1 for k in range(len(self._sites)) for P in self._site_places(k) if P.e > 1}
+        for P in self._site_places(-1):
             D[P] = D.get(P, 0) - (P.e + 1)
         return D
 
