@@ -367,11 +367,20 @@ def differential_samples(curve, ld, cycle, P):
     return t, g / fy * dxdt
 
 
-def adjoint_subspace(curve, candidates):
-    """Combinations of the candidate numerators whose differentials are holomorphic at every place."""
+def adjoint_subspace(curve, candidates, sites=None):
+    """Combinations of the candidate numerators whose differentials are holomorphic at every place.
+
+    ``sites``: the entries of :func:`local_sites` (-1: infinity) that hold every singular point of
+    the curve, when the caller knows them (elsewhere the candidates are holomorphic by the Newton
+    polygon, and those places only add rows of rounding noise); default all of them."""
     P = curve._numerators(candidates)
     rows = []
-    for ld in local_data(curve):
+    if sites is None:
+        lds = local_data(curve)
+    else:
+        local_sites(curve).prefetch(sites)
+        lds = [local_sites(curve)[p] for p in sites]
+    for ld in lds:
         for cyc in ld.cycles:
             t, h = differential_samples(curve, ld, cyc, P)
             N = h.shape[1]

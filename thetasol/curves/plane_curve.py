@@ -347,11 +347,15 @@ class PlaneCurve:
             if len(pts) == g:
                 diffs = [x ** (i - 1) * y ** (j - 1) for i, j in pts]
             elif len(pts) > g:
-                diffs = adjoint_subspace(self, [x ** (i - 1) * y ** (j - 1) for i, j in pts])
+                diffs = adjoint_subspace(self, [x ** (i - 1) * y ** (j - 1) for i, j in pts], self._singular_sites())
             else:
                 raise RuntimeError(f"genus {g} exceeds the Newton polygon bound {len(pts)} (internal error)")
             self._cache["holo"] = diffs
         return list(self._cache["holo"])
+
+    def _singular_sites(self):
+        """Entries of the local data (-1: infinity) known to hold every singular point; None: unknown."""
+        return None
 
     # ------------------------------------------------------------------ homology and periods
     def _homology(self):
