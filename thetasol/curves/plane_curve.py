@@ -338,7 +338,7 @@ class PlaneCurve:
         From the interior lattice points (i, j) of the Newton polygon, g = x^(i-1) y^(j-1), when
         their number equals the genus (f nondegenerate for its Newton polygon); otherwise the
         subspace of their span that satisfies the adjoint conditions at the singular points
-        (computed numerically from Laurent coefficients at every place; see docs/curves.md).
+        (Laurent coefficients at every place, or at those a subclass knows to hold the singular points).
         """
         if "holo" not in self._cache:
             pts = self._poly.interior_points()
