@@ -126,9 +126,6 @@ def symplectic_basis(cycles, G, weights=None):
     if weights is None:
         weights = np.ones(G.shape[0])
 
-    def pair(u, v):
-        return int(np.asarray(u, dtype=np.int64) @ Gd @ np.asarray(v, dtype=np.int64))
-
     def cost(u):
         return float(np.abs(np.asarray(u, dtype=float)) @ weights)
 
@@ -145,7 +142,8 @@ def symplectic_basis(cycles, G, weights=None):
         # choose a pair with |S_ij| = 1 and minimal cost
         idx = np.argwhere(np.abs(S) == 1)
         if len(idx):
-            costs = np.array([cost(C[i]) + cost(C[j]) for i, j in idx])
+            cc = [cost(c) for c in C]
+            costs = np.array([cc[i] + cc[j] for i, j in idx])
             i, j = idx[int(np.argmin(costs))]
         else:
             # Euclid on a row to create a unit entry
@@ -180,12 +178,13 @@ def symplectic_basis(cycles, G, weights=None):
         B.append(b)
         # project the others: c -> c - <c, b> a + <c, a> b
         rest = []
+        Cm = np.array(C, dtype=np.int64)
+        CG = Cm @ Gd
+        cbs, cas = CG @ np.asarray(b, dtype=np.int64), CG @ np.asarray(a, dtype=np.int64)
         for k in range(M):
             if k in (i, j):
                 continue
-            c = C[k]
-            cb, ca = pair(c, b), pair(c, a)
-            c = c - cb * a + ca * b
+            c = C[k] - int(cbs[k]) * a + int(cas[k]) * b
             if np.any(c != 0):
                 rest.append(c)
         C = rest

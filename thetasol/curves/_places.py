@@ -81,77 +81,161 @@ def perm_cycles(perm):
 
 
 def local_data(curve):
-    """LocalData for every site (in order) and for infinity (last)."""
-    if "local" in curve._cache:
-        return curve._cache["local"]
-    G = curve._graph
+    """LocalData for every site (in order) and for infinity (last), all computed."""
+    lds = local_sites(curve)
+    lds.compute_all()
+    return lds
+
+
+def local_sites(curve):
+    """The :class:`LocalSites` of the curve: each entry computed on first use."""
+    if "local" not in curve._cache:
+        curve._cache["local"] = LocalSites(curve)
+    return curve._cache["local"]
+
+
+class LocalSites:
+    """The circles around every critical value (in order) and around infinity (last).
+
+    The approach lines from the reference vertices are tracked for all of them at once (the Abel
+    images of places add their integrals), but the turn around a circle and its compensated samples
+    (128 per turn, the larger part of the cost) only for the entries that are used: a curve's Abel
+    map at the places at infinity needs the circle at infinity alone.  Indexing an entry computes it
+    (with every other entry not yet computed when iterating).
+    """
+
+    def __init__(self, curve):
+        self._curve = curve
+        G = curve._graph
+        sites = curve._sites
+        allsites = G.allsites
+        pieces1 = []
+        meta = []
+        for k, b in enumerate(sites):
+            ref = G.cell_vertices[k][0]
+            others = np.abs(allsites - b)
+            others = others[others > 0]
+            dmin = others.min() if len(others) else G.H
+            v = G.V[ref]
+            r = min(0.5 * dmin, 0.5 * abs(v - b))
+            x1 = b + r * (v - b) / abs(v - b)
+            pieces1.append(Piece("line", v, x1, curve._vroots[ref]))
+            meta.append(("critical", k, b, ref, x1, M_SITE, 1))
+        # infinity: out along the ray from the box centre through the base vertex
+        vb = G.V[G.base]
+        c = G.center
+        # the circle |x| = |x1| encloses every critical value with a margin of 2 (the Laurent series in
+        # t = x^(-1/e) converges for |x| > max |site|): coefficients lose at most ~2^k in accuracy
+        Rfar = 2.0 * (np.abs(allsites).max() if len(allsites) else max(abs(c), 1.0))
+        d = vb - c
+        # smallest lam >= 1 with |c + lam d| >= Rfar (the ray beyond the base corner stays outside the box)
+        qa, qb, qc = abs(d) ** 2, 2 * (np.conj(c) * d).real, abs(c) ** 2 - Rfar**2
+        disc = max(qb * qb - 4 * qa * qc, 0.0)
+        lam = max(1.0, (-qb + np.sqrt(disc)) / (2 * qa))
+        x1 = c + lam * d
+        pieces1.append(Piece("line", vb, x1, curve._vroots[G.base]))
+        meta.append(("infinity", -1, 0j, G.base, x1, M_INF, -1))
+        self._meta = meta
+        #: the approach lines, tracked together (piece p ends at the circle of entry p)
+        self.lines = curve._tracker.track(pieces1)
+        self._data = [None] * len(meta)
+
+    def __len__(self):
+        return len(self._meta)
+
+    def x1(self, p):
+        """The first sample (end of the approach line) of entry p, without computing the circle."""
+        return self._meta[p][4]
+
+    def __getitem__(self, p):
+        p = range(len(self._meta))[p]
+        if self._data[p] is None:
+            self._compute([p])
+        return self._data[p]
+
+    def __iter__(self):
+        self.compute_all()
+        return iter(self._data)
+
+    def prefetch(self, which):
+        """Compute the entries of ``which`` not yet computed, in one batch."""
+        missing = sorted({range(len(self._meta))[p] for p in which} - {p for p, ld in enumerate(self._data)
+                                                                        if ld is not None})
+        if missing:
+            self._compute(missing)
+
+    def compute_all(self):
+        """Compute every entry not yet computed (one tracking call for all of them)."""
+        missing = [p for p, ld in enumerate(self._data) if ld is None]
+        if missing:
+            self._compute(missing)
+
+    def _compute(self, which):
+        curve = self._curve
+        tr1 = self.lines
+        pieces2 = []
+        for p in which:
+            _, _, b, _, x1, M, d = self._meta[p]
+            pieces2.append(Piece("circle", x1, b, tr1.ends[p], e=d, taus=np.arange(M + 1) / M))
+        tr2 = curve._tracker.track(pieces2)
+        for q, p in enumerate(which):
+            self._data[p] = _local_entry(curve, self._meta[p], p, tr1.ends[p], tr2, q)
+
+
+def _local_entry(curve, meta, p, y1, tr2, q):
+    """The LocalData of entry p from piece q of the tracked circles tr2."""
+    kind, k, b, ref, x1, M, _ = meta
+    xs, ys = tr2.values(q)
+    end = ys[:, -1]
+    dd = np.abs(end[:, None] - y1[None, :])
+    perm = np.argmin(dd, axis=1)
+    if len(set(perm.tolist())) != curve.n:
+        raise ValueError("sheet continuation around a critical value failed (numerically singular curve)")
+    ld = LocalData(kind, k, b, ref, x1, xs[:M], ys[:, :M], perm)
+    ld.index = p
+    rel = tr2.rel[tr2.nodes.offsets[q]:tr2.nodes.offsets[q] + M] if tr2.rel is not None else None
+    xi = None
+    blo = 0j
+    if kind == "critical":
+        # the FFT assumes samples exactly at b + xi_m, xi_m = xi_0 exp(2 pi i m / M), b the exact
+        # critical value (float b plus its low part: the float alone is off by ~eps |b|, which a
+        # close neighbour at distance d turns into errors ~eps |b| / d in the series)
+        blo = complex(curve._sites_lo[k]) if getattr(curve, "_sites_lo", None) is not None else 0j
+        ld.center_lo = blo
+        ld.xi0 = (x1 - b) - blo
+        xi = ld.xi0 * np.exp(2j * np.pi * np.arange(M) / M)
+        ld.xs = b + (blo + xi)
+    ld.ys, ld.fys = _accurate_samples(curve, ld.xs, ld.ys, rel, center=b if kind == "critical" else None,
+                                      xi=xi, center_lo=blo)
+    return ld
+
+
+def prefetch_local(curve, targets):
+    """Compute in one batch the local data that the Abel map of ``targets`` (places and (x, y)
+    pairs) will read: the circles under critical and infinite places, and those whose series
+    PlaneCurve._near_place takes for a point close to a critical value or far out."""
+    lds = local_sites(curve)
     sites = curve._sites
-    allsites = G.allsites
-    pieces1 = []
-    meta = []
-    for k, b in enumerate(sites):
-        ref = G.cell_vertices[k][0]
-        others = np.abs(allsites - b)
-        others = others[others > 0]
-        dmin = others.min() if len(others) else G.H
-        v = G.V[ref]
-        r = min(0.5 * dmin, 0.5 * abs(v - b))
-        x1 = b + r * (v - b) / abs(v - b)
-        pieces1.append(Piece("line", v, x1, curve._vroots[ref]))
-        meta.append(("critical", k, b, ref, x1, M_SITE, 1))
-    # infinity: out along the ray from the box centre through the base vertex
-    vb = G.V[G.base]
-    c = G.center
-    # the circle |x| = |x1| encloses every critical value with a margin of 2 (the Laurent series in
-    # t = x^(-1/e) converges for |x| > max |site|): coefficients lose at most ~2^k in accuracy
-    Rfar = 2.0 * (np.abs(allsites).max() if len(allsites) else max(abs(c), 1.0))
-    d = vb - c
-    # smallest lam >= 1 with |c + lam d| >= Rfar (the ray beyond the base corner stays outside the box)
-    qa, qb, qc = abs(d) ** 2, 2 * (np.conj(c) * d).real, abs(c) ** 2 - Rfar**2
-    disc = max(qb * qb - 4 * qa * qc, 0.0)
-    lam = max(1.0, (-qb + np.sqrt(disc)) / (2 * qa))
-    x1 = c + lam * d
-    pieces1.append(Piece("line", vb, x1, curve._vroots[G.base]))
-    meta.append(("infinity", -1, 0j, G.base, x1, M_INF, -1))
-    tr1 = curve._tracker.track(pieces1)
-    pieces2 = []
-    for (_, _, b, _, x1, M, d), y1 in zip(meta, tr1.ends):
-        taus = np.arange(M + 1) / M
-        pieces2.append(Piece("circle", x1, b, y1, e=d, taus=taus))
-    tr2 = curve._tracker.track(pieces2)
-    out = []
-    for p, ((kind, k, b, ref, x1, M, _), y1) in enumerate(zip(meta, tr1.ends)):
-        xs, ys = tr2.values(p)
-        end = ys[:, -1]
-        dd = np.abs(end[:, None] - y1[None, :])
-        perm = np.argmin(dd, axis=1)
-        if len(set(perm.tolist())) != curve.n:
-            raise ValueError("sheet continuation around a critical value failed (numerically singular curve)")
-        ld = LocalData(kind, k, b, ref, x1, xs[:M], ys[:, :M], perm)
-        ld.index = p
-        rel = tr2.rel[tr2.nodes.offsets[p]:tr2.nodes.offsets[p] + M] if tr2.rel is not None else None
-        xi = None
-        blo = 0j
-        if kind == "critical":
-            # the FFT assumes samples exactly at b + xi_m, xi_m = xi_0 exp(2 pi i m / M), b the exact
-            # critical value (float b plus its low part: the float alone is off by ~eps |b|, which a
-            # close neighbour at distance d turns into errors ~eps |b| / d in the series)
-            blo = complex(curve._sites_lo[k]) if getattr(curve, "_sites_lo", None) is not None else 0j
-            ld.center_lo = blo
-            ld.xi0 = (x1 - b) - blo
-            xi = ld.xi0 * np.exp(2j * np.pi * np.arange(M) / M)
-            ld.xs = b + (blo + xi)
-        ld.ys, ld.fys = _accurate_samples(curve, ld.xs, ld.ys, rel, center=b if kind == "critical" else None,
-                                          xi=xi, center_lo=blo)
-        out.append(ld)
-    curve._cache["local"] = out
-    curve._cache["local_lines"] = tr1
-    return out
+    which = []
+    for t in targets:
+        kind = getattr(t, "kind", None)
+        if kind in ("critical", "infinity"):
+            which.append(t._site if kind == "critical" else -1)
+            continue
+        x0 = t.x if kind == "regular" else t[0]
+        if len(sites):
+            kk = int(np.argmin(np.abs(sites - x0)))
+            if abs(x0 - sites[kk]) < 0.25 * abs(lds.x1(kk) - sites[kk]):
+                which.append(kk)
+                continue
+        if abs(x0) > 4 * abs(lds.x1(len(lds) - 1)):
+            which.append(-1)
+    lds.prefetch(which)
 
 
 def local_of(curve, place):
     """The :class:`LocalData` of the critical value or of infinity under a (non-regular) place."""
-    lds = local_data(curve)
+    lds = local_sites(curve)
     return lds[place._site] if place.kind == "critical" else lds[-1]
 
 
@@ -283,11 +367,20 @@ def differential_samples(curve, ld, cycle, P):
     return t, g / fy * dxdt
 
 
-def adjoint_subspace(curve, candidates):
-    """Combinations of the candidate numerators whose differentials are holomorphic at every place."""
+def adjoint_subspace(curve, candidates, sites=None):
+    """Combinations of the candidate numerators whose differentials are holomorphic at every place.
+
+    ``sites``: the entries of :func:`local_sites` (-1: infinity) that hold every singular point of
+    the curve, when the caller knows them (elsewhere the candidates are holomorphic by the Newton
+    polygon, and those places only add rows of rounding noise); default all of them."""
     P = curve._numerators(candidates)
     rows = []
-    for ld in local_data(curve):
+    if sites is None:
+        lds = local_data(curve)
+    else:
+        local_sites(curve).prefetch(sites)
+        lds = [local_sites(curve)[p] for p in sites]
+    for ld in lds:
         for cyc in ld.cycles:
             t, h = differential_samples(curve, ld, cyc, P)
             N = h.shape[1]

@@ -610,10 +610,19 @@ def _newton_dd(Ahi, Alo, dhi, dlo, Y, iters, aberth=False):
     row and the steps are Ehrlich-Aberth's, N / (1 - N sum_j 1 / (y - y_j)) with N the Newton step."""
     delta = np.zeros_like(Y)
     step = np.zeros_like(Y)
+    # f and f_y in one compensated Horner pass over [Y, Y]: f_y's coefficients get a leading zero,
+    # whose first step leaves exactly f_y's own start (s = 0 z + c, compensation 0 z + c_lo)
+    K, m = Y.shape
+    shape = (K, m, Ahi.shape[1])
+    pad = np.zeros((K, 1), complex)
+    Chi = np.concatenate([np.broadcast_to(Ahi[:, None, :], shape),
+                          np.broadcast_to(np.concatenate([dhi, pad], axis=1)[:, None, :], shape)], axis=1)
+    Clo = np.concatenate([np.broadcast_to(Alo[:, None, :], shape),
+                          np.broadcast_to(np.concatenate([dlo, pad], axis=1)[:, None, :], shape)], axis=1)
     for _ in range(iters):
-        rh, rl = comp_horner(Ahi[:, None, :], Alo[:, None, :], Y)
-        fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
-        fy = fh + fl
+        hi, lo = comp_horner(Chi, Clo, np.concatenate([Y, Y], axis=1))
+        rh, rl = hi[:, :m], lo[:, :m]
+        fy = hi[:, m:] + lo[:, m:]
         with np.errstate(divide="ignore", invalid="ignore"):
             step = (rh + rl) / fy
             if aberth:
@@ -626,8 +635,10 @@ def _newton_dd(Ahi, Alo, dhi, dlo, Y, iters, aberth=False):
         # what the float64 root misses of the exact one: (Y - step) - fl(Y - step), exact
         # subtraction of nearby floats minus the (tiny, accurately known) step
         delta = np.where(ok, (Y - Ynew) - step, 0)
+        # a fixed point (the steps round away): every later step would repeat this one exactly
+        fixed = Ynew.tobytes() == Y.tobytes()
         Y = Ynew
-        if not np.any(ok & (np.abs(step) > 1e-17 * np.abs(Y))):
+        if fixed or not np.any(ok & (np.abs(step) > 1e-17 * np.abs(Y))):
             break
     return Y, delta, step
 

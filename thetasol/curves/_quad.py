@@ -549,17 +549,26 @@ class Tracker:
         tccur = Tc[first, c0]
         y2cur = D2p[first, c0]
         unsafe = {}
+        # what does not depend on the matching, for every track and step at once (the same operations;
+        # entries past a track's end index the pool's last node and are never read)
+        NODE = S[tp]
+        DT = tau[NODE[:, 1:]] - tau[NODE[:, :-1]]
+        H2 = 0.125 * DT * DT
+        nxt = NODE[:, 1:]
+        with np.errstate(all="ignore"):
+            MC = Rp[nxt] - 0.5 * DT[..., None] * Dp[nxt] + H2[..., None] * D2p[nxt]
+        Ltp = L[tp]
         for k in range(1, Lmax):
-            act = np.nonzero(L[tp] > k)[0]
+            act = np.nonzero(Ltp > k)[0]
             if len(act) == 0:
                 break
-            node = S[tp[act], k]
-            prev = S[tp[act], k - 1]
-            dt = tau[node] - tau[prev]
-            h2 = 0.125 * dt * dt
+            node = NODE[act, k]
+            prev = NODE[act, k - 1]
+            dt = DT[act, k - 1]
+            h2 = H2[act, k - 1]
             # second-order (Taylor to y'') predictions of the midpoint from both ends
             mp_ = ycur[act] + 0.5 * dt * ydcur[act] + h2 * y2cur[act]
-            mc = Rp[node] - 0.5 * dt[:, None] * Dp[node] + h2[:, None] * D2p[node]
+            mc = MC[act, k - 1]
             dd = np.abs(mc - mp_[:, None])
             i = np.argmin(dd, axis=1)
             ar = np.arange(len(act))

@@ -32,11 +32,12 @@ from thetasol.curves._places import (
     adjoint_subspace,
     expansion,
     laurent,
-    local_data,
     local_of,
+    local_sites,
     noise_level,
     perm_cycles,
     place_series,
+    prefetch_local,
     regular_samples,
     series_eval,
     series_integral,
@@ -337,7 +338,7 @@ class PlaneCurve:
         From the interior lattice points (i, j) of the Newton polygon, g = x^(i-1) y^(j-1), when
         their number equals the genus (f nondegenerate for its Newton polygon); otherwise the
         subspace of their span that satisfies the adjoint conditions at the singular points
-        (computed numerically from Laurent coefficients at every place; see docs/curves.md).
+        (Laurent coefficients at every place, or at those a subclass knows to hold the singular points).
         """
         if "holo" not in self._cache:
             pts = self._poly.interior_points()
@@ -346,11 +347,15 @@ class PlaneCurve:
             if len(pts) == g:
                 diffs = [x ** (i - 1) * y ** (j - 1) for i, j in pts]
             elif len(pts) > g:
-                diffs = adjoint_subspace(self, [x ** (i - 1) * y ** (j - 1) for i, j in pts])
+                diffs = adjoint_subspace(self, [x ** (i - 1) * y ** (j - 1) for i, j in pts], self._singular_sites())
             else:
                 raise RuntimeError(f"genus {g} exceeds the Newton polygon bound {len(pts)} (internal error)")
             self._cache["holo"] = diffs
         return list(self._cache["holo"])
+
+    def _singular_sites(self):
+        """Entries of the local data (-1: infinity) known to hold every singular point; None: unknown."""
+        return None
 
     # ------------------------------------------------------------------ homology and periods
     def _homology(self):
@@ -463,19 +468,15 @@ class PlaneCurve:
         return self._cache["tau"].copy()
 
     # ------------------------------------------------------------------ places
-    def _all_places(self):
-        if "places" not in self._cache:
-            out_sites, out_inf = [], []
-            for ld in local_data(self):
-                for cyc in ld.cycles:
-                    if ld.kind == "critical":
-                        out_sites.append(Place(self, "critical", ld.center, len(cyc), site=ld.site,
-                                               ref=ld.ref, label=cyc[0], cycle=cyc))
-                    else:
-                        out_inf.append(Place(self, "infinity", INF, len(cyc), site=-1,
-                                             ref=ld.ref, label=cyc[0], cycle=cyc))
-            self._cache["places"] = (out_sites, out_inf)
-        return self._cache["places"]
+    def _site_places(self, k):
+        """The places over critical value k (over infinity for k = -1), one per cycle of the monodromy."""
+        if ("places", k) not in self._cache:
+            lds = local_sites(self)
+            ld = lds[k if k >= 0 else len(lds) - 1]
+            x, kind = (ld.center, "critical") if ld.kind == "critical" else (INF, "infinity")
+            self._cache["places", k] = [Place(self, kind, x, len(cyc), site=ld.site, ref=ld.ref, label=cyc[0],
+                                              cycle=cyc) for cyc in ld.cycles]
+        return self._cache["places", k]
 
     def _place_limits(self, places):
         for P in places:
@@ -488,7 +489,7 @@ class PlaneCurve:
 
     def places_at_infinity(self) -> list:
         """The places over x = infinity (one per cycle of the monodromy at infinity)."""
-        return list(self._all_places()[1])
+        return list(self._site_places(-1))
 
     def places_over(self, x0: complex) -> list:
         """All places over x = x0 (a complex number or ``inf``)."""
@@ -497,7 +498,7 @@ class PlaneCurve:
             return self.places_at_infinity()
         k = self._site_index(x0)
         if k >= 0:
-            return [P for P in self._all_places()[0] if P._site == k]
+            return list(self._site_places(k))
         R, _ = self._poly.roots(np.array([x0]))
         return [Place(self, "regular", x0, 1, y=complex(v)) for v in R[0]]
 
@@ -593,7 +594,7 @@ class PlaneCurve:
         return (x0, y0)
 
     def _local(self):
-        return local_data(self)
+        return local_sites(self)
 
     def _place_data(self, place, P, key):
         """(k, t0, Fy, Fh) Laurent data of a critical or infinite place for numerators P."""
@@ -612,7 +613,7 @@ class PlaneCurve:
         ld = local_of(self, place)
         ck = ("lines", key)
         if ck not in self._cache:
-            self._cache[ck] = self._cache["local_lines"].integrate(P)
+            self._cache[ck] = local_sites(self).lines.integrate(P)
         lines = self._cache[ck]
         phi = self._potentials(P, key)
         # the approach line ends at the float x1 = b + xi0 exactly (xi0 is measured from the exact
@@ -627,14 +628,13 @@ class PlaneCurve:
         if len(self._sites):
             kk = int(np.argmin(np.abs(self._sites - x0)))
             b = self._sites[kk]
-            if abs(x0 - b) < 0.25 * abs(lds[kk].x1 - b):
+            if abs(x0 - b) < 0.25 * abs(lds.x1(kk) - b):
                 ld = lds[kk]
-        if ld is None and abs(x0) > 4 * abs(lds[-1].x1):
+        if ld is None and abs(x0) > 4 * abs(lds.x1(len(lds) - 1)):
             ld = lds[-1]
         if ld is None:
             return None
-        sites, infs = self._all_places()
-        cands = [P for P in (infs if ld.kind == "infinity" else sites) if (ld.kind == "infinity" or P._site == ld.site)]
+        cands = self._site_places(ld.site)
         best = []
         for P in cands:
             k, t0, Fy, _ = self._place_data(P, None, None)
@@ -656,6 +656,7 @@ class PlaneCurve:
         n = self.n
         phi = self._potentials(P, key)
         out = np.zeros((len(targets), P.shape[0]), dtype=complex)
+        prefetch_local(self, targets)
         pts_idx, pieces1, starts = [], [], []
         for i, t in enumerate(targets):
             if isinstance(t, Place) and t.kind != "regular":
@@ -757,9 +758,8 @@ class PlaneCurve:
     # ------------------------------------------------------------------ Riemann constant
     def canonical_divisor(self) -> dict:
         """The divisor of dx: finite ramification points (multiplicity e - 1) minus (e + 1) at infinity."""
-        sites, infs = self._all_places()
-        D = {P: P.e - 1 for P in sites if P.e > 1}
-        for P in infs:
+        D = {P: P.e - 1 for k in range(len(self._sites)) for P in self._site_places(k) if P.e > 1}
+        for P in self._site_places(-1):
             D[P] = D.get(P, 0) - (P.e + 1)
         return D
 

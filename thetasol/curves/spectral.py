@@ -293,6 +293,21 @@ class SpectralCurve(PlaneCurve):
                                  "u commutes with J and M = 0, or m is along a common eigenvector") from exc
             raise
 
+    def _singular_sites(self):
+        """The local data of the node over E = 0 (rank-one u) and, for a symmetric body, of the node
+        over E = infinity, when these account for the whole drop of the genus (else None: all sites).
+        The adjoint conditions then need the circles around them only (those around the other
+        critical values cost 30-45 ms of the set-up)."""
+        sites = []
+        if self.node is not None:
+            k = self._site_index(0.0)
+            if k < 0:
+                return None
+            sites.append(k)
+        if self.symmetric_body:
+            sites.append(-1)
+        return sites if len(sites) == self.arithmetic_genus - self.genus else None
+
     # ------------------------------------------------------------------ involution
     def involution(self, p: Place | tuple[complex, complex]) -> tuple[complex, complex] | Place:
         """The involution sigma: (E, w) -> (-E, w), on points or places."""

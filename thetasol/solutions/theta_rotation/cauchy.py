@@ -17,11 +17,11 @@ import numpy as np
 
 from thetasol.mechanics.lax import lax_matrix, right_eigenvector
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
-from thetasol.solutions.theta_rotation.node import local_branch, node_branch
+from thetasol.solutions.theta_rotation.node import lax_eigenvalues, local_branch, node_branch
 from thetasol.solutions.theta_rotation.riemann import ThetaShifts
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
 
-__all__ = ["N_CIRCLE", "N_RAY", "CauchyMeans", "cauchy_means", "cauchy_means_at", "auxiliary_rows"]
+__all__ = ["N_CIRCLE", "N_RAY", "CauchyMeans", "cauchy_means", "cauchy_means_at", "auxiliary_rows", "circle_points"]
 
 #: Points on the circles of the Cauchy means, and Gauss-Legendre nodes on their radii.
 N_CIRCLE = 32
@@ -47,19 +47,28 @@ class CauchyMeans:
     nu: np.ndarray
 
 
-def circle_data(sd: SpectralData, s_: int, radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Points on a circle |E| = radius around the place P_s (over E = 0), their w, and the local
-    Abel integrals from the place along the radii (Gauss-Legendre)."""
-    curve, place, slope = sd.curve, sd.P0[s_], sd.slopes[s_]
+def circle_points(radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(Ec (N,), Eq (N, n), wg (n,)): the points of a circle |E| = radius, the Gauss-Legendre nodes
+    on its radii and their weights."""
     phis = 2 * np.pi * np.arange(N_CIRCLE) / N_CIRCLE
     Ec = radius * np.exp(1j * phis)
     xg, wg = np.polynomial.legendre.leggauss(N_RAY)
     sg = 0.5 * (xg + 1)
-    Eq = Ec[:, None] * sg[None, :]                                   # (N, n) nodes on the radii
-    wq = local_branch(curve, place, slope, Eq)
+    return Ec, Ec[:, None] * sg[None, :], wg
+
+
+def circle_data(sd: SpectralData, s_: int, radius: float,
+                eig: tuple | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Points on a circle |E| = radius around the place P_s (over E = 0), their w, and the local
+    Abel integrals from the place along the radii (Gauss-Legendre).  ``eig``: the eigenvalues of
+    L at the nodes and at the points (:func:`circle_points`), which the three places share."""
+    curve, place, slope = sd.curve, sd.P0[s_], sd.slopes[s_]
+    Ec, Eq, wg = circle_points(radius)
+    Wq, Wc = eig if eig is not None else (None, None)
+    wq = local_branch(curve, place, slope, Eq, Wq)
     vals = curve.differential_values(sd.nums, Eq, wq)                # g dE / f_w over dE, (d, N, n)
     local = 0.5 * np.einsum("dnq,q->nd", vals * Ec[None, :, None], wg)   # (N, g_raw)
-    wc = local_branch(curve, place, slope, Ec)
+    wc = local_branch(curve, place, slope, Ec, Wc)
     return Ec, wc, local
 
 
@@ -80,10 +89,12 @@ def cauchy_means_at(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
     ed_, vd_, dlog_d = theta_d
     circles = []                                         # (psi, dpsi, A_loc) per radius and place
     for radius in radii:
+        Ec, Eq, _ = circle_points(radius)
+        eig = (lax_eigenvalues(curve, Eq), lax_eigenvalues(curve, Ec))
         for s_ in range(3):
-            Ec, wc, local = circle_data(sd, s_, radius)
+            Ec, wc, local = circle_data(sd, s_, radius, eig)
             if sd.slopes[s_] is not None:
-                v = node_branch(curve, sd.slopes[s_], Ec)[1]
+                v = node_branch(curve, sd.slopes[s_], Ec, eig[1])[1]
             else:
                 v = right_eigenvector(lax_matrix(Jp, M, u, Ec), wc)
             psi = v / (v @ dv.alpha)[:, None]
@@ -130,9 +141,14 @@ def auxiliary_rows(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
             continue                        # a branch point at E = 0 (rank-one a): a singular point
         trial += [b + 0.25 * sep * np.exp(1j * ang) for ang in (0.4, 2.5, 4.6)]
     cands = {}
-    for E in trial:
-        for w in np.linalg.eigvals(lax_matrix(Jp, M, u, E)):
-            v = right_eigenvector(lax_matrix(Jp, M, u, E), w) @ Bc
+    # every eigenvector of every trial point in one batched call (the same operations per point)
+    Et = np.array(trial)
+    Lt = lax_matrix(Jp, M, u, Et)
+    Wt = np.linalg.eigvals(Lt)
+    Vt = right_eigenvector(np.broadcast_to(Lt[:, None], (len(Et), 3, 3, 3)), Wt)
+    for E, ws, vs in zip(trial, Wt, Vt, strict=True):
+        for w, v in zip(ws, vs, strict=True):
+            v = v @ Bc
             h = np.abs(v) / np.linalg.norm(v)
             order = np.argsort(h)
             pair = tuple(sorted(order[1:]))

@@ -19,11 +19,13 @@ if TYPE_CHECKING:
     from thetasol.curves.plane_curve import Place
     from thetasol.curves.spectral import SpectralCurve
 
-__all__ = ["node_branch", "nearest_eigenvalue", "node_slopes", "local_branch", "node_branch_slopes"]
+__all__ = ["node_branch", "lax_eigenvalues", "nearest_eigenvalue", "node_slopes", "local_branch", "node_branch_slopes"]
 
 
-def node_branch(curve: SpectralCurve, slope: complex, Es: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(w, unit right eigenvector) on the node branch of slope ``slope`` at the small values Es.
+def node_branch(curve: SpectralCurve, slope: complex, Es: np.ndarray,
+                W: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """(w, unit right eigenvector) on the node branch of slope ``slope`` at the small values Es
+    (``W``: :func:`lax_eigenvalues` at Es if already known).
 
     There L(E) - w = (u - lam) + E (M - (w - lam) / E) + E^2 J^2 has two rows parallel to O(E): its
     null vector and eigenvalue taken from L(E) in float64 carry ~eps |L| / (|mu_1 - mu_2| |E|) (1e-13
@@ -45,7 +47,7 @@ def node_branch(curve: SpectralCurve, slope: complex, Es: np.ndarray) -> tuple[n
     X0[..., :2, 2] *= Ev[..., None]
     X0[..., 2, 2] = lam_n + Ev * A[..., 2, 2]
     dX = -np.stack([np.ones_like(Ev), np.ones_like(Ev), Ev], -1)          # d X / dx, diagonal
-    x = (nearest_eigenvalue(curve, Ev, lb + slope * Ev) - lb) / Ev       # the branch, to ~eps / |E|
+    x = (nearest_eigenvalue(curve, Ev, lb + slope * Ev, W) - lb) / Ev    # the branch, to ~eps / |E|
     for _ in range(8):
         X = X0 + dX[..., :, None] * np.eye(3) * x[..., None, None]
         minors = np.stack([X[..., 1, 1] * X[..., 2, 2] - X[..., 1, 2] * X[..., 2, 1],
@@ -61,9 +63,16 @@ def node_branch(curve: SpectralCurve, slope: complex, Es: np.ndarray) -> tuple[n
     return lb + Ev * x, v / np.linalg.norm(v, axis=-1, keepdims=True)
 
 
-def nearest_eigenvalue(curve: SpectralCurve, Es: np.ndarray, target: np.ndarray) -> np.ndarray:
-    """The eigenvalue of L(Es) nearest to ``target`` (float64; same shape as Es)."""
-    W = np.linalg.eigvals(lax_matrix(np.sqrt(curve.J2), curve.M, curve.u, Es))
+def lax_eigenvalues(curve: SpectralCurve, Es: np.ndarray) -> np.ndarray:
+    """The eigenvalues of L(Es) (float64; shape ``Es.shape + (3,)``)."""
+    return np.linalg.eigvals(lax_matrix(np.sqrt(curve.J2), curve.M, curve.u, Es))
+
+
+def nearest_eigenvalue(curve: SpectralCurve, Es: np.ndarray, target: np.ndarray,
+                       W: np.ndarray | None = None) -> np.ndarray:
+    """The eigenvalue of L(Es) nearest to ``target`` (float64; same shape as Es); ``W`` the
+    eigenvalues (:func:`lax_eigenvalues`) if already known."""
+    W = lax_eigenvalues(curve, Es) if W is None else W
     idx = np.argmin(np.abs(W - target[..., None]), axis=-1)
     return np.take_along_axis(W, idx[..., None], axis=-1)[..., 0]
 
@@ -78,15 +87,17 @@ def node_slopes(curve: SpectralCurve) -> np.ndarray:
     return mu
 
 
-def local_branch(curve: SpectralCurve, place: Place, slope: complex | None, Es: np.ndarray) -> np.ndarray:
+def local_branch(curve: SpectralCurve, place: Place, slope: complex | None, Es: np.ndarray,
+                 W: np.ndarray | None = None) -> np.ndarray:
     """w on the branch of ``place`` (over E = 0) at the small values Es (same shape).
 
     ``slope`` is dw/dE at a node's branch (:func:`node_slopes`; the scaled eigenproblem of
     :func:`node_branch`), None at a regular place (the eigenvalue of L(E) nearest to its w).
+    ``W``: :func:`lax_eigenvalues` at Es if already known (the three places share the points).
     """
     if slope is not None:
-        return node_branch(curve, slope, Es)[0]
-    return nearest_eigenvalue(curve, Es, np.full(np.shape(Es), complex(place.y)))
+        return node_branch(curve, slope, Es, W)[0]
+    return nearest_eigenvalue(curve, Es, np.full(np.shape(Es), complex(place.y)), W)
 
 
 def node_branch_slopes(curve: SpectralCurve, places: Sequence[Place]) -> tuple:
