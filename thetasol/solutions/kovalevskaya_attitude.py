@@ -112,9 +112,10 @@ class KovalevskayaAttitude:
         return omega, self.E @ S @ np.swapaxes(B, -1, -2)
 
 
-def _rate_on_grid(motion, I, center, mg, x, ref):
-    """``phidot`` and ``|b x gamma|^2/|b|^2`` at lattice coordinates ``x``."""
-    val, der = motion.values_at(x, 1)
+def _rate_on_grid(motion, I, center, mg, grid, ref):
+    """``phidot`` and ``|b x gamma|^2/|b|^2`` on the grid ``(k1, k2, a, b)`` of lattice coordinates
+    ``a_i k1 + b_j k2``."""
+    val, der = motion.values_on_grid(*grid, 1)
     p, q, r, g1, g2, g3 = (np.real(v) for v in _memoir_state(val, der, motion.coef, motion.c0, motion.l1))
     omega = np.stack([p, q, r], -1) @ motion.P.T
     gamma = -np.stack([g1, g2, g3], -1) @ motion.P.T
@@ -176,8 +177,7 @@ def _phase_grid(motion, I, center, mg, k1, k2, nu):
     """The reference vector and the rate's Fourier series on a grid refined per axis: a doubling samples only
     the new (odd) rows or columns, so the work is that of the final grid."""
     def sample(i1, n1, i2, n2, refs):
-        x = (i1 / n1)[:, None, None] * k1 + (i2 / n2)[None, :, None] * k2
-        return _rate_on_grid(motion, I, center, mg, x, refs)
+        return _rate_on_grid(motion, I, center, mg, (k1, k2, i1 / n1, i2 / n2), refs)
 
     n = [GRID_START, GRID_START]
     ar = np.arange(GRID_START)

@@ -323,6 +323,16 @@ class KovalevskayaMotion:
         out = tuple(np.stack([np.exp(j[0] - e) * j[i] for j in jets], -1) * sg for i in range(1, order + 2))
         return out[0] if order == 0 else out
 
+    def values_on_grid(self, k1: ArrayLike, k2: ArrayLike, a: ArrayLike, b: ArrayLike, order: int = 0
+                       ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
+        """:meth:`values_at` on the grid ``x_ij = a_i k1 + b_j k2``, shape ``(len(a), len(b), 7)``, by
+        :func:`thetasol.theta.grid.theta_grid` (matrix products; the common unit per point is another one)."""
+        from thetasol.theta.grid import theta_grid
+
+        G = theta_grid(self.theta.tau, self.z0, k1, k2, a, b, (None,) + self.chars1 + self.chars2,
+                       self.V2 if order else None)
+        return G.value if order == 0 else (G.value, G.derivative)
+
     def memoir_state(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
         """``(p, q, r, g1, g2, g3)`` in the memoir's frame and normalization (downward ``g``)."""
         return _memoir_state(*self._values(t, 1), self.coef, self.c0, self.l1)
