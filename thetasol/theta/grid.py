@@ -38,9 +38,16 @@ from thetasol.theta.flow import ellipsoid_candidates, lower_factor
 
 __all__ = ["ThetaGrid", "theta_grid"]
 
-#: Points per block and axis: larger blocks spread over more lattice terms, smaller ones cost more
-#: per-block work (benchmarks/bench_theta_grid.py).
-BLOCK = 16
+#: A block spans at most this length ``|da k_n|_Y`` of the lattice (and 1 .. 64 points per axis): larger
+#: blocks spread over more lattice terms, smaller ones cost more per-block work (benchmarks/bench_theta_grid.py).
+BLOCK_SPREAD = 1.0
+
+
+def _block_size(a: np.ndarray, kn: np.ndarray, Y: np.ndarray) -> int:
+    if len(a) < 2:
+        return 1
+    step = (np.max(a) - np.min(a)) / (len(a) - 1) * math.sqrt(max(kn @ Y @ kn, 1e-300))
+    return int(np.clip(2 ** math.floor(math.log2(max(BLOCK_SPREAD / max(step, 1e-300), 1.0))), 1, 64))
 
 
 @dataclass(frozen=True)
@@ -100,8 +107,8 @@ def _chars(chars, g: int) -> tuple[np.ndarray, np.ndarray]:
     return np.array(al), np.array(be)
 
 
-def _terms(Y: np.ndarray, k1n: np.ndarray, k2n: np.ndarray, A: _Blocks, B: _Blocks, tol: float) -> np.ndarray:
-    """The lattice terms ``m`` (S, g) with ``|m|_Y <= r + rho`` (see the module docstring)."""
+def _radius(Y: np.ndarray, k1n: np.ndarray, k2n: np.ndarray, A: _Blocks, B: _Blocks, tol: float) -> float:
+    """``r + rho`` (see the module docstring): the terms kept are ``|nu|_Y <= r + rho``."""
     g = len(Y)
     M = lower_factor(Y)
     cube = (np.arange(1 << g)[:, None] >> np.arange(g)[None, :]) & 1
@@ -111,25 +118,29 @@ def _terms(Y: np.ndarray, k1n: np.ndarray, k2n: np.ndarray, A: _Blocks, B: _Bloc
     for s in (1.0, -1.0):
         v = ha[:, None, None] * k1n + s * hb[None, :, None] * k2n
         spread = max(spread, float(np.max(np.linalg.norm(v @ M.T, axis=-1))))
-    r = math.sqrt((math.log(1.0 / tol) + 2.0 * math.log(10.0)) / math.pi) + rho + spread
+    return math.sqrt((math.log(1.0 / tol) + 2.0 * math.log(10.0)) / math.pi) + rho + spread
+
+
+def _terms(Y: np.ndarray, M: np.ndarray, r: float, alpha: np.ndarray) -> np.ndarray:
+    """The terms ``nu`` in ``Z^g + alpha`` (S, g) with ``|nu|_Y <= r`` (``Y = M^T M``)."""
     half = r * np.sqrt(np.diag(np.linalg.inv(Y)))
-    box = [(math.floor(-h), math.ceil(h)) for h in half]
-    m = ellipsoid_candidates(np.zeros(g), M, r * r, box)
-    return m[np.sum((m @ M.T) ** 2, 1) <= r * r]
+    box = [(math.floor(-h - a), math.ceil(h - a)) for h, a in zip(half, alpha, strict=True)]
+    nu = ellipsoid_candidates(alpha, M, r * r, box) + alpha
+    return nu[np.sum((nu @ M.T) ** 2, 1) <= r * r]
 
 
 @dataclass(frozen=True)
 class _Centres:
-    """Per block ``(P, Q)``: the lattice shift ``K``, ``c``, ``xi``, ``n0`` and ``o`` per distinct alpha."""
+    """Per block ``(P, Q)``: the lattice shift ``K``, ``c``, ``xi``, ``n0 = -round(c)`` and ``o = n0 + c``."""
 
     K: np.ndarray       # (P, Q, 2g)
     c: np.ndarray       # (P, Q, g)
     xi: np.ndarray      # (P, Q, g)
-    n0: np.ndarray      # (P, Q, nalpha, g)
-    o: np.ndarray       # (P, Q, nalpha, g)
+    n0: np.ndarray      # (P, Q, g)
+    o: np.ndarray       # (P, Q, g)
 
 
-def _centres(tau, z0, k1, k2, A: _Blocks, B: _Blocks, alphas: np.ndarray) -> _Centres:
+def _centres(tau, z0, k1, k2, A: _Blocks, B: _Blocks) -> _Centres:
     g = len(tau)
     X, Y = tau.real, tau.imag
     xc = A.centre[:, None, None] * k1 + B.centre[None, :, None] * k2
@@ -137,58 +148,44 @@ def _centres(tau, z0, k1, k2, A: _Blocks, B: _Blocks, alphas: np.ndarray) -> _Ce
     f = xc - K
     c0 = np.linalg.solve(Y, z0.imag)
     c = c0 + f[..., g:]
-    xi = (z0.real - X @ c0) + f[..., :g]
-    al = alphas / 2.0
-    n0 = -np.round(c[:, :, None, :] + al)
-    return _Centres(K, c, xi, n0, n0 + al + c[:, :, None, :])
+    n0 = -np.round(c)
+    return _Centres(K, c, (z0.real - X @ c0) + f[..., :g], n0, n0 + c)
 
 
-def _coefficients(tau, cen: _Centres, m, al2, be2, ia, V):
-    """``C`` (P, Q, nout, S): per characteristic the values' coefficients, then the derivatives' ones."""
-    d = m[None, None, None, :, :] + cen.o[:, :, :, None, :]                    # (P, Q, nal, S, g)
-    ex = np.pi * np.einsum("...i,ij,...j->...", d, tau, d) + 2 * np.pi * np.einsum("...i,...i->...", d,
-                                                                                      cen.xi[:, :, None, None, :])
-    E = np.exp(1j * ex)[:, :, ia]                                                # (P, Q, nch, S)
-    n = cen.n0[:, :, ia, None, :] + m                                            # (P, Q, nch, S, g)
-    Kp = np.rint(cen.K).astype(np.int64)
+def _coefficients(tau, cen: _Centres, nu, al2, be2, V):
+    """``C`` (P, Q, nout, S) for the characteristics ``(al2, be2)`` of one alpha (``nu`` its terms): the values'
+    coefficients, then the derivatives' ones."""
     g = tau.shape[0]
-    par = np.einsum("pqcsi,ci->pqcs", n.astype(np.int64), be2) + (Kp[..., :g] @ al2.T + Kp[..., g:] @ be2.T)[..., None]
-    unit = np.array([1, 1j, -1, -1j])[np.mod(np.sum(al2 * be2, 1), 4)][:, None]   # exp(2 pi i alpha.beta)
-    C = E * (1 - 2 * np.mod(par, 2)) * unit
+    # -pi d.Y.d from d itself (summing the expanded form loses |nu.Y.nu| eps when Im tau is large)
+    d = nu + cen.o[:, :, None, :]                                                # (P, Q, S, g)
+    X, Y = tau.real, tau.imag
+    E = np.exp(np.pi * (1j * np.sum((d @ X) * d, -1) - np.sum((d @ Y) * d, -1))
+               + 2j * np.pi * np.sum(d * cen.xi[:, :, None, :], -1))             # (P, Q, S)
+    # exp(2 pi i (n0 + nu).beta) exactly, and the block shift's signs (-1)^(2 (alpha.K_m + beta.K_n))
+    K, n0 = np.rint(cen.K).astype(np.int64), np.rint(cen.n0).astype(np.int64)
+    par = n0 @ be2.T + K[..., :g] @ al2.T + K[..., g:] @ be2.T                   # (P, Q, nch)
+    quarter = np.rint(2 * nu).astype(np.int64) @ be2.T                           # (S, nch)
+    tab = np.array([1, 1j, -1, -1j])[np.mod(quarter, 4)].T                       # (nch, S)
+    C = E[:, :, None, :] * (1 - 2 * np.mod(par, 2))[..., None] * tab
     if V is None:
         return C
-    w = 2j * np.pi * ((n + al2[:, None, :] / 2.0) @ V)
-    return np.concatenate([C, C * w], 2)
+    w = 2j * np.pi * ((cen.n0 @ V)[..., None] + nu @ V)                        # (P, Q, S)
+    return np.concatenate([C, C * w[:, :, None, :]], 2)
 
 
-def _correction(tau, k1, k2, A: _Blocks, B: _Blocks, cen: _Centres, u, w):
-    """``F`` (P, Q, nal, size_a, size_b): ``exp(-pi i c.tau.c - 2 pi i c.xi + 2 pi i (n0 + alpha).delta - (e(zeta)
-    - pi c.Y.c))``, the factor from the block's sum to ``exp(-e) theta``; and ``e`` (P, Q, size_a, size_b)."""
-    g = tau.shape[0]
-    X, Y = tau.real, tau.imag
-    k1n, k2n = k1[g:], k2[g:]
-    c, xi = cen.c, cen.xi
-    ph = np.exp(-1j * np.pi * (np.einsum("pqi,ij,pqj->pq", c, X, c) + 2 * np.sum(c * xi, -1)))
-    na = cen.o - c[:, :, None, :]                                               # n0 + alpha
-    ra = 2j * np.pi * (na @ u.real) - 2 * np.pi * (cen.o @ (Y @ k1n))           # (P, Q, nal)
-    rb = 2j * np.pi * (na @ w.real) - 2 * np.pi * (cen.o @ (Y @ k2n))
-    da, db = A.offset[:, None, None, :], B.offset[None, :, None, :]              # (P, 1, 1, sa), (1, Q, 1, sb)
-    row = np.exp(ra[..., None] * da - np.pi * (k1n @ Y @ k1n) * da * da) * ph[..., None, None]
-    col = np.exp(rb[..., None] * db - np.pi * (k2n @ Y @ k2n) * db * db)
-    cross = np.exp(-2 * np.pi * (k1n @ Y @ k2n) * A.offset[:, None, :, None] * B.offset[None, :, None, :])
-    F = row[..., :, None] * col[..., None, :] * cross[:, :, None]
-    cy = c @ Y
-    e = (np.pi * np.sum(cy * c, -1)[..., None, None]
-         + 2 * np.pi * ((cy @ k1n)[..., None, None] * da[:, :, 0, :, None] + (cy @ k2n)[..., None, None]
-                        * db[:, :, 0, None, :])
-         + np.pi * ((k1n @ Y @ k1n) * da[:, :, 0, :, None] ** 2 + (k2n @ Y @ k2n) * db[:, :, 0, None, :] ** 2)
-         + 2 * np.pi * (k1n @ Y @ k2n) * da[:, :, 0, :, None] * db[:, :, 0, None, :])
-    return F, e
+def _log_unit(tau, A: _Blocks, B: _Blocks, cen: _Centres, u, w) -> np.ndarray:
+    """``e`` (P, sa, Q, sb): ``-pi i c.tau.c - 2 pi i c.xi + 2 pi i n0.delta`` (the factor common to all
+    characteristics taken out of each block's sum)."""
+    c = cen.c
+    L = -1j * np.pi * (np.einsum("pqi,ij,pqj->pq", c, tau, c) + 2 * np.sum(c * cen.xi, -1))
+    la, lb = 2j * np.pi * (cen.n0 @ u), 2j * np.pi * (cen.n0 @ w)               # (P, Q)
+    return (L[:, None, :, None] + la[:, None, :, None] * A.offset[:, :, None, None]
+            + lb[:, None, :, None] * B.offset[None, None, :, :])
 
 
 def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: ArrayLike, b: ArrayLike,
                chars: str | Sequence = "all", direction: ArrayLike | None = None, tol: float = 1e-16,
-               block: int = BLOCK) -> ThetaGrid:
+               block: tuple[int, int] | None = None) -> ThetaGrid:
     """``theta[chi]`` and ``D_V theta[chi]`` at ``z0 + x_m + tau x_n``, ``x = a_i k1 + b_j k2``, on the grid ``(a, b)``.
 
     Parameters
@@ -207,8 +204,8 @@ def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: A
         ``V`` of the derivative ``D_V theta = V . grad theta``.
     tol : float
         Truncation: the terms left out of every point's ellipsoid sum to about ``tol`` (relative to ``exp(e)``).
-    block : int
-        Points per block and axis.
+    block : (int, int), optional
+        Points per block along ``a`` and ``b`` (default: ``BLOCK_SPREAD``).
 
     Returns
     -------
@@ -221,25 +218,31 @@ def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: A
     a, b = np.asarray(a, float).ravel(), np.asarray(b, float).ravel()
     V = None if direction is None else np.asarray(direction, complex).reshape(g)
     al2, be2 = _chars(chars, g)
-    alphas, ia = np.unique(al2, axis=0, return_inverse=True)
-    ia = ia.ravel()
-    A, B = _blocks(a, block), _blocks(b, block)
+    nch = len(al2)
+    if block is None:
+        block = (_block_size(a, k1[g:], tau.imag), _block_size(b, k2[g:], tau.imag))
+    A, B = _blocks(a, block[0]), _blocks(b, block[1])
+    P, Q, sa, sb = len(A.centre), len(B.centre), A.size, B.size
     u, w = k1[:g] + tau @ k1[g:], k2[:g] + tau @ k2[g:]
-    m = _terms(tau.imag, k1[g:], k2[g:], A, B, tol)
-    cen = _centres(tau, z0, k1, k2, A, B, alphas)
-    C = _coefficients(tau, cen, m, al2, be2, ia, V)                              # (P, Q, nout, S)
-    Am = np.exp((2j * np.pi) * A.offset[..., None] * (m @ u))                    # (P, sa, S)
-    Bm = np.exp((2j * np.pi) * B.offset[:, None, :] * (m @ w)[None, :, None])   # (Q, S, sb)
-    F, e = _correction(tau, k1, k2, A, B, cen, u, w)
-    P, Q, nout = C.shape[0], C.shape[1], C.shape[2]
-    sa, sb, nch = A.size, B.size, len(ia)
-    out = np.empty((P, sa, Q, sb, nout), complex)
-    for q in range(Q):
-        left = Am[:, None, :, :] * C[:, q, :, None, :]                          # (P, nout, sa, S)
-        G = (left.reshape(-1, len(m)) @ Bm[q]).reshape(P, nout, sa, sb)
-        for k in range(nout):
-            np.multiply(G[:, k], F[:, q, ia[k % nch]], out=out[:, :, q, :, k])
-    out = out.reshape(P * sa, Q * sb, nout)[:A.n, :B.n]
+    cen = _centres(tau, z0, k1, k2, A, B)
+    nout = nch if V is None else 2 * nch
+    out = np.empty((nout, P, sa, Q, sb), complex)
+    r = _radius(tau.imag, k1[g:], k2[g:], A, B, tol)
+    M = lower_factor(tau.imag)
+    terms = 0
+    for alpha in np.unique(al2, axis=0):
+        sel = np.nonzero(np.all(al2 == alpha, 1))[0]
+        rows = sel if V is None else np.concatenate([sel, sel + nch])
+        nu = _terms(tau.imag, M, r, alpha / 2.0)
+        terms = max(terms, len(nu))
+        C = _coefficients(tau, cen, nu, al2[sel], be2[sel], V)                  # (P, Q, nrow, S)
+        Am = np.exp((2j * np.pi) * A.offset[..., None] * (nu @ u))              # (P, sa, S)
+        Bm = np.exp((2j * np.pi) * B.offset[:, None, :] * (nu @ w)[None, :, None])   # (Q, S, sb)
+        for q in range(Q):
+            left = Am[None, :, :, :] * C[:, q].transpose(1, 0, 2)[:, :, None, :]   # (nrow, P, sa, S)
+            out[rows, :, :, q, :] = (left.reshape(-1, len(nu)) @ Bm[q]).reshape(len(rows), P, sa, sb)
+    out = out.reshape(nout, P * sa, Q * sb)[:, :A.n, :B.n]
     shift = np.broadcast_to(cen.K[:, None, :, None, :], (P, sa, Q, sb, 2 * g)).reshape(P * sa, Q * sb, 2 * g)
-    return ThetaGrid(e.transpose(0, 2, 1, 3).reshape(P * sa, Q * sb)[:A.n, :B.n], out[..., :nch],
-                     None if V is None else out[..., nch:], shift[:A.n, :B.n], len(m))
+    e = _log_unit(tau, A, B, cen, u, w).reshape(P * sa, Q * sb)[:A.n, :B.n]
+    val = np.moveaxis(out, 0, -1)
+    return ThetaGrid(e, val[..., :nch], None if V is None else val[..., nch:], shift[:A.n, :B.n], terms)
