@@ -43,16 +43,18 @@ from thetasol.theta.flow import ellipsoid_candidates, lower_factor
 
 __all__ = ["ThetaGrid", "theta_grid"]
 
-#: A block spans at most this length ``|da k_n|_Y`` of the lattice (and 1 .. 64 points per axis): larger
-#: blocks spread over more lattice terms, smaller ones cost more per-block work (benchmarks/bench_theta_grid.py).
+#: A block spans at most this length ``|da k1_n|_Y`` of the lattice along ``a`` and four times it along ``b``
+#: (1 .. 128 points per axis): larger blocks spread over more lattice terms (the matrix products grow), smaller
+#: ones cost more elementwise work per point, mostly along ``b`` (each block column forms its own left factors).
+#: Within 20% of the best of 8 block shapes on the Kovalevskaya grids of benchmarks/bench_theta_grid.py.
 BLOCK_SPREAD = 1.0
 
 
-def _block_size(a: np.ndarray, kn: np.ndarray, Y: np.ndarray) -> int:
+def _block_size(a: np.ndarray, kn: np.ndarray, Y: np.ndarray, spread: float) -> int:
     if len(a) < 2:
         return 1
     step = (np.max(a) - np.min(a)) / (len(a) - 1) * math.sqrt(max(kn @ Y @ kn, 1e-300))
-    return int(np.clip(2 ** math.floor(math.log2(max(BLOCK_SPREAD / max(step, 1e-300), 1.0))), 1, 64))
+    return int(np.clip(2 ** math.floor(math.log2(max(spread / max(step, 1e-300), 1.0))), 1, 128))
 
 
 @dataclass(frozen=True)
@@ -186,6 +188,14 @@ def _coefficients(tau, cen: _Centres, nu, valid, al2, be2, ia, V):
     return np.concatenate([C, C * w], 2)
 
 
+def _phases(offset: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``exp(2 pi i offset x)`` as (nalpha, blocks, size, S); the blocks of a uniform grid share their offsets."""
+    if np.all(offset == offset[:1]):
+        one = np.exp((2j * np.pi) * offset[0][None, None, :, None] * x[:, None, None, :])
+        return np.broadcast_to(one, (x.shape[0],) + offset.shape + (x.shape[1],))
+    return np.exp((2j * np.pi) * offset[None, :, :, None] * x[:, None, None, :])
+
+
 def _log_unit(tau, A: _Blocks, B: _Blocks, cen: _Centres, u, w) -> np.ndarray:
     """``e`` (P, sa, Q, sb): ``-pi i c.tau.c - 2 pi i c.xi + 2 pi i n0.delta`` (the factor common to all
     characteristics taken out of each block's sum)."""
@@ -233,7 +243,7 @@ def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: A
     al2, be2 = _chars(chars, g)
     nch = len(al2)
     if block is None:
-        block = (_block_size(a, k1[g:], tau.imag), _block_size(b, k2[g:], tau.imag))
+        block = (_block_size(a, k1[g:], tau.imag, BLOCK_SPREAD), _block_size(b, k2[g:], tau.imag, 4 * BLOCK_SPREAD))
     A, B = _blocks(a, block[0]), _blocks(b, block[1])
     P, Q, sa, sb = len(A.centre), len(B.centre), A.size, B.size
     u, w = k1[:g] + tau @ k1[g:], k2[:g] + tau @ k2[g:]
@@ -245,8 +255,8 @@ def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: A
     ia = ia.ravel()
     nu, valid = _terms(tau.imag, lower_factor(tau.imag), r, alphas / 2.0)
     C = _coefficients(tau, cen, nu, valid, al2, be2, ia, V)                    # (P, Q, nout, S)
-    Am = np.exp((2j * np.pi) * A.offset[None, :, :, None] * (nu @ u)[:, None, None, :])  # (nal, P, sa, S)
-    Bm = np.exp((2j * np.pi) * B.offset[None, :, None, :] * (nu @ w)[:, None, :, None])  # (nal, Q, S, sb)
+    Am = _phases(A.offset, nu @ u)                                              # (nal, P, sa, S)
+    Bm = _phases(B.offset, nu @ w).transpose(0, 1, 3, 2)                        # (nal, Q, S, sb)
     groups = [np.nonzero(np.tile(ia, nout // nch) == i)[0] for i in range(len(alphas))]
     for q in range(Q):
         Cq = C[:, q].transpose(1, 0, 2)                                        # (nout, P, S)
