@@ -17,7 +17,7 @@ applied.  A block's values are then one matrix product per characteristic (and p
 ``2 pi i (n0 + nu).V``), with ``A`` shared by the blocks of a row and ``B`` by those of a column (one term set
 per ``alpha``), all blocks of a column in one product.  All factors stay O(1): ``|C_nu| = exp(-pi d.Y.d)``
 (``Y = Im tau``), ``|A| <= exp(2 pi |da| |nu|_Y |k1_n|_Y)`` with ``|da k1_n|_Y`` at most half of
-``BLOCK_SPREAD``.  The terms are ``|nu|_Y <= r + rho`` (``|v|_Y^2 = v.Y.v``): ``pi r^2 = log(1/tol) + 2 log 10``
+``BLOCK_SPREAD`` (``B``: twice ``BLOCK_SPREAD``).  The terms are ``|nu|_Y <= r + rho`` (``|v|_Y^2 = v.Y.v``): ``pi r^2 = log(1/tol) + 2 log 10``
 is the ellipsoid criterion of :mod:`thetasol.theta.flow` (the terms outside every point's own ellipsoid are
 left out), ``rho`` bounds ``|o + delta_n|_Y`` over the cube and the block (circumradii).  The sums run in
 the frame of ``tau`` (no Siegel reduction): their cost grows as ``1/sqrt(det Im tau)`` and their error as
@@ -61,13 +61,15 @@ def _block_size(a: np.ndarray, kn: np.ndarray, Y: np.ndarray, spread: float) -> 
 
 @dataclass(frozen=True)
 class ThetaGrid:
-    """``theta[chi](zeta_ij) = exp(e_ij) sign * value_ij`` at ``zeta_ij = z_ij - shift_m - tau shift_n``.
+    """``sign * theta[chi](zeta_ij) = exp(e_ij) value_ij`` at ``zeta_ij = z_ij - shift_m - tau shift_n``.
 
-    ``value`` and ``derivative`` are ``(n1, n2, nchar)`` with the sign ``(-1)^(2(alpha.shift_m +
-    beta.shift_n))`` included, i.e. the values at ``z_ij`` up to a factor common to all characteristics;
-    ``derivative`` is ``D_V theta`` at ``zeta_ij`` in the same unit (None without a direction); ``e``
-    ``(n1, n2)``; ``shift`` ``(n1, n2, 2g)`` integers (the block's lattice vector); ``terms`` the lattice
-    terms summed per block.
+    ``sign = (-1)^(2(alpha.shift_m + beta.shift_n))``, so ``value`` is ``theta[chi](z_ij)`` up to a factor
+    common to all characteristics (the quasi-periodicity factor of ``shift``), as in
+    ``KovalevskayaMotion.values_at``.  ``value``, ``derivative``: ``(n1, n2, nchar)`` (views of one array with the
+    characteristics outermost); ``derivative`` is ``sign * D_V theta[chi](zeta_ij)`` in the same unit (None
+    without a direction).  ``e``: ``(n1, n2)`` complex, common to all characteristics; ``Re e`` differs from
+    ``pi Im(zeta).(Im tau)^-1.Im(zeta)`` by O(1), so ``|value|`` stays O(1).  ``shift``: ``(n1, n2, 2g)``
+    integers (the block's lattice vector).  ``terms``: lattice terms summed per block and alpha.
     """
 
     e: np.ndarray
