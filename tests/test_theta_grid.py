@@ -111,3 +111,20 @@ def test_kovalevskaya_phase_series_grid_against_pointwise(seed, monkeypatch):
     assert abs(diag["phase_tail"] - rdiag["phase_tail"]) < 2e-15
     t = np.linspace(0.0, 30.0, 301)
     assert np.max(np.abs(att(t)[1] - ref(t)[1])) < 5e-14
+
+
+def test_grid_genus1_unsorted_single_points():
+    # genus 1; unsorted, unevenly spaced coordinates (sorted inside); a single point; a single column.  Measured
+    # values / derivatives 1.2e-15 / 2.1e-15, 3.3e-15 / 3.9e-15, 5.4e-16 / 8.7e-16, 1.3e-15 / 1.4e-15
+    rng = np.random.default_rng(0)
+    cases = [(np.array([[0.3 + 1.2j]]), np.array([0.1 + 0.2j]), np.array([1.0, 2.0]), np.array([0.0, 1.0]),
+              np.arange(10) / 10, np.arange(7) / 7, 1e-14)]
+    tau = np.array([[1.1j, 0.3 + 0.2j], [0.3 + 0.2j, 0.9j - 0.4]])
+    k1, k2, z0 = np.array([1.0, 0, 2, 1]), np.array([0.0, 1, -1, 2]), np.array([0.1, 0.2j])
+    cases += [(tau, z0, k1, k2, rng.uniform(0, 1, 37), rng.uniform(-1, 2, 19), 1e-14),
+              (tau, z0, k1, k2, np.array([0.3]), np.array([0.7]), 1e-14),
+              (tau, z0, k1, k2, np.arange(33) / 33, np.array([0.7]), 1e-14)]
+    for tau, z0, k1, k2, a, b, bound in cases:
+        V = np.ones(len(tau)) + 0.5j
+        ev, ed, er = _against_jet(tau, z0, k1, k2, a, b, V)
+        assert ev < bound and ed < bound and er < 16

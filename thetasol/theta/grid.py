@@ -224,7 +224,8 @@ def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: A
     k1, k2 : array_like, shape (2g,)
         Real lattice coordinates of the two grid directions.
     a, b : array_like, shapes (n1,), (n2,)
-        The grid's coordinates along ``k1`` and ``k2`` (any order; sorted ones make small blocks).
+        The grid's coordinates along ``k1`` and ``k2`` (any order: sorted internally; the blocks assume
+        roughly uniform spacing).
     chars : "all" or sequence of (alpha, beta) or None
         Half characteristics (``"all"``: the ``4^g`` of :class:`thetasol.theta.riemann.RiemannTheta`'s order).
     direction : array_like, shape (g,), optional
@@ -244,6 +245,12 @@ def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: A
     k1, k2 = np.asarray(k1, float).reshape(2 * g), np.asarray(k2, float).reshape(2 * g)
     a, b = np.asarray(a, float).ravel(), np.asarray(b, float).ravel()
     V = None if direction is None else np.asarray(direction, complex).reshape(g)
+    oa, ob = np.argsort(a, kind="stable"), np.argsort(b, kind="stable")
+    if np.any(np.diff(oa) != 1) or np.any(np.diff(ob) != 1):   # sorted axes keep the blocks' spread small
+        G = theta_grid(tau, z0, k1, k2, a[oa], b[ob], chars, V, tol, block)
+        ra, rb = np.argsort(oa)[:, None], np.argsort(ob)[None, :]
+        return ThetaGrid(G.e[ra, rb], G.value[ra, rb], None if V is None else G.derivative[ra, rb],
+                         G.shift[ra, rb], G.terms)
     al2, be2 = _chars(chars, g)
     nch = len(al2)
     if block is None:
