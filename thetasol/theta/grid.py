@@ -17,7 +17,8 @@ applied.  A block's values are then one matrix product per characteristic (and p
 ``2 pi i (n0 + nu).V``), with ``A`` shared by the blocks of a row and ``B`` by those of a column (one term set
 per ``alpha``), all blocks of a column in one product.  All factors stay O(1): ``|C_nu| = exp(-pi d.Y.d)``
 (``Y = Im tau``), ``|A| <= exp(2 pi |da| |nu|_Y |k1_n|_Y)`` with ``|da k1_n|_Y`` at most half of
-``BLOCK_SPREAD`` (``B``: twice ``BLOCK_SPREAD``).  The terms are ``|nu|_Y <= r + rho`` (``|v|_Y^2 = v.Y.v``): ``pi r^2 = log(1/tol) + 2 log 10``
+``BLOCK_SPREAD`` (``|db k2_n|_Y``: ``BLOCK_SPREAD``), so an entry's exponent is at most ~20 and its relative
+rounding ~2e-15.  The terms are ``|nu|_Y <= r + rho`` (``|v|_Y^2 = v.Y.v``): ``pi r^2 = log(1/tol) + 2 log 10``
 is the ellipsoid criterion of :mod:`thetasol.theta.flow` (the terms outside every point's own ellipsoid are
 left out), ``rho`` bounds ``|o + delta_n|_Y`` over the cube and the block (circumradii).  The sums run in
 the frame of ``tau`` (no Siegel reduction): their cost grows as ``1/sqrt(det Im tau)`` and their error as
@@ -45,10 +46,11 @@ from thetasol.theta.flow import ellipsoid_candidates, lower_factor
 
 __all__ = ["ThetaGrid", "theta_grid"]
 
-#: A block spans at most this length ``|da k1_n|_Y`` of the lattice along ``a`` and four times it along ``b``
-#: (1 .. 128 points per axis): larger blocks spread over more lattice terms (the matrix products grow), smaller
-#: ones cost more elementwise work per point, mostly along ``b`` (each block column forms its own left factors).
-#: Within 20% of the best of 8 block shapes on the Kovalevskaya grids of benchmarks/bench_theta_grid.py.
+#: A block spans at most this length ``|da k1_n|_Y`` of the lattice along ``a`` and twice it along ``b``
+#: (1 .. 128 points per axis): larger blocks spread over more lattice terms (the matrix products grow) and
+#: larger factors (their rounding grows: 8e-15 with 4x along ``b`` against 4e-15 .. 8e-15), smaller ones cost
+#: more elementwise work per point, mostly along ``b`` (each block column forms its own left factors).  1x, 2x
+#: and 4x along ``b`` cost the same within 10% on the Kovalevskaya grids of benchmarks/bench_theta_grid.py.
 BLOCK_SPREAD = 1.0
 
 
@@ -260,7 +262,7 @@ def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: A
     al2, be2 = _chars(chars, g)
     nch = len(al2)
     if block is None:
-        block = (_block_size(a, k1[g:], tau.imag, BLOCK_SPREAD), _block_size(b, k2[g:], tau.imag, 4 * BLOCK_SPREAD))
+        block = (_block_size(a, k1[g:], tau.imag, BLOCK_SPREAD), _block_size(b, k2[g:], tau.imag, 2 * BLOCK_SPREAD))
     A, B = _blocks(a, block[0]), _blocks(b, block[1])
     P, Q, sa, sb = len(A.centre), len(B.centre), A.size, B.size
     u, w = k1[:g] + tau @ k1[g:], k2[:g] + tau @ k2[g:]
