@@ -77,8 +77,14 @@ def test_grid_selected_characteristics_and_order():
     idx = [2 * 4 + 3, 0, 1 * 4 + 0]
     assert np.max(np.abs(G.value * f - H.value[..., idx])) < 1e-14 * np.max(np.abs(H.value))
     assert np.max(np.abs(G.derivative * f - H.derivative[..., idx])) < 1e-14 * np.max(np.abs(H.derivative))
-    with pytest.raises(ValueError):
+    with pytest.raises(ValueError, match="half-integer"):
         theta_grid(tau, z0, k1, k2, a, b, [((0.25, 0.0), (0.0, 0.0))])
+    with pytest.raises(ValueError, match="empty"):
+        theta_grid(tau, z0, k1, k2, a, [])
+    with pytest.raises(ValueError, match="NaN"):
+        theta_grid(tau, z0, k1, k2, np.array([0.1, np.nan]), b)
+    with pytest.raises(ValueError, match="shape"):
+        theta_grid(tau, z0, k1[:3], k2, a, b)
 
 
 # -- the Kovalevskaya phase series: the grid against values_at point by point ------------------------------

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from thetasol.core.validate import finite_array
 from thetasol.theta._checks import check_tau
 from thetasol.theta.flow import ellipsoid_candidates, lower_factor
 
@@ -48,9 +49,10 @@ __all__ = ["ThetaGrid", "theta_grid"]
 
 #: A block spans at most this length ``|da k1_n|_Y`` of the lattice along ``a`` and twice it along ``b``
 #: (1 .. 128 points per axis): larger blocks spread over more lattice terms (the matrix products grow) and
-#: larger factors (their rounding grows: 8e-15 with 4x along ``b`` against 4e-15 .. 8e-15), smaller ones cost
-#: more elementwise work per point, mostly along ``b`` (each block column forms its own left factors).  1x, 2x
-#: and 4x along ``b`` cost the same within 10% on the Kovalevskaya grids of benchmarks/bench_theta_grid.py.
+#: larger factors, whose rounding grows (4x along ``b``: 1.0e-14 against 8.2e-15 on test seed 2's 128 x 128
+#: grid); smaller ones cost more elementwise work per point, mostly along ``b`` (each block column forms its own
+#: left factors).  1x, 2x and 4x along ``b`` cost the same within 10% on the Kovalevskaya grids of
+#: benchmarks/bench_theta_grid.py.
 BLOCK_SPREAD = 1.0
 
 
@@ -249,10 +251,12 @@ def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: A
     """
     tau = check_tau(tau)
     g = tau.shape[0]
-    z0 = np.asarray(z0, complex).reshape(g)
-    k1, k2 = np.asarray(k1, float).reshape(2 * g), np.asarray(k2, float).reshape(2 * g)
-    a, b = np.asarray(a, float).ravel(), np.asarray(b, float).ravel()
-    V = None if direction is None else np.asarray(direction, complex).reshape(g)
+    z0 = finite_array(z0, "z0", (g,), complex)
+    k1, k2 = finite_array(k1, "k1", (2 * g,)), finite_array(k2, "k2", (2 * g,))
+    a, b = finite_array(a, "a").ravel(), finite_array(b, "b").ravel()
+    if not (len(a) and len(b)):
+        raise ValueError(f"the grid is empty ({len(a)} x {len(b)} points)")
+    V = None if direction is None else finite_array(direction, "direction", (g,), complex)
     oa, ob = np.argsort(a, kind="stable"), np.argsort(b, kind="stable")
     if np.any(np.diff(oa) != 1) or np.any(np.diff(ob) != 1):   # sorted axes keep the blocks' spread small
         G = theta_grid(tau, z0, k1, k2, a[oa], b[ob], chars, V, tol, block)
@@ -274,8 +278,8 @@ def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: A
     ia = ia.ravel()
     nu, valid = _terms(tau.imag, lower_factor(tau.imag), r, alphas / 2.0)
     C = _coefficients(tau, cen, nu, valid, al2, be2, ia, V)                    # (P, Q, nout, S)
-    Am = _phases(A.offset, nu, alphas / 2.0, u)                                             # (nal, P, sa, S)
-    Bm = _phases(B.offset, nu, alphas / 2.0, w).transpose(0, 1, 3, 2)                       # (nal, Q, S, sb)
+    Am = _phases(A.offset, nu, alphas / 2.0, u)                                 # (nal, P, sa, S)
+    Bm = _phases(B.offset, nu, alphas / 2.0, w).transpose(0, 1, 3, 2)           # (nal, Q, S, sb)
     groups = [np.nonzero(np.tile(ia, nout // nch) == i)[0] for i in range(len(alphas))]
     for q in range(Q):
         Cq = C[:, q].transpose(1, 0, 2)                                        # (nout, P, S)
