@@ -22,11 +22,11 @@ plus the dropped sum) is ``diagnostics["phase_tail"]``.
 The samples come from :meth:`KovalevskayaMotion.values_on_grid` (:func:`thetasol.theta.grid.theta_grid`: the
 theta functions on the grid as matrix products), which gives the seven theta values and derivatives in another
 common unit per point than :meth:`KovalevskayaMotion.values_at`; the rate, a quotient, is the same to a few 1e-15
-(tests/test_theta_grid.py: the series' coefficients 1.3e-15 apart, ``Q(t)`` 4.5e-14 on ``[0, 30]``).  Set-up
+(tests/test_theta_grid.py: the series' coefficients 1.7e-15 apart, ``Q(t)`` 4.6e-14 on ``[0, 30]``).  Set-up
 cost (CPU time, one thread, best of 7, benchmarks/bench_theta_grid.py, 2-core machine shared with other jobs):
-18 .. 23 ms for test seed 2 (grid 128 x 128, 1.1 .. 1.4 us per grid point, of which the theta functions ~1 us over
-the five grid calls) and 4.6 .. 4.9 ms for seed 17 (32 x 64), against 234 .. 260 ms and 34 .. 36 ms (15 .. 17 us
-per point) with ``values_at`` at every point.
+19 ms for test seed 2 (grid 128 x 128, 1.2 us per grid point, of which the theta functions 0.9 us over the five
+grid calls) and 4.5 ms for seed 17 (32 x 64), against 228 ms and 31 ms (14 .. 15 us per point) with ``values_at``
+at every point.
 """
 from __future__ import annotations
 

@@ -25,9 +25,9 @@ the frame of ``tau`` (no Siegel reduction): their cost grows as ``1/sqrt(det Im 
 ``cond(Im tau) eps`` (tests/test_theta_grid.py: 3e-15 at condition 1, 4.5e-14 at 300).
 
 Cost (CPU time, one thread, best of 7, benchmarks/bench_theta_grid.py, on a 2-core machine shared with other
-jobs): genus 2, the seven characteristics of the Kovalevskaya top and their derivatives along ``V2``, 2.0 / 0.82 /
-0.46 us per point on 32 x 32 / 64 x 64 / 128 x 128 grids for test seed 2 (94 terms per alpha), 1.1 / 0.47 / 0.27
-us for seed 17 (50 terms), against 14 .. 21 us per point of ``KovalevskayaMotion.values_at``
+jobs): genus 2, the seven characteristics of the Kovalevskaya top and their derivatives along ``V2``, 1.8 / 0.64 /
+0.35 us per point on 32 x 32 / 64 x 64 / 128 x 128 grids for test seed 2 (94 terms per alpha), 1.1 / 0.39 / 0.21
+us for seed 17 (50 terms), against 13 .. 22 us per point of ``KovalevskayaMotion.values_at``
 (``RiemannTheta.jet``, all 16 characteristics, order 1); the two agree to 8e-15 relative to each point's largest
 value (values, and the Wronskians ``val_i der_j - val_j der_i``).  The matrix products run at the BLAS peak; the
 rest is elementwise work on the factors and ~1 ms of per-call overhead, which dominates the small grids.
