@@ -103,42 +103,75 @@ class FlowTheta:
         self.Dd = D * (2j * math.pi * (self.modes @ u))[None, :]
         self.u = u
         self.r = r
-        self._k = [np.arange(self.span[i]) + self.lo[i] for i in range(r)]
-        self._idx = [self.modes[:, i] - self.lo[i] for i in range(r)]
+        self._pair(self.modes, D, self.Dd)
+
+    def _pair(self, modes: np.ndarray, D: np.ndarray, Dd: np.ndarray) -> None:
+        """The real form of the series: the modes m and -m share one phase (module docstring).
+
+        ``p`` runs over the modes up to sign (first non-zero index positive); with
+        ``c = cos 2 pi p.phi``, ``s = sin 2 pi p.phi``, a coefficient pair contributes
+        ``c (D(p) + D(-p)) + s i (D(p) - D(-p))``.  ``self.W`` (2P, 4S) maps the columns
+        ``(c_0, s_0, c_1, s_1, ...)`` (the float view of ``exp(2 pi i p.phi)``) to the float view of
+        ``[v | dv]`` (n, 2S) complex.
+        """
+        S = D.shape[0]
+        sign = np.zeros(len(modes), np.int64)
+        for i in range(modes.shape[1] - 1, -1, -1):      # sign of the first non-zero index
+            sign = np.where(modes[:, i] != 0, np.sign(modes[:, i]), sign)
+        canon = modes * np.where(sign < 0, -1, 1)[:, None]
+        lo = canon.min(axis=0)
+        span = canon.max(axis=0) - lo + 1
+        codes, inv = np.unique(np.ravel_multi_index(tuple((canon - lo).T), span), return_inverse=True)
+        pm = lo + np.stack(np.unravel_index(codes, span), axis=-1)
+        C = np.concatenate([D, Dd]).T                    # (K, 2S): coefficients of exp(2 pi i m.phi)
+        A = np.zeros((len(pm), 2 * S), complex)          # coefficient of cos
+        Bs = np.zeros((len(pm), 2 * S), complex)         # coefficient of sin
+        neg = sign < 0
+        np.add.at(A, inv, C)
+        np.add.at(Bs, inv[~neg], 1j * C[~neg])
+        np.add.at(Bs, inv[neg], -1j * C[neg])
+        W = np.empty((2 * len(pm), 4 * S))
+        W[0::2, 0::2], W[0::2, 1::2] = A.real, A.imag
+        W[1::2, 0::2], W[1::2, 1::2] = Bs.real, Bs.imag
+        self.W = W
+        self._lo, self._span = lo, span
+        self._k = [np.arange(span[i]) + lo[i] for i in range(len(span))]
+        self._idx = [pm[:, i] - lo[i] for i in range(len(span))]
         # the products over the first r - 1 phases are formed once per distinct prefix of the modes
         # (fewer than the modes) and then gathered: the same products in the same order
         self._pre_inv, self._pre_idx = None, []
+        r = len(span)
         if r > 1:
-            pre, inv = np.unique(self.modes[:, :r - 1], axis=0, return_inverse=True)
+            pre, inv = np.unique(pm[:, :r - 1], axis=0, return_inverse=True)
             self._pre_inv = inv.ravel()
-            self._pre_idx = [pre[:, i] - self.lo[i] for i in range(r - 1)]
+            self._pre_idx = [pre[:, i] - lo[i] for i in range(r - 1)]
+        self.n_phases = len(pm)
+
+    def phases(self, phi: np.ndarray) -> np.ndarray:
+        """``exp(2 pi i p.phi)`` (n, P) for the phases phi (n, r) reduced mod 1."""
+        tabs = [np.exp(2j * math.pi * np.multiply.outer(phi[:, i], self._k[i]))   # (n, span_i)
+                for i in range(self.r)]
+        X = None
+        for i in range(self.r - 1):
+            col = tabs[i].take(self._pre_idx[i], axis=1)
+            X = col if X is None else X * col
+        last = tabs[-1].take(self._idx[-1], axis=1)
+        return last if X is None else X.take(self._pre_inv, axis=1) * last
 
     def __call__(self, t: np.ndarray, derivative: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv.
 
         The times go in blocks whose phase products (block x modes complex) fit in ~0.5 MB of
-        cache: 2.5x faster per time than one pass over 2001 times, whose products take 16 MB
-        (dense rows of benchmarks/bench_theta_rotation.py: generic body 12 -> 4.7 us, near-unstable
-        70 -> 28 us per time), with the same values (each row is the same operations whatever the block).
+        cache: 2.5x faster per time than one pass over 2001 times, whose products take 16 MB.
         """
         t = np.asarray(t, float)
         phi = np.multiply.outer(t, self.u)
         phi -= np.round(phi)
         n, S = t.shape[0], self.D.shape[0]
-        v = np.empty((n, S), complex)
-        dv = np.empty((n, S), complex) if derivative else None
-        blk = int(min(512, max(16, BLOCK_BYTES // (16 * max(1, self.modes.shape[0])))))
+        out = np.empty((n, 4 * S))
+        blk = int(min(512, max(16, BLOCK_BYTES // (16 * max(1, self.n_phases)))))
         for a in range(0, n, blk):
             b = min(n, a + blk)
-            tabs = [np.exp(2j * math.pi * np.multiply.outer(phi[a:b, i], self._k[i]))  # (block, span_i)
-                    for i in range(self.r)]
-            X = None
-            for i in range(self.r - 1):
-                col = tabs[i][:, self._pre_idx[i]]
-                X = col if X is None else X * col
-            last = tabs[-1][:, self._idx[-1]]
-            X = last if X is None else X[:, self._pre_inv] * last
-            v[a:b] = X @ self.D.T
-            if derivative:
-                dv[a:b] = X @ self.Dd.T
-        return self.e, v, dv
+            np.matmul(self.phases(phi[a:b]).view(float), self.W, out=out[a:b])
+        vd = out.view(complex)
+        return self.e, vd[:, :S], (vd[:, S:] if derivative else None)

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from thetasol.core.so3 import polar_orthonormalize, rotation_about, vee
+from thetasol.core.so3 import polar_near_orthogonal
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.exponents import Exponents
 from thetasol.solutions.theta_rotation.riemann import ThetaShifts
@@ -78,21 +78,67 @@ class FlowEvaluator:
         rate = 1j * self.nu[None] + dv[:, :9].reshape(-1, 3, 3) / vb - (dv[:, 9:] / vd)[:, None, :]
         return Phi, B @ np.einsum("nsk,si->nki", Psi * rate, self.X0inv)
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_lin", self._linear_map())
+
+    def _linear_map(self) -> np.ndarray:
+        """L (27, 36): the float view of ``[Psi | Psi rate]`` (n, 18 complex) -> the real parts of
+        ``G = Q0p Phi^T Pf^T``, ``F = Pf Phi`` and ``Fd = Pf Phidot`` (row-major, 9 each), with
+        ``Pf = P`` for distinct ``J`` (the output frame folded in) and the identity otherwise."""
+        Pf = self.P if self.axis is None else np.eye(3)
+        T = np.einsum("jk,si->skji", self.B, self.X0inv).reshape(9, 3, 3)     # Phi[j, i] per Psi[s, k]
+        TG = np.einsum("mji,ai,bj->mab", T, self.Q0p, Pf).reshape(9, 9)
+        TF = np.einsum("mji,aj->mai", T, Pf).reshape(9, 9)
+        L = np.zeros((27, 36))
+        for rows, cols, M in ((slice(0, 9), slice(0, 18), TG), (slice(9, 18), slice(0, 18), TF),
+                              (slice(18, 27), slice(18, 36), TF)):
+            blk = np.empty((18, 9))
+            blk[0::2], blk[1::2] = M.real, -M.imag                  # Re(z M) = Re z Re M - Im z Im M
+            L[rows, cols] = blk.T
+        return L
+
     def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(omega, Q)`` at the flat times ``t``: shapes (n, 3), (n, 3, 3) in the body frame given."""
-        Phi, Phidot = self.phi0(t, derivative=True)
-        Phi_r = Phi.real
-        Qp = polar_orthonormalize(self.Q0p @ np.swapaxes(Phi_r, -1, -2))
-        wp = vee(-Phidot.real @ np.swapaxes(Phi_r, -1, -2))
+        """``(omega, Q)`` at the flat times ``t``: shapes (n, 3), (n, 3, 3) in the body frame given.
+
+        ``Psi`` and ``Psidot = Psi rate`` (rate without dividing by ``vb``, which vanishes where a
+        component does) go through one real matrix product to ``G = Q0 Phi^T P^T`` (polar factor:
+        ``Q``) and ``F, Fd = P Phi, P Phidot`` (``omega = vee(F Fd^T)``); the 3x3 algebra after it
+        runs on component rows (9, n).
+        """
+        n = t.shape[0]
+        _, v, dv = self.flow(t, True)
+        vb, vd = v[:, :9].reshape(n, 3, 3), v[:, 9:]              # [n, s, k], [n, k]
+        dvb, dvd = dv[:, :9].reshape(n, 3, 3), dv[:, 9:]
+        ivd = 1.0 / vd
+        q = self.amp * np.exp(1j * np.multiply.outer(t, self.nu)) * ivd[:, None, :]
+        Z = np.empty((n, 2, 3, 3), complex)
+        np.multiply(q, vb, out=Z[:, 0])
+        np.multiply(q, 1j * self.nu * vb + dvb - vb * (dvd * ivd)[:, None, :], out=Z[:, 1])
+        Y = self._lin @ Z.reshape(n, 18).view(float).T             # (27, n)
+        Q = polar_near_orthogonal(Y[:9].reshape(3, 3, n))
+        F, Fd = Y[9:18].reshape(3, 3, n), Y[18:].reshape(3, 3, n)
+        w = 0.5 * (Fd[[1, 2, 0]] * F[[2, 0, 1]] - Fd[[2, 0, 1]] * F[[1, 2, 0]]).sum(axis=1)   # vee(F Fd^T)
         if self.axis is not None:
-            # back from the frame turning at -spin about the symmetry axis: Q = Q~ R^T, omega = R omega~ + spin e
-            ax, spin = self.axis, self.spin
-            R = rotation_about(ax, -spin * t)                  # R(t) = exp(-spin t hat(e))
-            Qp = Qp @ np.swapaxes(R, -1, -2)
-            wp = np.einsum("nij,nj->ni", R, wp)
-            wp[..., ax] += spin
-        P = self.P
-        return wp @ P.T, Qp @ P.T
+            Q, w = self._from_turning_frame(t, Q, w)
+        return np.ascontiguousarray(w.T), np.ascontiguousarray(Q.transpose(2, 0, 1))
+
+    def _from_turning_frame(self, t: np.ndarray, Q: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Symmetric body: ``Q = Q~ R^T P^T``, ``omega = P (R omega~ + spin e)``, ``R = exp(-spin t hat(e))``
+        (component rows (3, 3, n), (3, n))."""
+        ax, spin, P = self.axis, self.spin, self.P
+        i, j = (ax + 1) % 3, (ax + 2) % 3
+        c, s = np.cos(-spin * t), np.sin(-spin * t)
+        Qr = np.empty_like(Q)
+        Qr[:, ax] = Q[:, ax]
+        Qr[:, i] = c * Q[:, i] - s * Q[:, j]
+        Qr[:, j] = s * Q[:, i] + c * Q[:, j]
+        wr = np.empty_like(w)
+        wr[ax] = w[ax] + spin
+        wr[i] = c * w[i] - s * w[j]
+        wr[j] = s * w[i] + c * w[j]
+        Qo = (Qr[:, :, None, :] * P.T[None, :, :, None]).sum(axis=1)    # Q~ R^T P^T
+        wo = (P[:, :, None] * wr[None]).sum(axis=1)
+        return Qo, wo
 
     def imaginary_residual(self, t: np.ndarray) -> np.ndarray:
         """max |Im Phi(0, t)| at the flat times ``t`` (it must vanish: the error of the evaluation)."""
