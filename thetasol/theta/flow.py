@@ -22,7 +22,8 @@ import numpy as np
 __all__ = []
 
 #: Bytes of phase products per block of times in :meth:`FlowTheta.__call__` (an L2-sized block).
-BLOCK_BYTES = 1 << 19
+BLOCK_BYTES = 1 << 22
+BLOCK_CAP = 1024
 
 
 def lower_factor(Y: np.ndarray) -> np.ndarray:
@@ -169,7 +170,7 @@ class FlowTheta:
         phi -= np.round(phi)
         n, S = t.shape[0], self.D.shape[0]
         out = np.empty((n, 4 * S))
-        blk = int(min(512, max(16, BLOCK_BYTES // (16 * max(1, self.n_phases)))))
+        blk = int(min(BLOCK_CAP, max(16, BLOCK_BYTES // (16 * max(1, self.n_phases)))))
         for a in range(0, n, blk):
             b = min(n, a + blk)
             np.matmul(self.phases(phi[a:b]).view(float), self.W, out=out[a:b])

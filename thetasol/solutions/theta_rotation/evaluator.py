@@ -80,21 +80,26 @@ class FlowEvaluator:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "_lin", self._linear_map())
+        object.__setattr__(self, "_inu", 1j * self.nu)
 
     def _linear_map(self) -> np.ndarray:
-        """L (27, 36): the float view of ``[Psi | Psi rate]`` (n, 18 complex) -> the real parts of
-        ``G = Q0p Phi^T Pf^T``, ``F = Pf Phi`` and ``Fd = Pf Phidot`` (row-major, 9 each), with
-        ``Pf = P`` for distinct ``J`` (the output frame folded in) and the identity otherwise."""
+        """L (45, 36): the float view of ``[Psi | Psi rate]`` (n, 18 complex) -> the real parts of
+        ``G = Q0p Phi^T Pf^T``, ``F = Pf Phi`` with its rows cycled by 2 and by 1, and ``Fd / 2``
+        (``Fd = Pf Phidot``) with its rows cycled by 1 and by 2 (9 each, row-major): then
+        ``vee(F Fd^T)`` is two products and a sum.  ``Pf = P`` for distinct ``J`` (the output frame
+        folded in), the identity for a symmetric body."""
         Pf = self.P if self.axis is None else np.eye(3)
         T = np.einsum("jk,si->skji", self.B, self.X0inv).reshape(9, 3, 3)     # Phi[j, i] per Psi[s, k]
         TG = np.einsum("mji,ai,bj->mab", T, self.Q0p, Pf).reshape(9, 9)
-        TF = np.einsum("mji,aj->mai", T, Pf).reshape(9, 9)
-        L = np.zeros((27, 36))
-        for rows, cols, M in ((slice(0, 9), slice(0, 18), TG), (slice(9, 18), slice(0, 18), TF),
-                              (slice(18, 27), slice(18, 36), TF)):
+        TF = np.einsum("mji,aj->mai", T, Pf)
+        up, down = [1, 2, 0], [2, 0, 1]
+        blocks = ((0, TG), (0, TF[:, down].reshape(9, 9)), (0, TF[:, up].reshape(9, 9)),
+                  (18, 0.5 * TF[:, up].reshape(9, 9)), (18, 0.5 * TF[:, down].reshape(9, 9)))
+        L = np.zeros((45, 36))
+        for i, (col, M) in enumerate(blocks):
             blk = np.empty((18, 9))
             blk[0::2], blk[1::2] = M.real, -M.imag                  # Re(z M) = Re z Re M - Im z Im M
-            L[rows, cols] = blk.T
+            L[9 * i: 9 * i + 9, col: col + 18] = blk.T
         return L
 
     def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -108,16 +113,19 @@ class FlowEvaluator:
         n = t.shape[0]
         _, v, dv = self.flow(t, True)
         vb, vd = v[:, :9].reshape(n, 3, 3), v[:, 9:]              # [n, s, k], [n, k]
-        dvb, dvd = dv[:, :9].reshape(n, 3, 3), dv[:, 9:]
         ivd = 1.0 / vd
-        q = self.amp * np.exp(1j * np.multiply.outer(t, self.nu)) * ivd[:, None, :]
+        q = np.exp(np.multiply.outer(t, self._inu))
+        q *= self.amp
+        q *= ivd[:, None, :]
         Z = np.empty((n, 2, 3, 3), complex)
         np.multiply(q, vb, out=Z[:, 0])
-        np.multiply(q, 1j * self.nu * vb + dvb - vb * (dvd * ivd)[:, None, :], out=Z[:, 1])
-        Y = self._lin @ Z.reshape(n, 18).view(float).T             # (27, n)
+        rate = self._inu - (dv[:, 9:] * ivd)[:, None, :]
+        rate *= vb
+        rate += dv[:, :9].reshape(n, 3, 3)
+        np.multiply(q, rate, out=Z[:, 1])
+        Y = self._lin @ Z.reshape(n, 18).view(float).T             # (45, n)
         Q = polar_near_orthogonal(Y[:9].reshape(3, 3, n))
-        F, Fd = Y[9:18].reshape(3, 3, n), Y[18:].reshape(3, 3, n)
-        w = 0.5 * (Fd[[1, 2, 0]] * F[[2, 0, 1]] - Fd[[2, 0, 1]] * F[[1, 2, 0]]).sum(axis=1)   # vee(F Fd^T)
+        w = (Y[27:36] * Y[9:18] - Y[36:45] * Y[18:27]).reshape(3, 3, n).sum(axis=1)   # vee(F Fd^T)
         if self.axis is not None:
             Q, w = self._from_turning_frame(t, Q, w)
         return np.ascontiguousarray(w.T), np.ascontiguousarray(Q.transpose(2, 0, 1))
