@@ -7,7 +7,11 @@ for a symmetric body ``Q = Q~ R(t)^T``, ``omega = R omega~ + spin e`` back from 
 
 The theta functions along the flow, ``theta(b_sk + t U)`` and ``theta(d_k + t U)``, are Fourier series
 in the ``rdim`` real phases of ``U`` (:class:`thetasol.theta.flow.FlowTheta`): per time only the
-phases and one matrix product remain, and a far time costs what ``t = 1`` costs.
+phases and one real matrix product remain, and a far time costs what ``t = 1`` costs.  After it
+``Psi`` and its derivative go through one more real product (9x9 complex maps folded with ``B``,
+``X0^-1``, ``Q0`` and the principal frame) and the 3x3 algebra runs on component rows: the polar
+factor by one Newton-Schulz step (:func:`thetasol.core.so3.polar_near_orthogonal`, 20x closer to the
+long-double polar factor than the SVD's, tests/test_theta_evaluation.py).
 
 The shifts ``b_sk = A(P_s) - e_k`` are sums of Abel images, known to ~1e-14; where ``psi_k(P_s)`` is
 small or zero that error shows directly in ``Psi``.  Each ``b_sk`` is moved by the least amount that
