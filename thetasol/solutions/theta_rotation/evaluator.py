@@ -25,7 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from thetasol.core.so3 import polar_near_orthogonal
+from thetasol.core.jit import Kernel
+from thetasol.core.so3 import NEWTON_SCHULZ_MAX, polar_near_orthogonal
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.exponents import Exponents
 from thetasol.solutions.theta_rotation.riemann import ThetaShifts
@@ -114,8 +115,21 @@ class FlowEvaluator:
         ``Q``) and ``F, Fd = P Phi, P Phidot`` (``omega = vee(F Fd^T)``); the 3x3 algebra after it
         runs on component rows (9, n).
         """
-        n = t.shape[0]
         _, v, dv = self.flow(t, True)
+        kern = _STATE.get()
+        if kern is None:
+            return self._state(t, v, dv)
+        n = t.shape[0]
+        w, Q, bad = np.empty((n, 3)), np.empty((n, 3, 3)), np.zeros(n, bool)
+        kern(t, v, dv, self._inu.ravel(), self.amp.astype(complex).ravel(), self._lin, self.P,
+             -1 if self.axis is None else self.axis, float(self.spin), NEWTON_SCHULZ_MAX, w, Q, bad)
+        if bad.any():                                                # the polar factor needs the SVD
+            w[bad], Q[bad] = self._state(t[bad], v[bad], dv[bad])
+        return w, Q
+
+    def _state(self, t: np.ndarray, v: np.ndarray, dv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """numpy path of :meth:`evaluate` from the flow's values (its compiled twin: ``_state_kernel``)."""
+        n = t.shape[0]
         vb, vd = v[:, :9].reshape(n, 3, 3), v[:, 9:]              # [n, s, k], [n, k]
         ivd = 1.0 / vd
         q = np.exp(np.multiply.outer(t, self._inu))
@@ -156,6 +170,63 @@ class FlowEvaluator:
         """max |Im Phi(0, t)| at the flat times ``t`` (it must vanish: the error of the evaluation)."""
         Phi, _ = self.phi0(t, derivative=False)
         return np.abs(Phi.imag).max(axis=(-1, -2))
+
+
+def _state_kernel(t, v, dv, inu, amp, L, P, axis, spin, tol, w_out, Q_out, bad):  # pragma: no cover - numba
+    """Compiled :meth:`FlowEvaluator._state`, time by time, with the same formulas in the same order;
+    ``bad[a]`` marks a time whose polar factor needs the SVD (``|G^T G - 1| > tol``)."""
+    Zf, Y = np.empty(36), np.empty(45)
+    G, H = np.empty((3, 3)), np.empty((3, 3))
+    Q, w = np.empty((3, 3)), np.empty(3)
+    for a in range(t.shape[0]):
+        for k in range(3):
+            ivd = 1.0 / v[a, 9 + k]
+            rd = dv[a, 9 + k] * ivd
+            for s in range(3):
+                m = 3 * s + k
+                q = np.exp(t[a] * inu[m]) * amp[m] * ivd
+                z = q * v[a, m]
+                zd = q * ((inu[m] - rd) * v[a, m] + dv[a, m])
+                Zf[2 * m], Zf[2 * m + 1], Zf[18 + 2 * m], Zf[19 + 2 * m] = z.real, z.imag, zd.real, zd.imag
+        for i in range(45):
+            acc = 0.0
+            for j in range(36):
+                acc += L[i, j] * Zf[j]
+            Y[i] = acc
+        err = 0.0
+        for i in range(3):
+            for j in range(3):
+                G[i, j] = Y[3 * i + j]
+        for i in range(3):
+            for j in range(3):
+                x = G[0, i] * G[0, j] + G[1, i] * G[1, j] + G[2, i] * G[2, j]
+                err = max(err, abs(x - (1.0 if i == j else 0.0)))
+                H[i, j] = (1.5 if i == j else 0.0) - 0.5 * x
+        bad[a] = err > tol
+        for i in range(3):
+            for j in range(3):
+                Q[i, j] = G[i, 0] * H[0, j] + G[i, 1] * H[1, j] + G[i, 2] * H[2, j]
+            w[i] = 0.0
+            for k in range(3):
+                w[i] += Y[27 + 3 * i + k] * Y[9 + 3 * i + k] - Y[36 + 3 * i + k] * Y[18 + 3 * i + k]
+        if axis < 0:
+            Q_out[a], w_out[a] = Q, w
+            continue
+        # the turning frame of a symmetric body, as in FlowEvaluator._from_turning_frame
+        i, j = (axis + 1) % 3, (axis + 2) % 3
+        c, s = np.cos(-spin * t[a]), np.sin(-spin * t[a])
+        G[:, :] = Q                                               # the polar factor, before turning
+        for r in range(3):
+            Q[r, i], Q[r, j] = c * G[r, i] - s * G[r, j], s * G[r, i] + c * G[r, j]
+        wa, wi, wj = w[axis] + spin, c * w[i] - s * w[j], s * w[i] + c * w[j]
+        w[axis], w[i], w[j] = wa, wi, wj
+        for r in range(3):
+            for b in range(3):
+                Q_out[a, r, b] = Q[r, 0] * P[b, 0] + Q[r, 1] * P[b, 1] + Q[r, 2] * P[b, 2]
+            w_out[a, r] = P[r, 0] * w[0] + P[r, 1] * w[1] + P[r, 2] * w[2]
+
+
+_STATE = Kernel(_state_kernel)
 
 
 def corrected_shifts(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
