@@ -121,5 +121,6 @@ def test_numba_switched_off_by_the_environment(monkeypatch):
 
     monkeypatch.setattr(jit, "ENABLED", None)
     monkeypatch.setenv("THETASOL_NUMBA", "0")
+    monkeypatch.setitem(jit._state, "env_off", None)        # the environment is read once
     assert not jit.numba_available()
     assert jit.Kernel(lambda x: x).get() is None

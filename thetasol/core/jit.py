@@ -2,7 +2,7 @@
 
 numba is not a dependency.  A :class:`Kernel` wraps a plain Python function written for numba's
 nopython mode; :meth:`Kernel.get` returns it compiled, or None when numba is missing or switched off
-(``THETASOL_NUMBA=0`` in the environment, read at the first call, or :data:`ENABLED` set to False),
+(``THETASOL_NUMBA=0`` in the environment, read once at the first call, or :data:`ENABLED` set to False),
 and the caller then runs its numpy code, which computes the same quantities with the same formulas
 (to rounding: the two paths are compared in tests/test_theta_evaluation.py).
 
@@ -30,15 +30,18 @@ __all__ = ["ENABLED", "Kernel", "numba_available"]
 #: Use numba when it is installed; ``None`` means: decide at the first call from ``THETASOL_NUMBA``.
 ENABLED: bool | None = None
 
-_state: dict[str, Any] = {"numba": None}
+_state: dict[str, Any] = {"numba": None, "env_off": None}
 
 
 def numba_available() -> bool:
     """True when the compiled kernels are in use (numba importable and not switched off)."""
     if ENABLED is False:
         return False
-    if ENABLED is None and os.environ.get("THETASOL_NUMBA", "").lower() in ("0", "off", "false", "no"):
-        return False
+    if ENABLED is None:
+        if _state["env_off"] is None:
+            _state["env_off"] = os.environ.get("THETASOL_NUMBA", "").lower() in ("0", "off", "false", "no")
+        if _state["env_off"]:
+            return False
     if _state["numba"] is None:
         try:
             import numba

@@ -86,6 +86,8 @@ class FlowEvaluator:
     def __post_init__(self) -> None:
         object.__setattr__(self, "_lin", self._linear_map())
         object.__setattr__(self, "_inu", 1j * self.nu)
+        object.__setattr__(self, "_inu_flat", self._inu.astype(complex).ravel())
+        object.__setattr__(self, "_amp_flat", self.amp.astype(complex).ravel())
 
     def _linear_map(self) -> np.ndarray:
         """L (45, 36): the float view of ``[Psi | Psi rate]`` (n, 18 complex) -> the real parts of
@@ -121,7 +123,7 @@ class FlowEvaluator:
             return self._state(t, v, dv)
         n = t.shape[0]
         w, Q, bad = np.empty((n, 3)), np.empty((n, 3, 3)), np.zeros(n, bool)
-        kern(t, v, dv, self._inu.ravel(), self.amp.astype(complex).ravel(), self._lin, self.P,
+        kern(t, v, dv, self._inu_flat, self._amp_flat, self._lin, self.P,
              -1 if self.axis is None else self.axis, float(self.spin), NEWTON_SCHULZ_MAX, w, Q, bad)
         if bad.any():                                                # the polar factor needs the SVD
             w[bad], Q[bad] = self._state(t[bad], v[bad], dv[bad])
