@@ -200,8 +200,15 @@ def _phases_kernel(phi, lo, span, pm, out):  # pragma: no cover - compiled by nu
     for a in range(n):
         for i in range(r):
             for k in range(span[i]):
-                x = 2.0 * math.pi * (phi[a, i] * (k + lo[i]))
+                kk = k + lo[i]
+                if kk < 0 and -kk < span[i] + lo[i]:     # exp(-i x) = conj(exp(i x)): cos even, sin odd
+                    continue
+                x = 2.0 * math.pi * (phi[a, i] * kk)
                 tab[i, k] = complex(math.cos(x), math.sin(x))
+            for k in range(span[i]):
+                kk = k + lo[i]
+                if kk < 0 and -kk < span[i] + lo[i]:
+                    tab[i, k] = tab[i, k - 2 * kk].conjugate()
         for p in range(pm.shape[0]):
             z = tab[0, pm[p, 0]]
             for i in range(1, r):
