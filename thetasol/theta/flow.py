@@ -182,7 +182,7 @@ class FlowTheta:
         """
         t = np.asarray(t, float)
         phi = np.multiply.outer(t, self.u)
-        phi -= np.round(phi)
+        phi -= np.rint(phi)                               # np.round(phi) without its wrapper
         n, S = t.shape[0], self.D.shape[0]
         out = np.empty((n, 4 * S))
         blk = int(min(BLOCK_CAP, max(16, BLOCK_BYTES // (16 * max(1, self.n_phases)))))
