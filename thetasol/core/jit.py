@@ -16,8 +16,8 @@ Why lazily, and the cost: nothing is imported or compiled at ``import thetasol``
 kernel imports numba (~0.35 s) and compiles it (``cache=True``: later processes load the machine code
 from numba's cache next to the module, or from ``NUMBA_CACHE_DIR``).  Measured (CPU time, this
 machine, a fresh process importing thetasol and solving the generic body, whose set-up evaluates the
-flow once): 1.0 s without numba, 1.35 s with numba and a warm cache, 2.1 s with an empty cache, whose
-first evaluation then compiles the state kernel for 4.4 s more (once per installation).
+flow once): 1.0 s without numba, 1.35 s with numba and a warm cache, 2.1-2.3 s with an empty cache, whose
+first evaluation then compiles the state kernel for 4.2-4.4 s more (once per installation).
 """
 from __future__ import annotations
 
