@@ -124,3 +124,18 @@ def test_numba_switched_off_by_the_environment(monkeypatch):
     monkeypatch.setitem(jit._state, "env_off", None)        # the environment is read once
     assert not jit.numba_available()
     assert jit.Kernel(lambda x: x).get() is None
+
+
+def test_the_set_up_does_not_import_numba():
+    """numba is imported by the first evaluation, not by import thetasol or solve_rotation (whose
+    check at one time runs in numpy): a user who only solves does not pay its ~0.35 s."""
+    import subprocess
+    import sys
+
+    d = {k: REFS["generic"][k] for k in ("J", "a", "Q0", "omega0")}
+    code = ("import sys, numpy as np; from thetasol import solve_rotation; "
+            f"d = {json.dumps(d)}; "
+            "solve_rotation(np.diag(d['J']), np.array(d['a']), np.array(d['Q0']), np.array(d['omega0'])); "
+            "print('numba' in sys.modules)")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
+    assert res.stdout.split()[-1] == "False"

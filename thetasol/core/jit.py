@@ -12,12 +12,12 @@ make the phases of a Fourier flow are gathers that numpy runs as separate passes
 the theta-function rotation costs 23 us with the kernels and 52 us without them (generic body, 20 and
 69 us on symmetric_oblate); dense evaluation gains 5-20%.
 
-Why lazily, and the cost: nothing is imported or compiled at ``import thetasol``; the first call of a
-kernel imports numba (~0.35 s) and compiles it (``cache=True``: later processes load the machine code
-from numba's cache next to the module, or from ``NUMBA_CACHE_DIR``).  Measured (CPU time, this
-machine, a fresh process importing thetasol and solving the generic body, whose set-up evaluates the
-flow once): 1.0 s without numba, 1.35 s with numba and a warm cache, 2.1-2.3 s with an empty cache, whose
-first evaluation then compiles the state kernel for 4.2-4.4 s more (once per installation).
+Why lazily, and the cost: nothing is imported or compiled at ``import thetasol`` nor in a set-up;
+the first evaluation imports numba (~0.35 s) and compiles its kernels (``cache=True``: later processes
+load the machine code from numba's cache next to the module, or from ``NUMBA_CACHE_DIR``).  Measured
+(CPU time, this machine): a fresh process importing thetasol and solving the generic body takes 1.0 s
+with or without numba; its first evaluation then costs 0.35 s more with a warm cache, and 5.2-5.5 s
+more with an empty cache (compiling the two kernels, once per installation and source version).
 """
 from __future__ import annotations
 

@@ -158,9 +158,10 @@ class FlowTheta:
         self.n_phases = len(pm)
         self._pm_rel = np.ascontiguousarray(pm - lo)
 
-    def phases(self, phi: np.ndarray) -> np.ndarray:
-        """``exp(2 pi i p.phi)`` (n, P) for the phases phi (n, r) reduced mod 1."""
-        kern = _PHASES.get()
+    def phases(self, phi: np.ndarray, compiled: bool = True) -> np.ndarray:
+        """``exp(2 pi i p.phi)`` (n, P) for the phases phi (n, r) reduced mod 1 (``compiled``: with the
+        numba kernel when available, :mod:`thetasol.core.jit`)."""
+        kern = _PHASES.get() if compiled else None
         if kern is not None:
             out = np.empty((phi.shape[0], self.n_phases), complex)
             kern(phi, self._lo, self._span, self._pm_rel, out)
@@ -174,7 +175,8 @@ class FlowTheta:
         last = tabs[-1].take(self._idx[-1], axis=1)
         return last if X is None else X.take(self._pre_inv, axis=1) * last
 
-    def __call__(self, t: np.ndarray, derivative: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    def __call__(self, t: np.ndarray, derivative: bool = True,
+                 compiled: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv.
 
         The times go in blocks of :data:`BLOCK_BYTES` of phase products; the derivative is computed
@@ -188,7 +190,7 @@ class FlowTheta:
         blk = int(min(BLOCK_CAP, max(16, BLOCK_BYTES // (16 * max(1, self.n_phases)))))
         for a in range(0, n, blk):
             b = min(n, a + blk)
-            np.matmul(self.phases(phi[a:b]).view(float), self.W, out=out[a:b])
+            np.matmul(self.phases(phi[a:b], compiled).view(float), self.W, out=out[a:b])
         vd = out.view(complex)
         return self.e, vd[:, :S], (vd[:, S:] if derivative else None)
 

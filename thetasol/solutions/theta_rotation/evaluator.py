@@ -75,8 +75,11 @@ class FlowEvaluator:
     axis: int | None
 
     def phi0(self, t: np.ndarray, derivative: bool) -> tuple[np.ndarray, np.ndarray | None]:
-        """Phi(0, t) (n, 3, 3) = Q'(t)^T Q'0 in the principal frame and, if asked, its derivative."""
-        _, v, dv = self.flow(t, derivative)
+        """Phi(0, t) (n, 3, 3) = Q'(t)^T Q'0 in the principal frame and, if asked, its derivative.
+
+        numpy only: the set-up's check at one time (``imaginary_residual``) would otherwise import
+        numba (~0.35 s) inside ``solve_rotation``; the first evaluation pays that instead."""
+        _, v, dv = self.flow(t, derivative, compiled=False)
         vb, vd = v[:, :9].reshape(-1, 3, 3), v[:, 9:]          # [n, s, k], [n, k]
         phase = np.exp(1j * np.multiply.outer(t, self.nu))      # [n, s, k]
         Psi = self.amp[None] * phase * vb / vd[:, None, :]      # Psi_k(P_s, t)
