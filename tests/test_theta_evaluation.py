@@ -115,20 +115,24 @@ def test_compiled_kernels_agree_with_the_numpy_path(sol, monkeypatch):
     assert np.abs(out[True][2] - out[False][2]).max() <= (4.5e-13 if sensitive else 2e-15)
 
 
-def test_numba_switched_off_by_the_environment(monkeypatch):
-    """THETASOL_NUMBA=0 keeps the numpy path (numba may be installed but unwanted: compile time)."""
+def test_numba_is_opt_in(monkeypatch):
+    """The compiled kernels need THETASOL_NUMBA=1 (their one-off compilation, seconds, would land in
+    a program's first timed evaluation); without it, or with 0, the numpy path runs."""
     from thetasol.core import jit
 
     monkeypatch.setattr(jit, "ENABLED", None)
-    monkeypatch.setenv("THETASOL_NUMBA", "0")
-    monkeypatch.setitem(jit._state, "env_off", None)        # the environment is read once
-    assert not jit.numba_available()
-    assert jit.Kernel(lambda x: x).get() is None
+    for value, on in (("", False), ("0", False), ("1", True)):
+        monkeypatch.setenv("THETASOL_NUMBA", value)
+        monkeypatch.setitem(jit._state, "env_on", None)        # the environment is read once
+        assert jit.numba_available() is (on and jit._state["numba"] is not False)
+        assert (jit.Kernel(lambda x: x).get() is None) is not jit.numba_available()
 
 
 def test_the_set_up_does_not_import_numba():
-    """numba is imported by the first evaluation, not by import thetasol or solve_rotation (whose
-    check at one time runs in numpy): a user who only solves does not pay its ~0.35 s."""
+    """With the kernels switched on, numba is imported by the first evaluation, not by import thetasol
+    or solve_rotation (whose check at one time runs in numpy): a user who only solves does not pay
+    its ~0.35 s."""
+    import os
     import subprocess
     import sys
 
@@ -137,5 +141,7 @@ def test_the_set_up_does_not_import_numba():
             f"d = {json.dumps(d)}; "
             "solve_rotation(np.diag(d['J']), np.array(d['a']), np.array(d['Q0']), np.array(d['omega0'])); "
             "print('numba' in sys.modules)")
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True)
+    env = dict(os.environ, THETASOL_NUMBA="1")
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True,
+                         env=env)
     assert res.stdout.split()[-1] == "False"

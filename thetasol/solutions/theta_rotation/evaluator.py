@@ -11,9 +11,10 @@ phases and one real matrix product remain, and a far time costs what ``t = 1`` c
 ``Psi`` and its derivative go through one more real product (9x9 complex maps folded with ``B``,
 ``X0^-1``, ``Q0`` and the principal frame) and the 3x3 algebra runs on component rows: the polar
 factor by one Newton-Schulz step (:func:`thetasol.core.so3.polar_near_orthogonal`, 20x closer to the
-long-double polar factor than the SVD's, tests/test_theta_evaluation.py).  With numba present that
-state is one compiled kernel per block of times (:mod:`thetasol.core.jit`; the numpy path is the
-fallback): a far time then costs ~20 us instead of ~50 (dozens of numpy calls on 9-element arrays).
+long-double polar factor than the SVD's, tests/test_theta_evaluation.py).  With the numba kernels
+switched on (``THETASOL_NUMBA=1``, :mod:`thetasol.core.jit`) that state is one compiled kernel per
+chunk of times: a far time then costs ~20 us instead of ~50 (dozens of numpy calls on 9-element
+arrays).
 Working memory is ~2.5 KB per time (the flow's phases go in bounded blocks), so the default chunk of
 :class:`thetasol.solutions.base.Solution` applies.
 
