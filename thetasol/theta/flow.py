@@ -156,6 +156,9 @@ class FlowTheta:
             self._pre_inv = inv.ravel()
             self._pre_idx = [pre[:, i] - lo[i] for i in range(r - 1)]
         self.n_phases = len(pm)
+        self._k_all = np.concatenate(self._k).astype(float)
+        self._k_owner = np.repeat(np.arange(r), span)
+        self._k_split = np.cumsum(span)[:-1]
         self._pm_rel = np.ascontiguousarray(pm - lo)
 
     def phases(self, phi: np.ndarray, compiled: bool = True) -> np.ndarray:
@@ -166,8 +169,9 @@ class FlowTheta:
             out = np.empty((phi.shape[0], self.n_phases), complex)
             kern(phi, self._lo, self._span, self._pm_rel, out)
             return out
-        tabs = [np.exp(2j * math.pi * np.multiply.outer(phi[:, i], self._k[i]))   # (n, span_i)
-                for i in range(self.r)]
+        # the r tables exp(2 pi i phi_i k) in one array (one exp call), then split into views (n, span_i)
+        tab = np.exp(2j * math.pi * (phi.take(self._k_owner, axis=1) * self._k_all))
+        tabs = np.split(tab, self._k_split, axis=1)
         X = None
         for i in range(self.r - 1):
             col = tabs[i].take(self._pre_idx[i], axis=1)
