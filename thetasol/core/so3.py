@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["hat", "vee", "cross", "rotation_about", "rodrigues", "polar_orthonormalize", "complete_frame"]
+__all__ = ["hat", "vee", "cross", "rotation_about", "rodrigues", "polar_orthonormalize", "polar_near_orthogonal", "complete_frame"]
 
 
 def hat(v: np.ndarray) -> np.ndarray:
@@ -71,6 +71,32 @@ def polar_orthonormalize(Q: np.ndarray) -> np.ndarray:
     """Nearest rotation matrix (polar factor) of nearly orthogonal matrices ``(..., 3, 3)``."""
     U, _, Vt = np.linalg.svd(Q)
     return U @ Vt
+
+
+#: max |X^T X - I| up to which one Newton-Schulz step gives the polar factor to rounding (module docstring
+#: of :func:`polar_near_orthogonal`); beyond it the rows take the SVD.
+NEWTON_SCHULZ_MAX = 1e-8
+
+
+def polar_near_orthogonal(X: np.ndarray) -> np.ndarray:
+    """Polar factor of nearly orthogonal 3x3 matrices stored as component rows ``X[r, c, n]``.
+
+    One Newton-Schulz step ``X (3 - X^T X) / 2``: with ``X = R (1 + S)``, ``S`` symmetric, it returns
+    ``R (1 - 3 S^2 / 2 + ...)``, so for ``|X^T X - 1| <= 1e-8`` (``|S| <= 5e-9``) the result is the
+    polar factor to rounding; columns beyond that take the SVD.  Elementwise over ``n`` (the same
+    operations for every column, whatever ``n``), 10-40x cheaper than a batched SVD.
+    """
+    XtX = (X[:, :, None] * X[:, None, :]).sum(axis=0)                # (3, 3, n)
+    H = _THREE_HALVES - 0.5 * XtX
+    out = (X[:, :, None] * H[None]).sum(axis=1)
+    if np.abs(XtX - _EYE).max(initial=0.0) > NEWTON_SCHULZ_MAX:
+        bad = np.abs(XtX - _EYE).max(axis=(0, 1)) > NEWTON_SCHULZ_MAX
+        out[:, :, bad] = polar_orthonormalize(X[:, :, bad].transpose(2, 0, 1)).transpose(1, 2, 0)
+    return out
+
+
+_EYE = np.eye(3)[:, :, None]
+_THREE_HALVES = 1.5 * _EYE
 
 
 def complete_frame(e3: np.ndarray) -> np.ndarray:

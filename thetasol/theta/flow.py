@@ -9,9 +9,13 @@ constant and, as a function of t, theta is the Fourier series in r phases::
 
 with ``e_s = pi y.(Im tau)^-1.y``, ``y = Im s``.  The coefficients D_s are summed once (all m in
 the ellipsoid pi (m + c).Y.(m + c) <= R^2, c = Y^-1 y, outside which the terms are below ``tol``);
-per time only the phases ``exp(2 pi i m'.phi)`` (products of one-dimensional power tables) and one
-complex matrix product remain.  Integer shifts of ``phi`` leave theta unchanged, so far times cost
-what t = 1 costs and need no quasi-periodicity factors.
+per time only the phases and one real matrix product remain.  The modes m' and -m' share one phase:
+with ``p`` the modes up to sign, ``D(p) e^{i x} + D(-p) e^{-i x} = cos x (D(p) + D(-p)) +
+sin x i (D(p) - D(-p))``, so the product runs over the float view ``(cos, sin)`` of
+``exp(2 pi i p.phi)`` (products of one-dimensional tables) against one real matrix giving the values
+and the t-derivatives of every shift together: half the phases and half the multiplications of the
+complex series over m'.  Integer shifts of ``phi`` leave theta unchanged, so far times cost what t = 1 costs
+and need no quasi-periodicity factors.
 """
 from __future__ import annotations
 
@@ -19,10 +23,16 @@ import math
 
 import numpy as np
 
+from thetasol.core.jit import Kernel
+
 __all__ = []
 
-#: Bytes of phase products per block of times in :meth:`FlowTheta.__call__` (an L2-sized block).
-BLOCK_BYTES = 1 << 19
+#: Bytes of phase products per block of times in :meth:`FlowTheta.__call__`, and the most times per
+#: block: the real matrix (2 x phases, 4 x shifts) is read once per block, so larger blocks pay off until
+#: the products leave the cache (dense evaluation of the near-unstable body, 1418 phases: 16.7 us per
+#: time with 0.5 MB blocks, 12.5 with 4 MB; generic body 3.6 and 3.4).
+BLOCK_BYTES = 1 << 22
+BLOCK_CAP = 1024
 
 
 def lower_factor(Y: np.ndarray) -> np.ndarray:
@@ -103,42 +113,113 @@ class FlowTheta:
         self.Dd = D * (2j * math.pi * (self.modes @ u))[None, :]
         self.u = u
         self.r = r
-        self._k = [np.arange(self.span[i]) + self.lo[i] for i in range(r)]
-        self._idx = [self.modes[:, i] - self.lo[i] for i in range(r)]
+        self._pair(self.modes, D, self.Dd)
+
+    def _pair(self, modes: np.ndarray, D: np.ndarray, Dd: np.ndarray) -> None:
+        """The real form of the series: the modes m and -m share one phase (module docstring).
+
+        ``p`` runs over the modes up to sign (first non-zero index positive); with
+        ``c = cos 2 pi p.phi``, ``s = sin 2 pi p.phi``, a coefficient pair contributes
+        ``c (D(p) + D(-p)) + s i (D(p) - D(-p))``.  ``self.W`` (2P, 4S) maps the columns
+        ``(c_0, s_0, c_1, s_1, ...)`` (the float view of ``exp(2 pi i p.phi)``) to the float view of
+        ``[v | dv]`` (n, 2S) complex.
+        """
+        S = D.shape[0]
+        sign = np.zeros(len(modes), np.int64)
+        for i in range(modes.shape[1] - 1, -1, -1):      # sign of the first non-zero index
+            sign = np.where(modes[:, i] != 0, np.sign(modes[:, i]), sign)
+        canon = modes * np.where(sign < 0, -1, 1)[:, None]
+        lo = canon.min(axis=0)
+        span = canon.max(axis=0) - lo + 1
+        codes, inv = np.unique(np.ravel_multi_index(tuple((canon - lo).T), span), return_inverse=True)
+        pm = lo + np.stack(np.unravel_index(codes, span), axis=-1)
+        C = np.concatenate([D, Dd]).T                    # (K, 2S): coefficients of exp(2 pi i m.phi)
+        A = np.zeros((len(pm), 2 * S), complex)          # coefficient of cos
+        Bs = np.zeros((len(pm), 2 * S), complex)         # coefficient of sin
+        neg = sign < 0
+        np.add.at(A, inv, C)
+        np.add.at(Bs, inv[~neg], 1j * C[~neg])
+        np.add.at(Bs, inv[neg], -1j * C[neg])
+        W = np.empty((2 * len(pm), 4 * S))
+        W[0::2, 0::2], W[0::2, 1::2] = A.real, A.imag
+        W[1::2, 0::2], W[1::2, 1::2] = Bs.real, Bs.imag
+        self.W = W
+        self._lo, self._span = lo, span
+        self._k = [np.arange(span[i]) + lo[i] for i in range(len(span))]
+        self._idx = [pm[:, i] - lo[i] for i in range(len(span))]
         # the products over the first r - 1 phases are formed once per distinct prefix of the modes
         # (fewer than the modes) and then gathered: the same products in the same order
         self._pre_inv, self._pre_idx = None, []
+        r = len(span)
         if r > 1:
-            pre, inv = np.unique(self.modes[:, :r - 1], axis=0, return_inverse=True)
+            pre, inv = np.unique(pm[:, :r - 1], axis=0, return_inverse=True)
             self._pre_inv = inv.ravel()
-            self._pre_idx = [pre[:, i] - self.lo[i] for i in range(r - 1)]
+            self._pre_idx = [pre[:, i] - lo[i] for i in range(r - 1)]
+        self.n_phases = len(pm)
+        self._k_all = np.concatenate(self._k).astype(float)
+        self._k_owner = np.repeat(np.arange(r), span)
+        self._k_split = np.cumsum(span)[:-1]
+        self._pm_rel = np.ascontiguousarray(pm - lo)
 
-    def __call__(self, t: np.ndarray, derivative: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    def phases(self, phi: np.ndarray, compiled: bool = True) -> np.ndarray:
+        """``exp(2 pi i p.phi)`` (n, P) for the phases phi (n, r) reduced mod 1 (``compiled``: with the
+        numba kernel when available, :mod:`thetasol.core.jit`)."""
+        kern = _PHASES.get() if compiled else None
+        if kern is not None:
+            out = np.empty((phi.shape[0], self.n_phases), complex)
+            kern(phi, self._lo, self._span, self._pm_rel, out)
+            return out
+        # the r tables exp(2 pi i phi_i k) in one array (one exp call), then split into views (n, span_i)
+        tab = np.exp(2j * math.pi * (phi.take(self._k_owner, axis=1) * self._k_all))
+        tabs = np.split(tab, self._k_split, axis=1)
+        X = None
+        for i in range(self.r - 1):
+            col = tabs[i].take(self._pre_idx[i], axis=1)
+            X = col if X is None else X * col
+        last = tabs[-1].take(self._idx[-1], axis=1)
+        return last if X is None else X.take(self._pre_inv, axis=1) * last
+
+    def __call__(self, t: np.ndarray, derivative: bool = True,
+                 compiled: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv.
 
-        The times go in blocks whose phase products (block x modes complex) fit in ~0.5 MB of
-        cache: 2.5x faster per time than one pass over 2001 times, whose products take 16 MB
-        (dense rows of benchmarks/bench_theta_rotation.py: generic body 12 -> 4.7 us, near-unstable
-        70 -> 28 us per time), with the same values (each row is the same operations whatever the block).
+        The times go in blocks of :data:`BLOCK_BYTES` of phase products; the derivative is computed
+        in the same product whether asked or not (its columns cost a quarter of the product).
         """
         t = np.asarray(t, float)
         phi = np.multiply.outer(t, self.u)
-        phi -= np.round(phi)
+        phi -= np.rint(phi)                               # np.round(phi) without its wrapper
         n, S = t.shape[0], self.D.shape[0]
-        v = np.empty((n, S), complex)
-        dv = np.empty((n, S), complex) if derivative else None
-        blk = int(min(512, max(16, BLOCK_BYTES // (16 * max(1, self.modes.shape[0])))))
+        out = np.empty((n, 4 * S))
+        blk = int(min(BLOCK_CAP, max(16, BLOCK_BYTES // (16 * max(1, self.n_phases)))))
         for a in range(0, n, blk):
             b = min(n, a + blk)
-            tabs = [np.exp(2j * math.pi * np.multiply.outer(phi[a:b, i], self._k[i]))  # (block, span_i)
-                    for i in range(self.r)]
-            X = None
-            for i in range(self.r - 1):
-                col = tabs[i][:, self._pre_idx[i]]
-                X = col if X is None else X * col
-            last = tabs[-1][:, self._idx[-1]]
-            X = last if X is None else X[:, self._pre_inv] * last
-            v[a:b] = X @ self.D.T
-            if derivative:
-                dv[a:b] = X @ self.Dd.T
-        return self.e, v, dv
+            np.matmul(self.phases(phi[a:b], compiled).view(float), self.W, out=out[a:b])
+        vd = out.view(complex)
+        return self.e, vd[:, :S], (vd[:, S:] if derivative else None)
+
+
+def _phases_kernel(phi, lo, span, pm, out):  # pragma: no cover - compiled by numba (core.jit)
+    """Compiled :meth:`FlowTheta.phases`: the same tables and products in the same order, per time."""
+    n, r = phi.shape
+    tab = np.empty((r, span.max()), np.complex128)
+    for a in range(n):
+        for i in range(r):
+            for k in range(span[i]):
+                kk = k + lo[i]
+                if kk < 0 and -kk < span[i] + lo[i]:     # exp(-i x) = conj(exp(i x)): cos even, sin odd
+                    continue
+                x = 2.0 * math.pi * (phi[a, i] * kk)
+                tab[i, k] = complex(math.cos(x), math.sin(x))
+            for k in range(span[i]):
+                kk = k + lo[i]
+                if kk < 0 and -kk < span[i] + lo[i]:
+                    tab[i, k] = tab[i, k - 2 * kk].conjugate()
+        for p in range(pm.shape[0]):
+            z = tab[0, pm[p, 0]]
+            for i in range(1, r):
+                z = z * tab[i, pm[p, i]]
+            out[a, p] = z
+
+
+_PHASES = Kernel(_phases_kernel)

@@ -7,7 +7,16 @@ for a symmetric body ``Q = Q~ R(t)^T``, ``omega = R omega~ + spin e`` back from 
 
 The theta functions along the flow, ``theta(b_sk + t U)`` and ``theta(d_k + t U)``, are Fourier series
 in the ``rdim`` real phases of ``U`` (:class:`thetasol.theta.flow.FlowTheta`): per time only the
-phases and one matrix product remain, and a far time costs what ``t = 1`` costs.
+phases and one real matrix product remain, and a far time costs what ``t = 1`` costs.  After it
+``Psi`` and its derivative go through one more real product (9x9 complex maps folded with ``B``,
+``X0^-1``, ``Q0`` and the principal frame) and the 3x3 algebra runs on component rows: the polar
+factor by one Newton-Schulz step (:func:`thetasol.core.so3.polar_near_orthogonal`, 20x closer to the
+long-double polar factor than the SVD's, tests/test_theta_evaluation.py).  With the numba kernels
+switched on (``THETASOL_NUMBA=1``, :mod:`thetasol.core.jit`) that state is one compiled kernel per
+chunk of times: a far time then costs ~20 us instead of ~50 (dozens of numpy calls on 9-element
+arrays).
+Working memory is ~2.5 KB per time (the flow's phases go in bounded blocks), so the default chunk of
+:class:`thetasol.solutions.base.Solution` applies.
 
 The shifts ``b_sk = A(P_s) - e_k`` are sums of Abel images, known to ~1e-14; where ``psi_k(P_s)`` is
 small or zero that error shows directly in ``Psi``.  Each ``b_sk`` is moved by the least amount that
@@ -21,7 +30,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from thetasol.core.so3 import polar_orthonormalize, rotation_about, vee
+from thetasol.core.jit import Kernel
+from thetasol.core.so3 import NEWTON_SCHULZ_MAX, polar_near_orthogonal
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.exponents import Exponents
 from thetasol.solutions.theta_rotation.riemann import ThetaShifts
@@ -66,8 +76,11 @@ class FlowEvaluator:
     axis: int | None
 
     def phi0(self, t: np.ndarray, derivative: bool) -> tuple[np.ndarray, np.ndarray | None]:
-        """Phi(0, t) (n, 3, 3) = Q'(t)^T Q'0 in the principal frame and, if asked, its derivative."""
-        _, v, dv = self.flow(t, derivative)
+        """Phi(0, t) (n, 3, 3) = Q'(t)^T Q'0 in the principal frame and, if asked, its derivative.
+
+        numpy only: the set-up's check at one time (``imaginary_residual``) would otherwise import
+        numba (~0.35 s) inside ``solve_rotation``; the first evaluation pays that instead."""
+        _, v, dv = self.flow(t, derivative, compiled=False)
         vb, vd = v[:, :9].reshape(-1, 3, 3), v[:, 9:]          # [n, s, k], [n, k]
         phase = np.exp(1j * np.multiply.outer(t, self.nu))      # [n, s, k]
         Psi = self.amp[None] * phase * vb / vd[:, None, :]      # Psi_k(P_s, t)
@@ -78,26 +91,152 @@ class FlowEvaluator:
         rate = 1j * self.nu[None] + dv[:, :9].reshape(-1, 3, 3) / vb - (dv[:, 9:] / vd)[:, None, :]
         return Phi, B @ np.einsum("nsk,si->nki", Psi * rate, self.X0inv)
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "_lin", self._linear_map())
+        object.__setattr__(self, "_inu", 1j * self.nu)
+        object.__setattr__(self, "_inu_flat", self._inu.astype(complex).ravel())
+        object.__setattr__(self, "_amp_flat", self.amp.astype(complex).ravel())
+
+    def _linear_map(self) -> np.ndarray:
+        """L (45, 36): the float view of ``[Psi | Psi rate]`` (n, 18 complex) -> the real parts of
+        ``G = Q0p Phi^T Pf^T``, ``F = Pf Phi`` with its rows cycled by 2 and by 1, and ``Fd / 2``
+        (``Fd = Pf Phidot``) with its rows cycled by 1 and by 2 (9 each, row-major): then
+        ``vee(F Fd^T)`` is two products and a sum.  ``Pf = P`` for distinct ``J`` (the output frame
+        folded in), the identity for a symmetric body."""
+        Pf = self.P if self.axis is None else np.eye(3)
+        T = np.einsum("jk,si->skji", self.B, self.X0inv).reshape(9, 3, 3)     # Phi[j, i] per Psi[s, k]
+        TG = np.einsum("mji,ai,bj->mab", T, self.Q0p, Pf).reshape(9, 9)
+        TF = np.einsum("mji,aj->mai", T, Pf)
+        up, down = [1, 2, 0], [2, 0, 1]
+        blocks = ((0, TG), (0, TF[:, down].reshape(9, 9)), (0, TF[:, up].reshape(9, 9)),
+                  (18, 0.5 * TF[:, up].reshape(9, 9)), (18, 0.5 * TF[:, down].reshape(9, 9)))
+        L = np.zeros((45, 36))
+        for i, (col, M) in enumerate(blocks):
+            blk = np.empty((18, 9))
+            blk[0::2], blk[1::2] = M.real, -M.imag                  # Re(z M) = Re z Re M - Im z Im M
+            L[9 * i: 9 * i + 9, col: col + 18] = blk.T
+        return L
+
     def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``(omega, Q)`` at the flat times ``t``: shapes (n, 3), (n, 3, 3) in the body frame given."""
-        Phi, Phidot = self.phi0(t, derivative=True)
-        Phi_r = Phi.real
-        Qp = polar_orthonormalize(self.Q0p @ np.swapaxes(Phi_r, -1, -2))
-        wp = vee(-Phidot.real @ np.swapaxes(Phi_r, -1, -2))
+        """``(omega, Q)`` at the flat times ``t``: shapes (n, 3), (n, 3, 3) in the body frame given.
+
+        ``Psi`` and ``Psidot = Psi rate`` (rate without dividing by ``vb``, which vanishes where a
+        component does) go through one real matrix product to ``G = Q0 Phi^T P^T`` (polar factor:
+        ``Q``) and ``F, Fd = P Phi, P Phidot`` (``omega = vee(F Fd^T)``); the 3x3 algebra after it
+        runs on component rows (9, n).
+        """
+        _, v, dv = self.flow(t, True)
+        kern = _STATE.get()
+        if kern is None:
+            return self._state(t, v, dv)
+        n = t.shape[0]
+        w, Q, bad = np.empty((n, 3)), np.empty((n, 3, 3)), np.zeros(n, bool)
+        kern(t, v, dv, self._inu_flat, self._amp_flat, self._lin, self.P,
+             -1 if self.axis is None else self.axis, float(self.spin), NEWTON_SCHULZ_MAX, w, Q, bad)
+        if bad.any():                                                # the polar factor needs the SVD
+            w[bad], Q[bad] = self._state(t[bad], v[bad], dv[bad])
+        return w, Q
+
+    def _state(self, t: np.ndarray, v: np.ndarray, dv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """numpy path of :meth:`evaluate` from the flow's values (its compiled twin: ``_state_kernel``)."""
+        n = t.shape[0]
+        vb, vd = v[:, :9].reshape(n, 3, 3), v[:, 9:]              # [n, s, k], [n, k]
+        ivd = 1.0 / vd
+        q = np.exp(np.multiply.outer(t, self._inu))
+        q *= self.amp
+        q *= ivd[:, None, :]
+        Z = np.empty((n, 2, 3, 3), complex)
+        np.multiply(q, vb, out=Z[:, 0])
+        rate = self._inu - (dv[:, 9:] * ivd)[:, None, :]
+        rate *= vb
+        rate += dv[:, :9].reshape(n, 3, 3)
+        np.multiply(q, rate, out=Z[:, 1])
+        Y = self._lin @ Z.reshape(n, 18).view(float).T             # (45, n)
+        Q = polar_near_orthogonal(Y[:9].reshape(3, 3, n))
+        w = (Y[27:36] * Y[9:18] - Y[36:45] * Y[18:27]).reshape(3, 3, n).sum(axis=1)   # vee(F Fd^T)
         if self.axis is not None:
-            # back from the frame turning at -spin about the symmetry axis: Q = Q~ R^T, omega = R omega~ + spin e
-            ax, spin = self.axis, self.spin
-            R = rotation_about(ax, -spin * t)                  # R(t) = exp(-spin t hat(e))
-            Qp = Qp @ np.swapaxes(R, -1, -2)
-            wp = np.einsum("nij,nj->ni", R, wp)
-            wp[..., ax] += spin
-        P = self.P
-        return wp @ P.T, Qp @ P.T
+            Q, w = self._from_turning_frame(t, Q, w)
+        return np.ascontiguousarray(w.T), np.ascontiguousarray(Q.transpose(2, 0, 1))
+
+    def _from_turning_frame(self, t: np.ndarray, Q: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Symmetric body: ``Q = Q~ R^T P^T``, ``omega = P (R omega~ + spin e)``, ``R = exp(-spin t hat(e))``
+        (component rows (3, 3, n), (3, n))."""
+        ax, spin, P = self.axis, self.spin, self.P
+        i, j = (ax + 1) % 3, (ax + 2) % 3
+        c, s = np.cos(-spin * t), np.sin(-spin * t)
+        Qr = np.empty_like(Q)
+        Qr[:, ax] = Q[:, ax]
+        Qr[:, i] = c * Q[:, i] - s * Q[:, j]
+        Qr[:, j] = s * Q[:, i] + c * Q[:, j]
+        wr = np.empty_like(w)
+        wr[ax] = w[ax] + spin
+        wr[i] = c * w[i] - s * w[j]
+        wr[j] = s * w[i] + c * w[j]
+        Qo = (Qr[:, :, None, :] * P.T[None, :, :, None]).sum(axis=1)    # Q~ R^T P^T
+        wo = (P[:, :, None] * wr[None]).sum(axis=1)
+        return Qo, wo
 
     def imaginary_residual(self, t: np.ndarray) -> np.ndarray:
         """max |Im Phi(0, t)| at the flat times ``t`` (it must vanish: the error of the evaluation)."""
         Phi, _ = self.phi0(t, derivative=False)
         return np.abs(Phi.imag).max(axis=(-1, -2))
+
+
+def _state_kernel(t, v, dv, inu, amp, L, P, axis, spin, tol, w_out, Q_out, bad):  # pragma: no cover - numba
+    """Compiled :meth:`FlowEvaluator._state`, time by time, with the same formulas in the same order;
+    ``bad[a]`` marks a time whose polar factor needs the SVD (``|G^T G - 1| > tol``)."""
+    Zf, Y = np.empty(36), np.empty(45)
+    G, H = np.empty((3, 3)), np.empty((3, 3))
+    Q, w = np.empty((3, 3)), np.empty(3)
+    for a in range(t.shape[0]):
+        for k in range(3):
+            ivd = 1.0 / v[a, 9 + k]
+            rd = dv[a, 9 + k] * ivd
+            for s in range(3):
+                m = 3 * s + k
+                q = np.exp(t[a] * inu[m]) * amp[m] * ivd
+                z = q * v[a, m]
+                zd = q * ((inu[m] - rd) * v[a, m] + dv[a, m])
+                Zf[2 * m], Zf[2 * m + 1], Zf[18 + 2 * m], Zf[19 + 2 * m] = z.real, z.imag, zd.real, zd.imag
+        for i in range(45):
+            acc = 0.0
+            for j in range(36):
+                acc += L[i, j] * Zf[j]
+            Y[i] = acc
+        err = 0.0
+        for i in range(3):
+            for j in range(3):
+                G[i, j] = Y[3 * i + j]
+        for i in range(3):
+            for j in range(3):
+                x = G[0, i] * G[0, j] + G[1, i] * G[1, j] + G[2, i] * G[2, j]
+                err = max(err, abs(x - (1.0 if i == j else 0.0)))
+                H[i, j] = (1.5 if i == j else 0.0) - 0.5 * x
+        bad[a] = err > tol
+        for i in range(3):
+            for j in range(3):
+                Q[i, j] = G[i, 0] * H[0, j] + G[i, 1] * H[1, j] + G[i, 2] * H[2, j]
+            w[i] = 0.0
+            for k in range(3):
+                w[i] += Y[27 + 3 * i + k] * Y[9 + 3 * i + k] - Y[36 + 3 * i + k] * Y[18 + 3 * i + k]
+        if axis < 0:
+            Q_out[a], w_out[a] = Q, w
+            continue
+        # the turning frame of a symmetric body, as in FlowEvaluator._from_turning_frame
+        i, j = (axis + 1) % 3, (axis + 2) % 3
+        c, s = np.cos(-spin * t[a]), np.sin(-spin * t[a])
+        G[:, :] = Q                                               # the polar factor, before turning
+        for r in range(3):
+            Q[r, i], Q[r, j] = c * G[r, i] - s * G[r, j], s * G[r, i] + c * G[r, j]
+        wa, wi, wj = w[axis] + spin, c * w[i] - s * w[j], s * w[i] + c * w[j]
+        w[axis], w[i], w[j] = wa, wi, wj
+        for r in range(3):
+            for b in range(3):
+                Q_out[a, r, b] = Q[r, 0] * P[b, 0] + Q[r, 1] * P[b, 1] + Q[r, 2] * P[b, 2]
+            w_out[a, r] = P[r, 0] * w[0] + P[r, 1] * w[1] + P[r, 2] * w[2]
+
+
+_STATE = Kernel(_state_kernel)
 
 
 def corrected_shifts(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.mechanics.equations import invariants as first_integrals
 from thetasol.solutions._symmetry import sorted_principal_frame, symmetry_axis
-from thetasol.solutions.base import CHUNK, ClosedFormUnavailable, RotationSolution
+from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.theta_rotation.divisors import eigenvector_divisors
 from thetasol.solutions.theta_rotation.evaluator import FlowEvaluator, flow_evaluator
 from thetasol.solutions.theta_rotation.exponents import exponents
@@ -35,8 +35,6 @@ if TYPE_CHECKING:
 
 __all__ = ["ThetaRotation"]
 
-#: Bytes of working memory one chunk of times may take in the evaluator.
-MEMORY_PER_CHUNK = 64 << 20
 #: |Im Phi(0, t)| at t = 1000 above which the set-up warns (1e-13..1e-9 on accurate solutions).
 RESIDUAL_WARN = 1e-8
 
@@ -85,12 +83,6 @@ class ThetaRotation(RotationSolution):
 
     def _evaluate(self, t: np.ndarray):
         return self.evaluator.evaluate(t)
-
-    def _chunk_size(self) -> int:
-        # the Fourier flow holds about three complex arrays of (times, modes): 48 bytes per mode and
-        # time; near a relative equilibrium a body has ~6000 modes
-        modes = int(self.evaluator.flow.modes.shape[0])
-        return max(1, min(CHUNK, MEMORY_PER_CHUNK // (48 * max(modes, 1))))
 
     def abel_map(self, points: Place | Sequence | Mapping) -> np.ndarray:
         """Abel map in the coordinates of :attr:`riemann_matrix` and :attr:`U`.
