@@ -211,6 +211,7 @@ def _mode_box(A, aj, ak):
 PHASE_DROP = 5e-16     # radians: the integrated Fourier coefficients dropped sum to at most this
 PHASE_TOL = 1e-15      # an axis of the grid doubles (32 .. 512) until the coefficients on its edge are below
 GRID_START, GRID_MAX = 32, 512
+PHASE_REFUSE = 1e-12   # radians: a larger truncation at GRID_MAX is refused (the mean rate's error grows with t)
 
 
 def _phase_grid(motion, I, center, mg, k1, k2, nu, refs):
@@ -256,6 +257,9 @@ def kovalevskaya_attitude(motion: KovalevskayaMotion, I: ArrayLike, center: Arra
     k1, k2 = _torus_lattice(motion)
     nu = np.linalg.lstsq(np.stack([k1, k2], 1), motion.lattice_velocity(), rcond=None)[0]
     ref, modes, coef, tail, mean, n = _phase_grid(motion, I, center, mg, k1, k2, nu, _references(I, omega0))
+    if tail > PHASE_REFUSE:
+        raise RuntimeError(f"the precession rate's Fourier series has not converged on the {n[0]} x {n[1]} grid "
+                           f"(truncation {tail:.1e} rad)")
     up = -g / np.linalg.norm(g)
     e1 = np.cross(up, [1.0, 0.0, 0.0]) if abs(up[0]) < 0.9 else np.cross(up, [0.0, 1.0, 0.0])
     e1 /= np.linalg.norm(e1)
