@@ -64,7 +64,9 @@ _group("thetasol.scenes.fixed_point", "solve_fixed_point", "FixedPointSolution")
 _group("thetasol.scenes.gyrostat_scene", "solve_gyrostat_configuration", "GyrostatSplit", "load_gyrostat_scene")
 # the machinery: theta functions and curves
 _group("thetasol.theta.riemann", "RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce")
+_group("thetasol.theta.grid", "theta_grid", "ThetaGrid")
 _group("thetasol.curves.plane_curve", "PlaneCurve", "Place")
+_group("thetasol.curves.hyperelliptic", "HyperellipticCurve")
 _group("thetasol.curves.spectral", "SpectralCurve", "spectral_curve")
 
 __all__ = sorted(_API) + ["reference", "__version__"]
@@ -88,6 +90,7 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:
     from thetasol import reference
+    from thetasol.curves.hyperelliptic import HyperellipticCurve
     from thetasol.curves.plane_curve import Place, PlaneCurve
     from thetasol.curves.spectral import SpectralCurve, spectral_curve
     from thetasol.ensembles import solve_many
@@ -137,4 +140,5 @@ if TYPE_CHECKING:
     from thetasol.solutions.neumann import NeumannSolution, solve_neumann
     from thetasol.solutions.orbiting_rotation import OrbitingRotation, solve_orbiting_rotation
     from thetasol.solutions.rotation import solve_rotation
+    from thetasol.theta.grid import ThetaGrid, theta_grid
     from thetasol.theta.riemann import RiemannTheta, riemann_theta, riemann_theta_separated, siegel_reduce

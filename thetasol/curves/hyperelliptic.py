@@ -47,8 +47,8 @@ branch points within 6e-5 (a cusp forming) cost ~2 digits: vanishing-cycle perio
 Cost (CPU, one core, tests' quintics): 0.5-0.9 ms for the periods and tau, 0.13 ms for the Abel map of
 two points, ~1.7 ms more for the Riemann constant (one theta call; the theta set-up, ~1.1 ms, can be
 shared through ``theta=``), against ~75 ms for a PlaneCurve of the same quintic.  In
-:mod:`thetasol.solutions.kovalevskaya_top` the curve set-up went from 74/85 ms to 6.1/6.2 ms
-(benchmarks/bench_heavy_top.py tops, seeds 2/17).
+:mod:`thetasol.solutions.kovalevskaya_top` the curve set-up costs 6.1/6.2 ms (benchmarks/bench_heavy_top.py
+tops, seeds 2/17).
 """
 from __future__ import annotations
 
