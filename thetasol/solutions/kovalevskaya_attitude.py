@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core.dd import dd_mul
-from thetasol.solutions.kovalevskaya_top import KovalevskayaMotion, _memoir_state
+from thetasol.solutions.kovalevskaya_top import KovalevskayaMotion
 
 __all__ = ["Reference", "KovalevskayaAttitude", "kovalevskaya_attitude", "build_kovalevskaya_top"]
 
@@ -158,19 +158,52 @@ class KovalevskayaAttitude:
         return omega, self.E @ S @ np.swapaxes(B, -1, -2)
 
 
-def _rate_on_grid(motion, I, center, mg, grid, ref):
-    """``phidot`` and ``|b x gamma|^2/|b|^2`` on the grid ``(k1, k2, a, b)`` of lattice coordinates
-    ``a_i k1 + b_j k2``."""
+def _grid_state(motion, val, der):
+    """``omega`` and ``gamma`` (body frame, up) as ``(3, N)`` arrays from the seven theta values and derivatives on
+    the grid (:func:`thetasol.solutions.kovalevskaya_top.KovalevskayaMotion.memoir_state`'s formulas on
+    contiguous planes, one complex reciprocal per point)."""
+    V = np.moveaxis(val, -1, 0).reshape(7, -1)
+    Dv = np.moveaxis(der, -1, 0).reshape(7, -1)
+    lam, nu, mu, rho = motion.coef
+    D, Np = np.array([lam, nu]) @ V[1:4]
+    Nr, G3 = np.array([mu, rho]) @ V[4:7]
+    iD = 1.0 / D
+    rc = Nr * iD
+    p, q, r = np.real(Np * iD), np.real(V[0] * iD), np.real(rc)
+    g2 = np.real((mu @ Dv[4:7] - rc * (lam @ Dv[1:4])) * iD) / motion.c0
+    g1 = (2 * (p * p + q * q) + r * r - 6 * motion.l1) / (2 * motion.c0)
+    return motion.P @ np.stack([p, q, r]), motion.P @ -np.stack([g1, g2, np.real(G3 * iD)])
+
+
+def _rate_on_grid(motion, I, center, mg, grid, refs):
+    """``phidot`` on the grid ``(k1, k2, a, b)`` of lattice coordinates ``a_i k1 + b_j k2``, per reference.
+
+    With ``b = mu M + lam d`` (``d`` a unit column of the memoir's frame), ``tau = mg gamma x center`` and
+    ``K = tau x gamma``, the numerator ``(b x bdot) . gamma`` is ``mu^2 M.K + mu lam ((M.d)(omega.gamma) -
+    (M.omega)(d.gamma) + d.K) + lam^2 ((omega.gamma) - (d.omega)(d.gamma))``: a few dot products per point shared
+    by all the candidates."""
     val, der = motion.values_on_grid(*grid, 1)
-    p, q, r, g1, g2, g3 = (np.real(v) for v in _memoir_state(val, der, motion.coef, motion.c0, motion.l1))
-    omega = np.stack([p, q, r], -1) @ motion.P.T
-    gamma = -np.stack([g1, g2, g3], -1) @ motion.P.T
+    omega, gamma = _grid_state(motion, val, der)
+    M = I @ omega
+    tau = mg * np.stack([gamma[1] * center[2] - gamma[2] * center[1], gamma[2] * center[0] - gamma[0] * center[2],
+                         gamma[0] * center[1] - gamma[1] * center[0]])
+    K = np.stack([tau[1] * gamma[2] - tau[2] * gamma[1], tau[2] * gamma[0] - tau[0] * gamma[2],
+                  tau[0] * gamma[1] - tau[1] * gamma[0]])
+    MM, MK, Mg, Mw, wg = (np.einsum("in,in->n", x, y) for x, y in
+                          ((M, M), (M, K), (M, gamma), (M, omega), (omega, gamma)))
+    Pt = motion.P.T
+    Md, dg, dw, dK = Pt @ M, Pt @ gamma, Pt @ omega, Pt @ K
+    dd = np.sum(motion.P * motion.P, 0)
+    shape = val.shape[:-1]
     out = []
-    for rf in ref:
-        b, bdot = rf.vectors(motion.P, I, center, mg, omega, gamma)
-        bb = np.sum(b * b, -1)
-        den = bb - np.sum(b * gamma, -1) ** 2
-        out.append((np.sum(np.cross(b, bdot) * gamma, -1) / den, den / bb))
+    for rf in refs:
+        mu, lam, k = rf.mu, rf.lam, rf.axis
+        num, bb, bg = mu * mu * MK, mu * mu * MM, mu * Mg
+        if lam:
+            num = num + (mu * lam) * (Md[k] * wg - Mw * dg[k] + dK[k]) + (lam * lam) * (dd[k] * wg - dw[k] * dg[k])
+            bb = bb + (2 * mu * lam) * Md[k] + (lam * lam) * dd[k]
+            bg = bg + lam * dg[k]
+        out.append((num / (bb - bg * bg)).reshape(shape))
     return out
 
 
@@ -258,15 +291,17 @@ def _phase_grid(motion, I, center, mg, k1, k2, nu, refs):
     rates = sample(ar, GRID_START, ar, GRID_START, refs)
     # the reference whose rate's series converges fastest on the first grid (the largest edge coefficient);
     # the distance from the vertical alone is a poor proxy: the rate's size also varies with the numerator
-    best = int(np.argmin([max(_phase_series(r, nu)[2]) for r, _ in rates]))
-    ref, rate = refs[best], rates[best][0]
+    best = int(np.argmin([max(_phase_series(r, nu)[2]) for r in rates]))
+    ref, rate = refs[best], rates[best]
     big = _predicted_grid(rate, nu)
-    full = sample(np.arange(big[0]), big[0], np.arange(big[1]), big[1], (ref,))[0][0] if big != n else None
+    full = sample(np.arange(big[0]), big[0], np.arange(big[1]), big[1], (ref,))[0] if big != n else None
     if full is not None:
         rate = full[::big[0] // n[0], ::big[1] // n[1]]
     while True:
         modes, coef, tails, dropped, mean = _phase_series(rate, nu)
         grow = [a for a in (0, 1) if tails[a] >= PHASE_TOL and n[a] < GRID_MAX]
+        if not grow and max(tails) + dropped >= PHASE_TOL and n[int(np.argmax(tails))] < GRID_MAX:
+            grow = [int(np.argmax(tails))]    # the truncation reported is below PHASE_TOL where the grid allows
         if not grow:
             return ref, modes, coef, max(tails) + dropped, mean, tuple(n)
         for a in grow:
@@ -278,7 +313,7 @@ def _phase_grid(motion, I, center, mg, k1, k2, nu, refs):
             odd = np.arange(1, 2 * n[a], 2)
             other = np.arange(n[1 - a])
             new = (sample(odd, 2 * n[0], other, n[1], (ref,)) if a == 0
-                   else sample(other, n[0], odd, 2 * n[1], (ref,)))[0][0]
+                   else sample(other, n[0], odd, 2 * n[1], (ref,)))[0]
             out = np.empty(m)
             idx = [slice(None), slice(None)]
             idx[a] = slice(0, None, 2)
