@@ -2,8 +2,8 @@
 
 Given ``(omega, gamma)`` of :class:`thetasol.solutions.kovalevskaya_top.KovalevskayaMotion`, the attitude is
 ``Q = E S(phi) B^T`` with ``B = [u_b, gamma x u_b, gamma]`` (body frame), ``u_b`` the unit horizontal part of a
-reference vector ``b`` (the angular momentum ``M = I omega`` or a body axis, whichever stays farthest from the
-vertical on the torus), ``E`` a space frame with third axis up and ``S(phi)`` the rotation by ``phi`` about it.
+reference vector ``b`` (among ``M = I omega``, the body axes and their combinations, the one whose rate series
+converges fastest on the first grid), ``E`` a space frame with third axis up and ``S(phi)`` the rotation by ``phi`` about it.
 The azimuth of ``Q b`` obeys
 
     phidot = (b x bdot_space) . gamma / (|b|^2 - (b . gamma)^2),   bdot_space = omega x b (body axis),
@@ -11,12 +11,13 @@ The azimuth of ``Q b`` obeys
 
 a function on the real torus ``z0 + a V1 + b V2`` (an abelian integral of the third kind along the flow).  It is
 sampled on an ``n1 x n2`` grid of the torus angles (each axis doubled from 32 until the integrated Fourier
-coefficients on its edge are below ``PHASE_TOL``; a doubling samples only the new rows or columns), its Fourier
+coefficients on its edge are below ``PHASE_TOL``; the grid predicted from the first grid's decay is sampled in
+one call, a doubling beyond it samples only the new rows or columns), its Fourier
 coefficients taken by FFT, and integrated term by term:
 ``phi(t) = phi0 + c_00 t + sum c_jk (exp(2 pi i (j nu1 + k nu2) t) - 1)/(2 pi i (j nu1 + k nu2))``, the torus
 angles ``nu t`` reduced modulo 1 and ``c_00 t`` modulo ``2 pi`` with two-word products.  The series is kept as
 a dense box of modes ``|j| <= J, |k| <= K`` (the smallest outside which the coefficients sum to at most
-``PHASE_DROP``) and evaluated as a matrix product.  The truncation (the largest coefficient on the grid's edge
+``PHASE_DROP``, less where the edge leaves less room below ``PHASE_TOL``) and evaluated as a matrix product.  The truncation (the largest coefficient on the grid's edge
 plus the dropped sum) is ``diagnostics["phase_tail"]``.
 
 The samples come from :meth:`KovalevskayaMotion.values_on_grid` (:func:`thetasol.theta.grid.theta_grid`: the
@@ -24,9 +25,9 @@ theta functions on the grid as matrix products), which gives the seven theta val
 common unit per point than :meth:`KovalevskayaMotion.values_at`; the rate, a quotient, is the same to a few 1e-15
 (tests/test_theta_grid.py: the series' coefficients 1.7e-15 apart, ``Q(t)`` 4.6e-14 on ``[0, 30]``).  Set-up
 cost (CPU time, one thread, best of 7, benchmarks/bench_theta_grid.py, 2-core machine shared with other jobs):
-19 ms for test seed 2 (grid 128 x 128, 1.2 us per grid point, of which the theta functions 0.9 us over the five
-grid calls) and 4.5 ms for seed 17 (32 x 64), against 228 ms and 31 ms (14 .. 15 us per point) with ``values_at``
-at every point.
+11.7 ms for test seed 2 (grid 128 x 128 in two grid calls, 0.71 us per grid point) and 5.1 ms for seed 17
+(32 x 64, most of it the 22 candidate references on the first grid), against 228 ms and 31 ms (14 .. 15 us per
+point) with ``values_at`` at every point.
 """
 from __future__ import annotations
 
@@ -214,7 +215,9 @@ def _phase_series(rate, nu):
     n1, n2 = rate.shape
     j, k, C, mean = _integrated(rate, nu)
     tails = (float(np.max(np.abs(C[np.abs(j) >= n1 // 2 - 1]))), float(np.max(np.abs(C[:, np.abs(k) >= n2 // 2 - 1]))))
-    rows, cols, dropped = _mode_box(np.abs(C), np.abs(j), np.abs(k))
+    # the dropped modes' budget leaves the truncation below PHASE_TOL where the edge allows
+    budget = min(PHASE_DROP, max(0.0, 0.99 * PHASE_TOL - max(tails)))
+    rows, cols, dropped = _mode_box(np.abs(C), np.abs(j), np.abs(k), budget)
     return (j[rows], k[cols]), C[np.ix_(rows, cols)], tails, dropped, mean
 
 
@@ -230,16 +233,30 @@ def _integrated(rate, nu):
     return j, k, C, float(np.real(F[0, 0]))
 
 
-def _mode_box(A, aj, ak):
+def _edge_tails(rates, nu):
+    """The largest integrated coefficient on either edge of each rate's series (``rates`` (nref, n1, n2), one
+    batched FFT): ``max(_phase_series(rate, nu)[2])`` per rate."""
+    _, n1, n2 = rates.shape
+    F = np.abs(np.fft.fft2(rates) / (n1 * n2))
+    j, k = np.fft.fftfreq(n1, 1 / n1), np.fft.fftfreq(n2, 1 / n2)
+    div = np.abs(2 * np.pi * (j[:, None] * nu[0] + k[None, :] * nu[1]))
+    div[0, 0] = np.inf
+    C = F / div
+    edge = (np.abs(j)[:, None] >= n1 // 2 - 1) | (np.abs(k)[None, :] >= n2 // 2 - 1)
+    return np.max(C[:, edge], 1)
+
+
+def _mode_box(A, aj, ak, budget):
     """The smallest box ``|j| <= J, |k| <= K`` (shrunk greedily, the cheaper row or column first) outside which
-    the coefficients sum to at most ``PHASE_DROP``: the evaluation costs ``(2J + 1)(2K + 1)`` products."""
-    M = np.zeros((int(aj.max()) + 1, int(ak.max()) + 1))
-    np.add.at(M, (aj.astype(int)[:, None], ak.astype(int)[None, :]), A)   # mass per (|j|, |k|)
+    the coefficients sum to at most ``budget``: the evaluation costs ``(2J + 1)(2K + 1)`` products."""
+    nj, nk = int(aj.max()) + 1, int(ak.max()) + 1
+    idx = aj.astype(int)[:, None] * nk + ak.astype(int)[None, :]
+    M = np.bincount(idx.ravel(), A.ravel(), nj * nk).reshape(nj, nk)   # mass per (|j|, |k|)
     J, K, dropped = M.shape[0] - 1, M.shape[1] - 1, 0.0
     while J > 0 or K > 0:
         rj = M[J, :K + 1].sum() if J > 0 else np.inf
         ck = M[:J + 1, K].sum() if K > 0 else np.inf
-        if min(rj, ck) + dropped > PHASE_DROP:
+        if min(rj, ck) + dropped > budget:
             break
         if rj / (2 * K + 1) <= ck / (2 * J + 1):   # per product saved
             dropped, J = dropped + rj, J - 1
@@ -291,7 +308,7 @@ def _phase_grid(motion, I, center, mg, k1, k2, nu, refs):
     rates = sample(ar, GRID_START, ar, GRID_START, refs)
     # the reference whose rate's series converges fastest on the first grid (the largest edge coefficient);
     # the distance from the vertical alone is a poor proxy: the rate's size also varies with the numerator
-    best = int(np.argmin([max(_phase_series(r, nu)[2]) for r in rates]))
+    best = int(np.argmin(_edge_tails(np.stack(rates), nu)))
     ref, rate = refs[best], rates[best]
     big = _predicted_grid(rate, nu)
     full = sample(np.arange(big[0]), big[0], np.arange(big[1]), big[1], (ref,))[0] if big != n else None
@@ -300,8 +317,6 @@ def _phase_grid(motion, I, center, mg, k1, k2, nu, refs):
     while True:
         modes, coef, tails, dropped, mean = _phase_series(rate, nu)
         grow = [a for a in (0, 1) if tails[a] >= PHASE_TOL and n[a] < GRID_MAX]
-        if not grow and max(tails) + dropped >= PHASE_TOL and n[int(np.argmax(tails))] < GRID_MAX:
-            grow = [int(np.argmax(tails))]    # the truncation reported is below PHASE_TOL where the grid allows
         if not grow:
             return ref, modes, coef, max(tails) + dropped, mean, tuple(n)
         for a in grow:
