@@ -35,8 +35,8 @@ evaluations of a product, and no path graph, sympy or sheet matching (as in Plan
 * **Riemann constant** (base infinity): a half period;  the one of the 4^g candidates with ``theta(K) = 0``
   and ``theta(K + A(D')) = 0`` at three random effective divisors of degree ``g - 1`` (Riemann's
   vanishing theorem), one theta call for all.  In genus 2 the parities decide it without theta: ``K`` and
-  every ``K + A(e_j)`` are odd half periods (the same ``K`` on 150 random genus-2 curves and the 40 tops of
-  benchmarks/bench_heavy_top.py; ~2 ms less per curve).
+  every ``K + A(e_j)`` are odd half periods (the same ``K`` as the theta test on 150 random genus-2 curves and
+  the 40 tops of benchmarks/bench_heavy_top.py).
 
 Everything is built from differences of branch points, so nothing depends on the units of ``x``.
 Measured (tests/test_hyperelliptic.py): periods against mpmath ``quad`` at 30 digits to <= 5.1e-16
@@ -47,10 +47,10 @@ Jacobi inversion (Kleinian functions from theta give back ``x1 + x2``, ``x1 x2``
 branch points within 6e-5 (a cusp forming) cost ~2 digits: vanishing-cycle periods ~150 against
 ``tau ~ 1`` (tau symmetric to 2.2e-14, the Kleinian functions to 8e-10).
 Cost (CPU, one core, tests' quintics): 0.5-0.9 ms for the periods and tau, 0.13 ms for the Abel map of
-two points, ~1.7 ms more for the Riemann constant (one theta call; the theta set-up, ~1.1 ms, can be
-shared through ``theta=``), against ~75 ms for a PlaneCurve of the same quintic.  In
-:mod:`thetasol.solutions.kovalevskaya_top` the curve set-up costs 6.1/6.2 ms (benchmarks/bench_heavy_top.py
-tops, seeds 2/17).
+two points, 0.06 ms more for the Riemann constant in genus 2 (parities; in higher genus one theta call,
+~1.7 ms, the theta set-up, ~1.1 ms, shared through ``theta=``), against ~75 ms for a PlaneCurve of the same
+quintic.  In :mod:`thetasol.solutions.kovalevskaya_top` the curve set-up (with the theta set-up) costs
+2.2/2.5 ms (benchmarks/bench_heavy_top.py tops, seeds 2/17).
 """
 from __future__ import annotations
 
