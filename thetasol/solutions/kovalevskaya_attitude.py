@@ -275,8 +275,9 @@ def _predicted_grid(rate, nu):
     """The grid ``(n1, n2)`` (powers of two, ``GRID_START .. GRID_MAX / 2``) at which the edge coefficients of the
     rate's series on the first grid would fall below ``PHASE_TOL``, extrapolating each axis' geometric decay
     between ``|j| = n/4`` and its edge.  An underestimate costs one more doubling, an overestimate samples points
-    the doubling test leaves unused (hence the cap: the early decay is often the slower one, and on the 40 tops
-    of benchmarks/bench_heavy_top.py the prediction is exact on 31, one doubling short on 7, long on 2)."""
+    the doubling test leaves unused (hence the cap: the early decay is often the slower one; on the 40 tops of
+    benchmarks/bench_heavy_top.py the prediction is exact on 33 and one doubling short on 7, uncapped it was
+    long, 512 for 256, on 2)."""
     j, k, C, _ = _integrated(rate, nu)
     out = []
     for A, m in ((np.abs(C), np.abs(j)), (np.abs(C).T, np.abs(k))):
