@@ -34,7 +34,9 @@ evaluations of a product, and no path graph, sympy or sheet matching (as in Plan
   differences and ``div y = sum e_j - (2g + 1) inf`` gives ``sum_j A(e_j) = 0``, hence ``A(e_1)``.
 * **Riemann constant** (base infinity): a half period;  the one of the 4^g candidates with ``theta(K) = 0``
   and ``theta(K + A(D')) = 0`` at three random effective divisors of degree ``g - 1`` (Riemann's
-  vanishing theorem), one theta call for all.
+  vanishing theorem), one theta call for all.  In genus 2 the parities decide it without theta: ``K`` and
+  every ``K + A(e_j)`` are odd half periods (the same ``K`` as the theta test on 150 random genus-2 curves and
+  the 40 tops of benchmarks/bench_heavy_top.py).
 
 Everything is built from differences of branch points, so nothing depends on the units of ``x``.
 Measured (tests/test_hyperelliptic.py): periods against mpmath ``quad`` at 30 digits to <= 5.1e-16
@@ -45,10 +47,10 @@ Jacobi inversion (Kleinian functions from theta give back ``x1 + x2``, ``x1 x2``
 branch points within 6e-5 (a cusp forming) cost ~2 digits: vanishing-cycle periods ~150 against
 ``tau ~ 1`` (tau symmetric to 2.2e-14, the Kleinian functions to 8e-10).
 Cost (CPU, one core, tests' quintics): 0.5-0.9 ms for the periods and tau, 0.13 ms for the Abel map of
-two points, ~1.7 ms more for the Riemann constant (one theta call; the theta set-up, ~1.1 ms, can be
-shared through ``theta=``), against ~75 ms for a PlaneCurve of the same quintic.  In
-:mod:`thetasol.solutions.kovalevskaya_top` the curve set-up costs 6.1/6.2 ms (benchmarks/bench_heavy_top.py
-tops, seeds 2/17).
+two points, 0.06 ms more for the Riemann constant in genus 2 (parities; in higher genus one theta call,
+~1.7 ms, the theta set-up, ~1.1 ms, shared through ``theta=``), against ~75 ms for a PlaneCurve of the same
+quintic.  In :mod:`thetasol.solutions.kovalevskaya_top` the curve set-up (with the theta set-up) costs
+2.2/2.5 ms (benchmarks/bench_heavy_top.py tops, seeds 2/17).
 """
 from __future__ import annotations
 
@@ -340,12 +342,35 @@ class HyperellipticCurve:
         out = raw @ self.normalization().T if normalized else raw
         return out.reshape(shape + (g,))
 
+    def _odd_riemann_constant(self) -> np.ndarray | None:
+        """Genus 2: ``K`` from parities alone.  With the base at a branch point, ``theta(K + A(P))`` vanishes on
+        the curve, so ``K`` and every ``K + A(e_j)`` are half periods where theta vanishes, i.e. odd ones (a
+        genus-2 curve has no vanishing even theta constant); the candidate with that property, if it is the
+        only one (else None).  Parity of ``(a + tau b)/2`` (``a, b`` integers): ``a.b mod 2``."""
+        tau = self.riemann_matrix()
+        A = self.branch_images()
+        bn = np.linalg.solve(tau.imag, A.imag.T).T                                  # (5, 2)
+        am = A.real - bn @ tau.real.T
+        half = 2 * np.concatenate([am, bn], 1)
+        if np.max(np.abs(half - np.rint(half))) > 1e-6:
+            return None
+        half = np.rint(half).astype(np.int64)
+        bits = (np.arange(16)[:, None] >> np.arange(4)[None, :]) & 1                  # (a1, a2, b1, b2)
+        tot = bits[:, None, :] + np.concatenate([np.zeros((1, 4), np.int64), half])[None]   # (16, 6, 4)
+        odd = np.all(np.sum(tot[..., :2] * tot[..., 2:], -1) % 2 == 1, 1)
+        if np.count_nonzero(odd) != 1:
+            return None
+        c = bits[np.argmax(odd)]
+        return 0.5 * c[:2] + 0.5 * c[2:] @ tau.T
+
     def riemann_constant(self, theta: RiemannTheta | None = None) -> np.ndarray:
         """Vector of Riemann constants with base at infinity (normalized coordinates).
 
         The half period ``K = (a + tau b)/2``, ``a, b`` in ``{0, 1}^g``, with ``theta(K + A(D')) = 0`` for the
         effective divisors ``D'`` of degree ``g - 1`` (Riemann's vanishing theorem; tested at
-        ``D' = (g - 1) inf`` and three random divisors, all 4^g candidates in one theta call).  With it
+        ``D' = (g - 1) inf`` and three random divisors, all 4^g candidates in one theta call; in genus 2 the
+        one odd half period ``K`` with every ``K + A(e_j)`` odd, when the branch images are half periods to
+        1e-6 and it is unique).  With it
         ``theta(A(P) - A(D) - K)`` vanishes exactly at the points of a generic effective divisor ``D`` of
         degree g.  ``theta``: a :class:`~thetasol.theta.riemann.RiemannTheta` of :meth:`riemann_matrix`
         to reuse (its set-up is most of the cost).
@@ -355,6 +380,10 @@ class HyperellipticCurve:
         RuntimeError
             No candidate makes theta vanish to 1e-8 while the next is 10 times larger (nearly degenerate curve).
         """
+        if "K" not in self._cache and self.genus == 2:
+            K = self._odd_riemann_constant()
+            if K is not None:
+                self._cache["K"] = K
         if "K" not in self._cache:
             g, e = self.genus, self.branch_points
             tau = self.riemann_matrix()

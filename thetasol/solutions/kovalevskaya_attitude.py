@@ -2,8 +2,8 @@
 
 Given ``(omega, gamma)`` of :class:`thetasol.solutions.kovalevskaya_top.KovalevskayaMotion`, the attitude is
 ``Q = E S(phi) B^T`` with ``B = [u_b, gamma x u_b, gamma]`` (body frame), ``u_b`` the unit horizontal part of a
-reference vector ``b`` (the angular momentum ``M = I omega`` or a body axis, whichever stays farthest from the
-vertical on the torus), ``E`` a space frame with third axis up and ``S(phi)`` the rotation by ``phi`` about it.
+reference vector ``b`` (among ``M = I omega``, the body axes and their combinations, the one whose rate series
+converges fastest on the first grid), ``E`` a space frame with third axis up and ``S(phi)`` the rotation by ``phi`` about it.
 The azimuth of ``Q b`` obeys
 
     phidot = (b x bdot_space) . gamma / (|b|^2 - (b . gamma)^2),   bdot_space = omega x b (body axis),
@@ -11,12 +11,13 @@ The azimuth of ``Q b`` obeys
 
 a function on the real torus ``z0 + a V1 + b V2`` (an abelian integral of the third kind along the flow).  It is
 sampled on an ``n1 x n2`` grid of the torus angles (each axis doubled from 32 until the integrated Fourier
-coefficients on its edge are below ``PHASE_TOL``; a doubling samples only the new rows or columns), its Fourier
+coefficients on its edge are below ``PHASE_TOL``; the grid predicted from the first grid's decay is sampled in
+one call, a doubling beyond it samples only the new rows or columns), its Fourier
 coefficients taken by FFT, and integrated term by term:
 ``phi(t) = phi0 + c_00 t + sum c_jk (exp(2 pi i (j nu1 + k nu2) t) - 1)/(2 pi i (j nu1 + k nu2))``, the torus
 angles ``nu t`` reduced modulo 1 and ``c_00 t`` modulo ``2 pi`` with two-word products.  The series is kept as
 a dense box of modes ``|j| <= J, |k| <= K`` (the smallest outside which the coefficients sum to at most
-``PHASE_DROP``) and evaluated as a matrix product.  The truncation (the largest coefficient on the grid's edge
+``PHASE_DROP``, less where the edge leaves less room below ``PHASE_TOL``) and evaluated as a matrix product.  The truncation (the largest coefficient on the grid's edge
 plus the dropped sum) is ``diagnostics["phase_tail"]``.
 
 The samples come from :meth:`KovalevskayaMotion.values_on_grid` (:func:`thetasol.theta.grid.theta_grid`: the
@@ -24,9 +25,9 @@ theta functions on the grid as matrix products), which gives the seven theta val
 common unit per point than :meth:`KovalevskayaMotion.values_at`; the rate, a quotient, is the same to a few 1e-15
 (tests/test_theta_grid.py: the series' coefficients 1.7e-15 apart, ``Q(t)`` 4.6e-14 on ``[0, 30]``).  Set-up
 cost (CPU time, one thread, best of 7, benchmarks/bench_theta_grid.py, 2-core machine shared with other jobs):
-19 ms for test seed 2 (grid 128 x 128, 1.2 us per grid point, of which the theta functions 0.9 us over the five
-grid calls) and 4.5 ms for seed 17 (32 x 64), against 228 ms and 31 ms (14 .. 15 us per point) with ``values_at``
-at every point.
+11.7 ms for test seed 2 (grid 128 x 128 in two grid calls, 0.71 us per grid point) and 5.1 ms for seed 17
+(32 x 64, most of it the 22 candidate references on the first grid), against 228 ms and 31 ms (14 .. 15 us per
+point) with ``values_at`` at every point.
 """
 from __future__ import annotations
 
@@ -36,7 +37,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core.dd import dd_mul
-from thetasol.solutions.kovalevskaya_top import KovalevskayaMotion, _memoir_state
+from thetasol.solutions.kovalevskaya_top import KovalevskayaMotion
 
 __all__ = ["Reference", "KovalevskayaAttitude", "kovalevskaya_attitude", "build_kovalevskaya_top"]
 
@@ -158,19 +159,52 @@ class KovalevskayaAttitude:
         return omega, self.E @ S @ np.swapaxes(B, -1, -2)
 
 
-def _rate_on_grid(motion, I, center, mg, grid, ref):
-    """``phidot`` and ``|b x gamma|^2/|b|^2`` on the grid ``(k1, k2, a, b)`` of lattice coordinates
-    ``a_i k1 + b_j k2``."""
+def _grid_state(motion, val, der):
+    """``omega`` and ``gamma`` (body frame, up) as ``(3, N)`` arrays from the seven theta values and derivatives on
+    the grid (:func:`thetasol.solutions.kovalevskaya_top.KovalevskayaMotion.memoir_state`'s formulas on
+    contiguous planes, one complex reciprocal per point)."""
+    V = np.moveaxis(val, -1, 0).reshape(7, -1)
+    Dv = np.moveaxis(der, -1, 0).reshape(7, -1)
+    lam, nu, mu, rho = motion.coef
+    D, Np = np.array([lam, nu]) @ V[1:4]
+    Nr, G3 = np.array([mu, rho]) @ V[4:7]
+    iD = 1.0 / D
+    rc = Nr * iD
+    p, q, r = np.real(Np * iD), np.real(V[0] * iD), np.real(rc)
+    g2 = np.real((mu @ Dv[4:7] - rc * (lam @ Dv[1:4])) * iD) / motion.c0
+    g1 = (2 * (p * p + q * q) + r * r - 6 * motion.l1) / (2 * motion.c0)
+    return motion.P @ np.stack([p, q, r]), motion.P @ -np.stack([g1, g2, np.real(G3 * iD)])
+
+
+def _rate_on_grid(motion, I, center, mg, grid, refs):
+    """``phidot`` on the grid ``(k1, k2, a, b)`` of lattice coordinates ``a_i k1 + b_j k2``, per reference.
+
+    With ``b = mu M + lam d`` (``d`` a unit column of the memoir's frame), ``tau = mg gamma x center`` and
+    ``K = tau x gamma``, the numerator ``(b x bdot) . gamma`` is ``mu^2 M.K + mu lam ((M.d)(omega.gamma) -
+    (M.omega)(d.gamma) + d.K) + lam^2 ((omega.gamma) - (d.omega)(d.gamma))``: a few dot products per point shared
+    by all the candidates."""
     val, der = motion.values_on_grid(*grid, 1)
-    p, q, r, g1, g2, g3 = (np.real(v) for v in _memoir_state(val, der, motion.coef, motion.c0, motion.l1))
-    omega = np.stack([p, q, r], -1) @ motion.P.T
-    gamma = -np.stack([g1, g2, g3], -1) @ motion.P.T
+    omega, gamma = _grid_state(motion, val, der)
+    M = I @ omega
+    tau = mg * np.stack([gamma[1] * center[2] - gamma[2] * center[1], gamma[2] * center[0] - gamma[0] * center[2],
+                         gamma[0] * center[1] - gamma[1] * center[0]])
+    K = np.stack([tau[1] * gamma[2] - tau[2] * gamma[1], tau[2] * gamma[0] - tau[0] * gamma[2],
+                  tau[0] * gamma[1] - tau[1] * gamma[0]])
+    MM, MK, Mg, Mw, wg = (np.einsum("in,in->n", x, y) for x, y in
+                          ((M, M), (M, K), (M, gamma), (M, omega), (omega, gamma)))
+    Pt = motion.P.T
+    Md, dg, dw, dK = Pt @ M, Pt @ gamma, Pt @ omega, Pt @ K
+    dd = np.sum(motion.P * motion.P, 0)
+    shape = val.shape[:-1]
     out = []
-    for rf in ref:
-        b, bdot = rf.vectors(motion.P, I, center, mg, omega, gamma)
-        bb = np.sum(b * b, -1)
-        den = bb - np.sum(b * gamma, -1) ** 2
-        out.append((np.sum(np.cross(b, bdot) * gamma, -1) / den, den / bb))
+    for rf in refs:
+        mu, lam, k = rf.mu, rf.lam, rf.axis
+        num, bb, bg = mu * mu * MK, mu * mu * MM, mu * Mg
+        if lam:
+            num = num + (mu * lam) * (Md[k] * wg - Mw * dg[k] + dK[k]) + (lam * lam) * (dd[k] * wg - dw[k] * dg[k])
+            bb = bb + (2 * mu * lam) * Md[k] + (lam * lam) * dd[k]
+            bg = bg + lam * dg[k]
+        out.append((num / (bb - bg * bg)).reshape(shape))
     return out
 
 
@@ -179,27 +213,50 @@ def _phase_series(rate, nu):
     coefficient matrix, the largest integrated coefficient on each axis' edge, the sum of the dropped ones
     (a bound on the phase error they leave), the mean rate."""
     n1, n2 = rate.shape
+    j, k, C, mean = _integrated(rate, nu)
+    tails = (float(np.max(np.abs(C[np.abs(j) >= n1 // 2 - 1]))), float(np.max(np.abs(C[:, np.abs(k) >= n2 // 2 - 1]))))
+    # the dropped modes' budget leaves the truncation below PHASE_TOL where the edge allows
+    budget = min(PHASE_DROP, max(0.0, 0.99 * PHASE_TOL - max(tails)))
+    rows, cols, dropped = _mode_box(np.abs(C), np.abs(j), np.abs(k), budget)
+    return (j[rows], k[cols]), C[np.ix_(rows, cols)], tails, dropped, mean
+
+
+def _integrated(rate, nu):
+    """The modes ``j, k``, the rate's integrated Fourier coefficients ``C`` (``C[0, 0] = 0``) and its mean."""
+    n1, n2 = rate.shape
     F = np.fft.fft2(rate) / (n1 * n2)
     j, k = np.fft.fftfreq(n1, 1 / n1), np.fft.fftfreq(n2, 1 / n2)
     div = 2j * np.pi * (j[:, None] * nu[0] + k[None, :] * nu[1])
     div[0, 0] = 1.0
     C = F / div
     C[0, 0] = 0.0
-    tails = (float(np.max(np.abs(C[np.abs(j) >= n1 // 2 - 1]))), float(np.max(np.abs(C[:, np.abs(k) >= n2 // 2 - 1]))))
-    rows, cols, dropped = _mode_box(np.abs(C), np.abs(j), np.abs(k))
-    return (j[rows], k[cols]), C[np.ix_(rows, cols)], tails, dropped, float(np.real(F[0, 0]))
+    return j, k, C, float(np.real(F[0, 0]))
 
 
-def _mode_box(A, aj, ak):
+def _edge_tails(rates, nu):
+    """The largest integrated coefficient on either edge of each rate's series (``rates`` (nref, n1, n2), one
+    batched FFT): ``max(_phase_series(rate, nu)[2])`` per rate."""
+    _, n1, n2 = rates.shape
+    F = np.abs(np.fft.fft2(rates) / (n1 * n2))
+    j, k = np.fft.fftfreq(n1, 1 / n1), np.fft.fftfreq(n2, 1 / n2)
+    div = np.abs(2 * np.pi * (j[:, None] * nu[0] + k[None, :] * nu[1]))
+    div[0, 0] = np.inf
+    C = F / div
+    edge = (np.abs(j)[:, None] >= n1 // 2 - 1) | (np.abs(k)[None, :] >= n2 // 2 - 1)
+    return np.max(C[:, edge], 1)
+
+
+def _mode_box(A, aj, ak, budget):
     """The smallest box ``|j| <= J, |k| <= K`` (shrunk greedily, the cheaper row or column first) outside which
-    the coefficients sum to at most ``PHASE_DROP``: the evaluation costs ``(2J + 1)(2K + 1)`` products."""
-    M = np.zeros((int(aj.max()) + 1, int(ak.max()) + 1))
-    np.add.at(M, (aj.astype(int)[:, None], ak.astype(int)[None, :]), A)   # mass per (|j|, |k|)
+    the coefficients sum to at most ``budget``: the evaluation costs ``(2J + 1)(2K + 1)`` products."""
+    nj, nk = int(aj.max()) + 1, int(ak.max()) + 1
+    idx = aj.astype(int)[:, None] * nk + ak.astype(int)[None, :]
+    M = np.bincount(idx.ravel(), A.ravel(), nj * nk).reshape(nj, nk)   # mass per (|j|, |k|)
     J, K, dropped = M.shape[0] - 1, M.shape[1] - 1, 0.0
     while J > 0 or K > 0:
         rj = M[J, :K + 1].sum() if J > 0 else np.inf
         ck = M[:J + 1, K].sum() if K > 0 else np.inf
-        if min(rj, ck) + dropped > PHASE_DROP:
+        if min(rj, ck) + dropped > budget:
             break
         if rj / (2 * K + 1) <= ck / (2 * J + 1):   # per product saved
             dropped, J = dropped + rj, J - 1
@@ -214,9 +271,36 @@ GRID_START, GRID_MAX = 32, 512
 PHASE_REFUSE = 1e-12   # radians: a larger truncation at GRID_MAX is refused (the mean rate's error grows with t)
 
 
+def _predicted_grid(rate, nu):
+    """The grid ``(n1, n2)`` (powers of two, ``GRID_START .. GRID_MAX / 2``) at which the edge coefficients of the
+    rate's series on the first grid would fall below ``PHASE_TOL``, extrapolating each axis' geometric decay
+    between ``|j| = n/4`` and its edge.  An underestimate costs one more doubling, an overestimate samples points
+    the doubling test leaves unused (hence the cap: the early decay is often the slower one; on the 40 tops of
+    benchmarks/bench_heavy_top.py the prediction is exact on 33 and one doubling short on 7, uncapped it was
+    long, 512 for 256, on 2)."""
+    j, k, C, _ = _integrated(rate, nu)
+    out = []
+    for A, m in ((np.abs(C), np.abs(j)), (np.abs(C).T, np.abs(k))):
+        n = len(m)
+        prof = np.zeros(n // 2 + 1)
+        np.maximum.at(prof, m.astype(int), A.max(1))
+        edge, mid = float(prof[n // 2 - 1:].max()), float(prof[n // 4])
+        size = n
+        if edge >= PHASE_TOL and mid > edge:
+            per_mode = (np.log(mid) - np.log(edge)) / (n // 2 - 1 - n // 4)
+            while size < GRID_MAX // 2 and np.log(edge) - per_mode * (size - n) / 2 >= np.log(PHASE_TOL):
+                size *= 2
+        elif edge >= PHASE_TOL:
+            size = min(2 * n, GRID_MAX)
+        out.append(size)
+    return out
+
+
 def _phase_grid(motion, I, center, mg, k1, k2, nu, refs):
-    """The reference vector and the rate's Fourier series on a grid refined per axis: a doubling samples only
-    the new (odd) rows or columns, so the work is that of the final grid."""
+    """The reference vector and the rate's Fourier series on a grid refined per axis: each axis doubles until its
+    edge coefficients are below ``PHASE_TOL``.  The grid predicted from the first grid's decay is sampled in one
+    call (a call costs ~1.5 ms besides its points), the doublings take their samples from it; beyond it a
+    doubling samples only the new (odd) rows or columns."""
     def sample(i1, n1, i2, n2, refs):
         return _rate_on_grid(motion, I, center, mg, (k1, k2, i1 / n1, i2 / n2), refs)
 
@@ -225,27 +309,34 @@ def _phase_grid(motion, I, center, mg, k1, k2, nu, refs):
     rates = sample(ar, GRID_START, ar, GRID_START, refs)
     # the reference whose rate's series converges fastest on the first grid (the largest edge coefficient);
     # the distance from the vertical alone is a poor proxy: the rate's size also varies with the numerator
-    best = int(np.argmin([max(_phase_series(r, nu)[2]) for r, _ in rates]))
-    ref, rate = refs[best], rates[best][0]
+    best = int(np.argmin(_edge_tails(np.stack(rates), nu)))
+    ref, rate = refs[best], rates[best]
+    big = _predicted_grid(rate, nu)
+    full = sample(np.arange(big[0]), big[0], np.arange(big[1]), big[1], (ref,))[0] if big != n else None
+    if full is not None:
+        rate = full[::big[0] // n[0], ::big[1] // n[1]]
     while True:
         modes, coef, tails, dropped, mean = _phase_series(rate, nu)
         grow = [a for a in (0, 1) if tails[a] >= PHASE_TOL and n[a] < GRID_MAX]
         if not grow:
             return ref, modes, coef, max(tails) + dropped, mean, tuple(n)
         for a in grow:
+            m = list(n)
+            m[a] *= 2
+            if full is not None and m[0] <= big[0] and m[1] <= big[1]:
+                rate, n = full[::big[0] // m[0], ::big[1] // m[1]], m
+                continue
             odd = np.arange(1, 2 * n[a], 2)
             other = np.arange(n[1 - a])
             new = (sample(odd, 2 * n[0], other, n[1], (ref,)) if a == 0
-                   else sample(other, n[0], odd, 2 * n[1], (ref,)))[0][0]
-            shape = list(rate.shape)
-            shape[a] *= 2
-            out = np.empty(shape)
+                   else sample(other, n[0], odd, 2 * n[1], (ref,)))[0]
+            out = np.empty(m)
             idx = [slice(None), slice(None)]
             idx[a] = slice(0, None, 2)
             out[tuple(idx)] = rate
             idx[a] = slice(1, None, 2)
             out[tuple(idx)] = new
-            rate, n[a] = out, 2 * n[a]
+            rate, n = out, m
 
 
 def kovalevskaya_attitude(motion: KovalevskayaMotion, I: ArrayLike, center: ArrayLike, Q0: ArrayLike,

@@ -195,7 +195,7 @@ def _curve_setup(I, center, Q0, omega0, mass, gravity) -> _CurveSetup:
 
 def kovalevskaya_separated_flow(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, mass: float,
                                 gravity: ArrayLike) -> SeparatedFlow:
-    """Set up :class:`SeparatedFlow` from the data (the curve, its periods and Abel map: ~6 ms)."""
+    """Set up :class:`SeparatedFlow` from the data (the curve, its periods and Abel map: ~5 ms)."""
     st = _curve_setup(I, center, Q0, omega0, mass, gravity)
     s1, s2 = st.s
     coef = kovalevskaya_curve(st.l1, st.l, st.k, st.frame.c0)
