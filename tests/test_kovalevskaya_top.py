@@ -41,10 +41,10 @@ def _real_roots(I, c, Q0, w0):
 
 # seed: (real branch points, bound).  Five real (2, 14, 27; 27 with two of them 0.071 apart), three real and
 # a complex pair (4, 17: two of them 0.031 apart); measured <= 1.9e-12 at t <= 100 (heyoka conditioning
-# <= 6e-15).  19: q(0) next to 0 (s2(0) = -4.3e4): 3.6e-11.  25: two branch points 0.009 apart (a torus next
-# to a degenerate one): 2.2e-8; there the diagnostic ``fit_residual`` (6.6e-8) says so.
-CASES = {2: (5, 3e-12), 14: (5, 3e-12), 27: (5, 3e-12), 4: (3, 3e-12), 17: (3, 3e-12), 19: (3, 1e-10),
-         25: (5, 1e-7)}
+# <= 6e-15).  19: q(0) next to 0 (s2(0) = -4.3e4): 7.5e-11 (``fit_residual`` 6e-9).  25: two branch points
+# 0.009 apart (a torus next to a degenerate one): 1.4e-11 (``fit_residual`` 4.2e-11).
+CASES = {2: (5, 3e-12), 14: (5, 3e-12), 27: (5, 3e-12), 4: (3, 3e-12), 17: (3, 3e-12), 19: (3, 2e-10),
+         25: (5, 1e-10)}
 
 
 @pytest.mark.parametrize("seed", sorted(CASES))
@@ -84,11 +84,13 @@ def test_integrals_at_far_times():
     assert np.max(np.abs(ga[0] - Q0.T @ up)) < 1e-12 and np.max(np.abs(om[0] - w0)) < 1e-12
 
 
-@pytest.mark.parametrize("seed, bound", [(4, 3e-13), (17, 3e-13), (14, 3e-13)])
+@pytest.mark.parametrize("seed, bound", [(4, 5e-13), (17, 1e-12), (14, 5e-13)])
 def test_solve_heavy_top_against_heyoka(seed, bound):
     # (omega, Q) from solve_heavy_top (the azimuth about the vertical as a Fourier series on the torus):
-    # measured at t in {0.5, 1, 2, 10, 100}: <= 1.4e-13 (4), 4.6e-14 (17), 8.0e-14 (14); heyoka conditioning
-    # at t = 100 1e-14
+    # measured at t in {0.5, 1, 2, 10, 100}: <= 1.8e-13 (4), 2.8e-13 (17), 1.0e-13 (14); heyoka conditioning
+    # at t = 100 1e-14.  The error grows linearly in t from the mean precession rate, whose float64 mean over the
+    # grid inherits the state's error (fit_residual 2.4e-14 on 17) with a weight that depends on the reference
+    # vector (on 17: e3, chosen for its faster series, 2.8e-13; e2 3.4e-14).  Bound 1e-12 = 100 x the conditioning
     pytest.importorskip("heyoka")
     from thetasol.solutions.heavy_top import solve_heavy_top
 
