@@ -541,27 +541,32 @@ class Tracker:
         for p, sq in enumerate(seqs):
             S[p, :len(sq)] = sq
         n = Rp.shape[1]
+        # tracks by decreasing length: the tracks still active at step k are a prefix (slices, not
+        # index arrays, in the loop; every operation is per track, so the order changes no value)
+        perm = np.argsort(-L[tp], kind="stable")
+        tq = tp[perm]
         choice = np.full((T, Lmax), -1, dtype=int)
-        choice[:, 0] = c0
-        first = S[tp, 0]
-        ycur = Rp[first, c0]
-        ydcur = Dp[first, c0]
-        tccur = Tc[first, c0]
-        y2cur = D2p[first, c0]
+        choice[:, 0] = np.broadcast_to(c0, (T,))[perm]
+        first = S[tq, 0]
+        ycur = Rp[first, choice[:, 0]]
+        ydcur = Dp[first, choice[:, 0]]
+        tccur = Tc[first, choice[:, 0]]
+        y2cur = D2p[first, choice[:, 0]]
         unsafe = {}
         # what does not depend on the matching, for every track and step at once (the same operations;
         # entries past a track's end index the pool's last node and are never read)
-        NODE = S[tp]
+        NODE = S[tq]
         DT = tau[NODE[:, 1:]] - tau[NODE[:, :-1]]
         H2 = 0.125 * DT * DT
         nxt = NODE[:, 1:]
         with np.errstate(all="ignore"):
             MC = Rp[nxt] - 0.5 * DT[..., None] * Dp[nxt] + H2[..., None] * D2p[nxt]
-        Ltp = L[tp]
+        nact = np.searchsorted(-L[tq], -np.arange(Lmax), side="left")   # tracks with length > k
         for k in range(1, Lmax):
-            act = np.nonzero(Ltp > k)[0]
-            if len(act) == 0:
+            na = int(nact[k])
+            if na == 0:
                 break
+            act = slice(0, na)
             node = NODE[act, k]
             prev = NODE[act, k - 1]
             dt = DT[act, k - 1]
@@ -571,11 +576,13 @@ class Tracker:
             mc = MC[act, k - 1]
             dd = np.abs(mc - mp_[:, None])
             i = np.argmin(dd, axis=1)
-            ar = np.arange(len(act))
+            ar = np.arange(na)
             d1 = dd[ar, i]
-            d2 = np.partition(dd, 1, axis=1)[:, 1] if n > 1 else np.full(len(act), np.inf)
+            d2 = np.partition(dd, 1, axis=1)[:, 1] if n > 1 else np.full(na, np.inf)
             sepi = Sp[node, i]
-            turn = np.abs(dt * dt * (D2p[node, i] - y2cur[act]))
+            D2i = D2p[node, i]
+            Tci = Tc[node, i]
+            turn = np.abs(dt * dt * (D2i - y2cur[act]))
             adt = np.abs(dt)
             # the tangent may turn by no more than a fraction of the gap over the step (curvature),
             # otherwise the Hermite discrepancy is not a reliable error measure
@@ -584,7 +591,7 @@ class Tracker:
                 # the same test on log y: sheets that turn together (y ~ c_j x^p on a large circle,
                 # gaps a small fraction of |y|) fail it in y at steps ~ gap^(1/3) but pass it in log y
                 w = np.nonzero(~herm)[0]
-                il, ok = _log_hermite(ycur[act[w]], ydcur[act[w]], y2cur[act[w]], Rp[node[w]], Dp[node[w]],
+                il, ok = _log_hermite(ycur[w], ydcur[w], y2cur[w], Rp[node[w]], Dp[node[w]],
                                       D2p[node[w]], dt[w], h2[w])
                 i[w] = np.where(ok, il, i[w])
                 herm[w] = ok
@@ -592,41 +599,54 @@ class Tracker:
                 if len(w) and n > 1:
                     # a tight pair of sheets riding on a common motion (near a far branch point): the
                     # test on the pair's mean and on its half-difference
-                    ip, ok = _pair_hermite(Rp[prev[w]], Dp[prev[w]], D2p[prev[w]], choice[act[w], k - 1],
+                    ip, ok = _pair_hermite(Rp[prev[w]], Dp[prev[w]], D2p[prev[w]], choice[w, k - 1],
                                            Rp[node[w]], Dp[node[w]], D2p[node[w]], dt[w], h2[w])
                     i[w] = np.where(ok, ip, i[w])
                     herm[w] = ok
-            safe = herm & (adt <= MOVE * tccur[act]) & (adt <= MOVE * Tc[node, i])
+                Tci = Tc[node, i]
+            safe = herm & (adt <= MOVE * tccur[act]) & (adt <= MOVE * Tci)
             # two tracks of one piece may not pick the same root
-            key = tp[act] * (n + 1) + i
+            key = tq[act] * (n + 1) + i
             dup = np.bincount(key)[key] != 1
             safe &= ~dup
             bad = np.nonzero(~safe)[0]
             if len(bad):
-                if scalar:
-                    for q in bad:
-                        t = act[q]
-                        nd = node[q]
-                        i[q] = self._refine(pieces_obj[tp[t]], tau[prev[q]], ycur[t], ydcur[t], tau[nd],
-                                            Rp[nd], Dp[nd], Sp[nd], Tc[nd], tccur[t], y2cur[t], D2p[nd])
-                else:
-                    with np.errstate(divide="ignore", invalid="ignore"):
-                        r = np.maximum.reduce([
-                            np.where(sepi > 0, (d1 / (SAFETY * sepi)) ** (1 / 4), 4.0),
-                            np.where(tccur[act] > 0, adt / (MOVE * tccur[act]), 4.0),
-                            np.where(Tc[node, i] > 0, adt / (MOVE * Tc[node, i]), 4.0),
-                            np.where(sepi > 0, (turn / (SAFETY * sepi)) ** (1 / 3), 4.0),
-                            np.where(d2 > 0, (d1 / (SAFETY * d2)) ** (1 / 4), 4.0)])
-                    m = np.clip(np.ceil(1.5 * np.nan_to_num(r[bad], nan=4.0, posinf=64.0)), 2, 64).astype(int)
-                    for q, mq in zip(bad, m):
-                        key2 = (int(tp[act[q]]), k)
-                        unsafe[key2] = max(unsafe.get(key2, 2), int(mq))
+                bad = bad[np.argsort(perm[bad])]          # in the tracks' own order
+                self._unsafe_steps(bad, k, i, node, prev, dt, d1, d2, sepi, turn, adt, tccur, Tc, tq, tau,
+                                   (Rp, Dp, Sp, D2p), ycur, ydcur, y2cur, unsafe, scalar, pieces_obj)
             choice[act, k] = i
             ycur[act] = Rp[node, i]
             ydcur[act] = Dp[node, i]
             tccur[act] = Tc[node, i]
             y2cur[act] = D2p[node, i]
-        return choice, [(p, k, m) for (p, k), m in unsafe.items()]
+        out = np.empty_like(choice)
+        out[perm] = choice
+        return out, [(p, k, m) for (p, k), m in unsafe.items()]
+
+    def _unsafe_steps(self, bad, k, i, node, prev, dt, d1, d2, sepi, turn, adt, tccur, Tc, tq, tau, pool4,
+                      ycur, ydcur, y2cur, unsafe, scalar, pieces_obj):
+        """Steps of :meth:`_match_pass` that fail a test: resolved by :meth:`_refine` (``scalar``,
+        the root index written into ``i``) or recorded in ``unsafe`` with a subdivision count."""
+        Rp, Dp, Sp, D2p = pool4
+        if scalar:
+            for q in bad:
+                nd = node[q]
+                i[q] = self._refine(pieces_obj[tq[q]], tau[prev[q]], ycur[q], ydcur[q], tau[nd],
+                                    Rp[nd], Dp[nd], Sp[nd], Tc[nd], tccur[q], y2cur[q], D2p[nd])
+            return
+        tca = tccur[:len(i)]
+        Tci = Tc[node, i]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = np.maximum.reduce([
+                np.where(sepi > 0, (d1 / (SAFETY * sepi)) ** (1 / 4), 4.0),
+                np.where(tca > 0, adt / (MOVE * tca), 4.0),
+                np.where(Tci > 0, adt / (MOVE * Tci), 4.0),
+                np.where(sepi > 0, (turn / (SAFETY * sepi)) ** (1 / 3), 4.0),
+                np.where(d2 > 0, (d1 / (SAFETY * d2)) ** (1 / 4), 4.0)])
+        m = np.clip(np.ceil(1.5 * np.nan_to_num(r[bad], nan=4.0, posinf=64.0)), 2, 64).astype(int)
+        for q, mq in zip(bad, m):
+            key2 = (int(tq[q]), k)
+            unsafe[key2] = max(unsafe.get(key2, 2), int(mq))
 
 
 class Tracked:
