@@ -542,3 +542,30 @@ def test_rank_one_node_next_to_branch_points_against_dop853():
     against heyoka 80-bit.  With the node's scaled eigenproblem (and the exact exponents) measured
     1.6e-14 and 1.5e-12.  DOP853 at rtol 1e-13 is itself 3.5e-13 off here."""
     _check_against_dop853(*_NODE_NEAR_BRANCH, "theta/nodal-genus-3", [0.0, 3.1, 17.3], 1e-12)
+
+
+@pytest.mark.parametrize("name", ["generic", "nearly_symmetric", "near_unstable_equilibrium", "rank_one",
+                                  "symmetric_oblate", "symmetric_rank_one"])
+def test_riemann_constant_from_stage_two_divisors_matches_random_divisors(name, monkeypatch):
+    """Riemann's vanishing theorem on the divisors made of stage 2's points (poles and component zeros)
+    picks the same half-period candidate as on three random divisors, and clearly: the runner-up's theta
+    is >= 1.1e-7 on these bodies (nearly_symmetric; 1e-2 on generic), above the 1e-8 that sends the choice
+    to random divisors.  Both choices satisfy theta(K + A(D')) ~ 1e-15 at their divisors."""
+    from thetasol.solutions.theta_rotation import riemann as stage3
+    from thetasol.solutions.theta_rotation.divisors import eigenvector_divisors
+    from thetasol.solutions.theta_rotation.frame import body_frame
+    from thetasol.solutions.theta_rotation.spectral_data import spectral_data
+
+    J, a, Q0, w0, _ = _case(name)
+    sd = spectral_data(body_frame(J, a, Q0, w0))
+    dv = eigenvector_divisors(sd)
+    canon = stage3.canonical_divisor(sd)
+    K_random = stage3.riemann_constant(sd, canon)           # no stage 2 data: three random divisors
+
+    def no_fallback(*args):
+        raise AssertionError("the stage 2 divisors did not decide: fell back to random divisors")
+
+    monkeypatch.setattr(stage3, "_random_divisor_constant", no_fallback)
+    K_stage2 = stage3.riemann_constant(sd, canon, dv)
+    # the same candidate: the two differ only by the rounding of A(canonical divisor) / 2
+    assert np.abs(K_stage2 - K_random).max() < 1e-13

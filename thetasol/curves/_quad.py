@@ -294,6 +294,67 @@ def _pair_hermite(P, Pd, P2, ip, R, D, D2, dt, h2):
     return pick, ok
 
 
+def _step_tests(c, prev, node, dt, h2, mc, pool):
+    """The matching tests of the steps prev -> node for a track holding root ``c`` at ``prev``.
+
+    Hermite test on y (second-order midpoint predictions from both ends), else on log y, else on a
+    tight pair; safe also needs the step within MOVE of both ends' scales.  Returns the root index
+    ``i``, ``safe`` (before the test for duplicates) and what :func:`_subdivisions` needs.
+    """
+    Rp, Dp, Sp, Tc, D2p = pool["R"], pool["Dt"], pool["sep"], pool["tc"], pool["D2"]
+    n = Rp.shape[1]
+    ycur, ydcur, tccur, y2cur = Rp[prev, c], Dp[prev, c], Tc[prev, c], D2p[prev, c]
+    with np.errstate(all="ignore"):
+        mp_ = ycur + 0.5 * dt * ydcur + h2 * y2cur
+        dd = np.abs(mc - mp_[:, None])
+        i = np.argmin(dd, axis=1)
+        ar = np.arange(len(i))
+        d1 = dd[ar, i]
+        d2 = np.partition(dd, 1, axis=1)[:, 1] if n > 1 else np.full(len(i), np.inf)
+        sepi = Sp[node, i]
+        turn = np.abs(dt * dt * (D2p[node, i] - y2cur))
+        adt = np.abs(dt)
+        # the tangent may turn by no more than a fraction of the gap over the step (curvature),
+        # otherwise the Hermite discrepancy is not a reliable error measure
+        herm = (d1 <= SAFETY * d2) & (d1 <= SAFETY * sepi) & (turn <= SAFETY * sepi)
+        if not herm.all():
+            # the same test on log y: sheets that turn together (y ~ c_j x^p on a large circle,
+            # gaps a small fraction of |y|) fail it in y at steps ~ gap^(1/3) but pass it in log y
+            w = np.nonzero(~herm)[0]
+            il, ok = _log_hermite(ycur[w], ydcur[w], y2cur[w], Rp[node[w]], Dp[node[w]],
+                                  D2p[node[w]], dt[w], h2[w])
+            i[w] = np.where(ok, il, i[w])
+            herm[w] = ok
+            w = w[~ok]
+            if len(w) and n > 1:
+                # a tight pair of sheets riding on a common motion (near a far branch point): the
+                # test on the pair's mean and on its half-difference
+                ip, ok = _pair_hermite(Rp[prev[w]], Dp[prev[w]], D2p[prev[w]], np.full(len(w), c),
+                                       Rp[node[w]], Dp[node[w]], D2p[node[w]], dt[w], h2[w])
+                i[w] = np.where(ok, ip, i[w])
+                herm[w] = ok
+        Tci = Tc[node, i]
+        safe = herm & (adt <= MOVE * tccur) & (adt <= MOVE * Tci)
+    return {"i": i, "safe": safe, "d1": d1, "d2": d2, "sepi": sepi, "turn": turn, "adt": adt,
+            "tccur": tccur, "Tci": Tci}
+
+
+def _subdivisions(tests, c, e):
+    """Number of parts for each unsafe step (entries ``e`` of :func:`_step_tests` for roots ``c``):
+    from how far the step failed each test (the tests scale as the step to the powers used)."""
+    g = {name: np.array([tests[ci][name][ei] for ci, ei in zip(c, e)])
+         for name in ("d1", "d2", "sepi", "turn", "adt", "tccur", "Tci")}
+    d1, d2, sepi, turn, adt, tca, Tci = (g[k] for k in ("d1", "d2", "sepi", "turn", "adt", "tccur", "Tci"))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r = np.maximum.reduce([
+            np.where(sepi > 0, (d1 / (SAFETY * sepi)) ** (1 / 4), 4.0),
+            np.where(tca > 0, adt / (MOVE * tca), 4.0),
+            np.where(Tci > 0, adt / (MOVE * Tci), 4.0),
+            np.where(sepi > 0, (turn / (SAFETY * sepi)) ** (1 / 3), 4.0),
+            np.where(d2 > 0, (d1 / (SAFETY * d2)) ** (1 / 4), 4.0)])
+    return np.clip(np.ceil(1.5 * np.nan_to_num(r, nan=4.0, posinf=64.0)), 2, 64).astype(int)
+
+
 def _gaps(R):
     """|R_i - R_j| for the roots of every row (K, n, n), infinite on the diagonal."""
     n = R.shape[1]
@@ -532,6 +593,9 @@ class Tracker:
         """Match along every sequence; returns (choices (T, Lmax), unsafe steps [(piece, k, m)]).
 
         With scalar=True unsafe steps are resolved by :meth:`_refine` instead of being reported.
+        A step's tests depend on the matching only through the root the track holds at the previous
+        node: they are done for every step and every such root at once (:func:`_step_tests`), and the
+        walk along the tracks only picks the entries.
         """
         Rp, Dp, Sp, Tc, tau, D2p = pool["R"], pool["Dt"], pool["sep"], pool["tc"], pool["tau"], pool["D2"]
         T = len(tp)
@@ -541,92 +605,52 @@ class Tracker:
         for p, sq in enumerate(seqs):
             S[p, :len(sq)] = sq
         n = Rp.shape[1]
+        # tracks by decreasing length: the tracks still active at step k are a prefix
+        perm = np.argsort(-L[tp], kind="stable")
+        tq = tp[perm]
+        Lq = L[tq]
         choice = np.full((T, Lmax), -1, dtype=int)
-        choice[:, 0] = c0
-        first = S[tp, 0]
-        ycur = Rp[first, c0]
-        ydcur = Dp[first, c0]
-        tccur = Tc[first, c0]
-        y2cur = D2p[first, c0]
-        unsafe = {}
-        # what does not depend on the matching, for every track and step at once (the same operations;
-        # entries past a track's end index the pool's last node and are never read)
-        NODE = S[tp]
-        DT = tau[NODE[:, 1:]] - tau[NODE[:, :-1]]
-        H2 = 0.125 * DT * DT
-        nxt = NODE[:, 1:]
+        choice[:, 0] = np.broadcast_to(c0, (T,))[perm]
+        NODE = S[tq]
+        tt, kk = np.nonzero(Lq[:, None] > np.arange(1, Lmax)[None, :])   # every step k = kk + 1
+        pos = np.zeros((T, Lmax), dtype=int)
+        pos[tt, kk + 1] = np.arange(len(tt))
+        prev, node = NODE[tt, kk], NODE[tt, kk + 1]
+        dt = tau[node] - tau[prev]
+        h2 = 0.125 * dt * dt
         with np.errstate(all="ignore"):
-            MC = Rp[nxt] - 0.5 * DT[..., None] * Dp[nxt] + H2[..., None] * D2p[nxt]
-        Ltp = L[tp]
+            mc = Rp[node] - 0.5 * dt[:, None] * Dp[node] + h2[:, None] * D2p[node]
+        tests = [_step_tests(c, prev, node, dt, h2, mc, pool) for c in range(n)]
+        I = np.stack([t_["i"] for t_ in tests])
+        SAFE = np.stack([t_["safe"] for t_ in tests])
+        nact = np.searchsorted(-Lq, -np.arange(Lmax), side="left")   # tracks with length > k
+        unsafe = {}
         for k in range(1, Lmax):
-            act = np.nonzero(Ltp > k)[0]
-            if len(act) == 0:
+            na = int(nact[k])
+            if na == 0:
                 break
-            node = NODE[act, k]
-            prev = NODE[act, k - 1]
-            dt = DT[act, k - 1]
-            h2 = H2[act, k - 1]
-            # second-order (Taylor to y'') predictions of the midpoint from both ends
-            mp_ = ycur[act] + 0.5 * dt * ydcur[act] + h2 * y2cur[act]
-            mc = MC[act, k - 1]
-            dd = np.abs(mc - mp_[:, None])
-            i = np.argmin(dd, axis=1)
-            ar = np.arange(len(act))
-            d1 = dd[ar, i]
-            d2 = np.partition(dd, 1, axis=1)[:, 1] if n > 1 else np.full(len(act), np.inf)
-            sepi = Sp[node, i]
-            turn = np.abs(dt * dt * (D2p[node, i] - y2cur[act]))
-            adt = np.abs(dt)
-            # the tangent may turn by no more than a fraction of the gap over the step (curvature),
-            # otherwise the Hermite discrepancy is not a reliable error measure
-            herm = (d1 <= SAFETY * d2) & (d1 <= SAFETY * sepi) & (turn <= SAFETY * sepi)
-            if not herm.all():
-                # the same test on log y: sheets that turn together (y ~ c_j x^p on a large circle,
-                # gaps a small fraction of |y|) fail it in y at steps ~ gap^(1/3) but pass it in log y
-                w = np.nonzero(~herm)[0]
-                il, ok = _log_hermite(ycur[act[w]], ydcur[act[w]], y2cur[act[w]], Rp[node[w]], Dp[node[w]],
-                                      D2p[node[w]], dt[w], h2[w])
-                i[w] = np.where(ok, il, i[w])
-                herm[w] = ok
-                w = w[~ok]
-                if len(w) and n > 1:
-                    # a tight pair of sheets riding on a common motion (near a far branch point): the
-                    # test on the pair's mean and on its half-difference
-                    ip, ok = _pair_hermite(Rp[prev[w]], Dp[prev[w]], D2p[prev[w]], choice[act[w], k - 1],
-                                           Rp[node[w]], Dp[node[w]], D2p[node[w]], dt[w], h2[w])
-                    i[w] = np.where(ok, ip, i[w])
-                    herm[w] = ok
-            safe = herm & (adt <= MOVE * tccur[act]) & (adt <= MOVE * Tc[node, i])
+            c = choice[:na, k - 1]
+            e = pos[:na, k]
+            i = I[c, e]
             # two tracks of one piece may not pick the same root
-            key = tp[act] * (n + 1) + i
-            dup = np.bincount(key)[key] != 1
-            safe &= ~dup
+            key = tq[:na] * (n + 1) + i
+            safe = SAFE[c, e] & (np.bincount(key)[key] == 1)
             bad = np.nonzero(~safe)[0]
             if len(bad):
+                bad = bad[np.argsort(perm[bad])]          # in the tracks' own order
                 if scalar:
                     for q in bad:
-                        t = act[q]
-                        nd = node[q]
-                        i[q] = self._refine(pieces_obj[tp[t]], tau[prev[q]], ycur[t], ydcur[t], tau[nd],
-                                            Rp[nd], Dp[nd], Sp[nd], Tc[nd], tccur[t], y2cur[t], D2p[nd])
+                        pv, nd, cq = prev[e[q]], node[e[q]], c[q]
+                        i[q] = self._refine(pieces_obj[tq[q]], tau[pv], Rp[pv, cq], Dp[pv, cq], tau[nd],
+                                            Rp[nd], Dp[nd], Sp[nd], Tc[nd], Tc[pv, cq], D2p[pv, cq], D2p[nd])
                 else:
-                    with np.errstate(divide="ignore", invalid="ignore"):
-                        r = np.maximum.reduce([
-                            np.where(sepi > 0, (d1 / (SAFETY * sepi)) ** (1 / 4), 4.0),
-                            np.where(tccur[act] > 0, adt / (MOVE * tccur[act]), 4.0),
-                            np.where(Tc[node, i] > 0, adt / (MOVE * Tc[node, i]), 4.0),
-                            np.where(sepi > 0, (turn / (SAFETY * sepi)) ** (1 / 3), 4.0),
-                            np.where(d2 > 0, (d1 / (SAFETY * d2)) ** (1 / 4), 4.0)])
-                    m = np.clip(np.ceil(1.5 * np.nan_to_num(r[bad], nan=4.0, posinf=64.0)), 2, 64).astype(int)
-                    for q, mq in zip(bad, m):
-                        key2 = (int(tp[act[q]]), k)
+                    for q, mq in zip(bad, _subdivisions(tests, c[bad], e[bad])):
+                        key2 = (int(tq[q]), k)
                         unsafe[key2] = max(unsafe.get(key2, 2), int(mq))
-            choice[act, k] = i
-            ycur[act] = Rp[node, i]
-            ydcur[act] = Dp[node, i]
-            tccur[act] = Tc[node, i]
-            y2cur[act] = D2p[node, i]
-        return choice, [(p, k, m) for (p, k), m in unsafe.items()]
+            choice[:na, k] = i
+        out = np.empty_like(choice)
+        out[perm] = choice
+        return out, [(p, k, m) for (p, k), m in unsafe.items()]
 
 
 class Tracked:

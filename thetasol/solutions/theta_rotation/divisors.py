@@ -48,6 +48,11 @@ class EigenvectorDivisors:
         (stage 3 then uses ``div(E)`` and ``A(inf_k)``).
     radius : float
         Radius of the Cauchy circles of stage 4 (:func:`circle_radius`).
+    AP0_raw : ndarray, shape (3, g)
+        ``A(P_s)`` as computed (not reduced): the canonical divisor of stage 3 is made of these.
+    A_points : ndarray, shape (n, g)
+        The Abel images of the single points of ``D0`` and of the ``Z_k`` used: stage 3 tests the
+        Riemann constant on divisors made of them.
     """
 
     alpha: np.ndarray
@@ -55,6 +60,8 @@ class EigenvectorDivisors:
     AP0: np.ndarray
     AZ: tuple
     radius: float
+    AP0_raw: np.ndarray
+    A_points: np.ndarray
 
 
 def choose_alpha(X: np.ndarray) -> np.ndarray:
@@ -179,4 +186,5 @@ def eigenvector_divisors(sd: SpectralData) -> EigenvectorDivisors:
     for k, use in enumerate(use_zeros):
         if use:
             AZ[k], pos = A_all[pos:pos + g].sum(axis=0), pos + g
-    return EigenvectorDivisors(alpha=alpha, AD0=AD0, AP0=AP0, AZ=tuple(AZ), radius=r)
+    return EigenvectorDivisors(alpha=alpha, AD0=AD0, AP0=AP0, AZ=tuple(AZ), radius=r,
+                               AP0_raw=A_all[nD:nD + 3], A_points=np.concatenate([A_all[:nD], A_all[nD + 3:]]))
