@@ -85,13 +85,13 @@ def test_integrals_at_far_times():
     assert np.max(np.abs(ga[0] - Q0.T @ up)) < 1e-12 and np.max(np.abs(om[0] - w0)) < 1e-12
 
 
-@pytest.mark.parametrize("seed, bound", [(4, 5e-13), (17, 1e-12), (14, 5e-13)])
+@pytest.mark.parametrize("seed, bound", [(4, 1e-12), (17, 2e-13), (14, 5e-13)])
 def test_solve_heavy_top_against_heyoka(seed, bound):
     # (omega, Q) from solve_heavy_top (the azimuth about the vertical as a Fourier series on the torus):
     # measured at t in {0.5, 1, 2, 10, 100}: <= 3.6e-13 (4), 3.3e-14 (17), 1.5e-13 (14); heyoka conditioning
     # at t = 100 1e-14.  The error grows linearly in t from the mean precession rate, whose float64 mean over the
     # grid inherits the state's error (fit_residual 4.2e-15 on 17, 2.9e-13 on 4) with a weight that depends on the
-    # reference vector.  Bound 1e-12 = 100 x the conditioning
+    # reference vector (on 4 the bound is 100 x the conditioning: its error there is that of the 40 samples alone)
     pytest.importorskip("heyoka")
     from thetasol.solutions.heavy_top import solve_heavy_top
 
