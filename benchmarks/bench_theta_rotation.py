@@ -35,6 +35,7 @@ import numpy as np
 from _common import best_of, machine_info
 
 from thetasol import integrate_rotation, solve_rotation
+from thetasol.integrators.rotation import rotation_expressions
 
 REFS = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "rotation" / "refs.json"
 QUICK = "generic,saddle,rank_one,near_unstable_equilibrium,symmetric_oblate"
@@ -55,16 +56,7 @@ def heyoka_integrator():
     m, Q = xs[:3], [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]
     p = [hy.par[k] for k in range(27)]
     Iinv, J, A = ([p[o + 3 * i: o + 3 * i + 3] for i in range(3)] for o in (0, 9, 18))
-    w = [sum(Iinv[i][k] * m[k] for k in range(3)) for i in range(3)]
-    aQ = [[sum(A[i][k] * Q[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-    ap = [[sum(Q[k][i] * aQ[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-    JA = [[sum(J[i][k] * ap[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-    tau = [JA[2][1] - JA[1][2], JA[0][2] - JA[2][0], JA[1][0] - JA[0][1]]
-    mdot = [m[1] * w[2] - m[2] * w[1] + tau[0], m[2] * w[0] - m[0] * w[2] + tau[1],
-            m[0] * w[1] - m[1] * w[0] + tau[2]]
-    W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
-    Qdot = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
-    ta = hy.taylor_adaptive(list(zip(xs, mdot + Qdot, strict=True)), np.zeros(12), tol=1e-16,
+    ta = hy.taylor_adaptive(list(zip(xs, rotation_expressions(m, Q, Iinv, J, A), strict=True)), np.zeros(12), tol=1e-16,
                             pars=np.zeros(27))
     return ta, CLOCK[0]() - start
 

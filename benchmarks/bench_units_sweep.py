@@ -30,6 +30,7 @@ from _common import machine_info  # noqa: E402
 
 from thetasol import ClosedFormUnavailable, solve_rotation  # noqa: E402
 from thetasol.core.so3 import rodrigues  # noqa: E402
+from thetasol.integrators.rotation import rotation_expressions  # noqa: E402
 
 LD = np.longdouble
 EPS = np.finfo(float).eps
@@ -37,7 +38,7 @@ T_NAT = np.array([0.7, 17.3, 102.0, 997.0, 4002.0])
 _TA = {}
 
 
-# -- the reference (same as tests/test_units.py) ----------------------------------------------------
+# -- the reference (the equations of tests/test_units.py, through integrators.rotation.rotation_expressions) -
 
 def _integrator():
     import heyoka as hy
@@ -47,17 +48,9 @@ def _integrator():
         m, Q = xs[:3], [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]
         p = [hy.par[k] for k in range(27)]
         Iinv, J, A = ([p[o + 3 * i: o + 3 * i + 3] for i in range(3)] for o in (0, 9, 18))
-        w = [sum(Iinv[i][k] * m[k] for k in range(3)) for i in range(3)]
-        aQ = [[sum(A[i][k] * Q[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-        ap = [[sum(Q[k][i] * aQ[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-        JA = [[sum(J[i][k] * ap[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-        tau = [JA[2][1] - JA[1][2], JA[0][2] - JA[2][0], JA[1][0] - JA[0][1]]
-        mdot = [m[1] * w[2] - m[2] * w[1] + tau[0], m[2] * w[0] - m[0] * w[2] + tau[1],
-                m[0] * w[1] - m[1] * w[0] + tau[2]]
-        W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
-        Qdot = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
-        _TA["ta"] = hy.taylor_adaptive(list(zip(xs, mdot + Qdot, strict=True)), np.zeros(12, dtype=LD), tol=LD(1e-19),
-                                       fp_type=LD, pars=np.zeros(27, dtype=LD))
+        odes = list(zip(xs, rotation_expressions(m, Q, Iinv, J, A), strict=True))
+        _TA["ta"] = hy.taylor_adaptive(odes, np.zeros(12, dtype=LD), tol=LD(1e-19), fp_type=LD,
+                                       pars=np.zeros(27, dtype=LD))
     return _TA["ta"]
 
 

@@ -32,7 +32,7 @@ from thetasol.integrators._common import both_ways, extended_inertia, heyoka_and
 from thetasol.mechanics.equations import inertia_from_moments, invariants, rotation_rhs
 from thetasol.solutions.base import RotationSolution
 
-__all__ = ["integrate_rotation", "NumericalRotation", "numerical_rotation"]
+__all__ = ["integrate_rotation", "NumericalRotation", "numerical_rotation", "rotation_expressions"]
 
 
 def _prepare(J, a, Q0, omega0, t) -> tuple[np.ndarray, ...]:
@@ -270,6 +270,25 @@ class _SplitState:
 
 # -- heyoka ----------------------------------------------------------------------------------
 
+def rotation_expressions(m: list, Q: list, Iinv: list, J: list, A: list) -> list:
+    """The right-hand side of (4.8) with ``Qdot = Q hat(omega)`` as expressions: ``mdot`` (3) then ``Qdot`` (9,
+    row-major), for ``m`` (3) and ``Q`` (3 x 3 nested lists) of symbolic variables and ``I^-1``, ``J``, ``a``
+    (3 x 3 nested lists of numbers or parameters).  The torque is ``vee([J, Q^T a Q])``.
+
+    Written once for every heyoka model of the rotation (this module's reference and the benchmarks' compiled
+    parametric integrators)."""
+    w = [sum(Iinv[i][k] * m[k] for k in range(3)) for i in range(3)]
+    aQ = [[sum(A[i][k] * Q[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+    ap = [[sum(Q[k][i] * aQ[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+    JA = [[sum(J[i][k] * ap[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+    comm = [[JA[i][j] - JA[j][i] for j in range(3)] for i in range(3)]  # [J, ap] (ap symmetric)
+    tau = [comm[2][1], comm[0][2], comm[1][0]]
+    mdot = [m[1] * w[2] - m[2] * w[1] + tau[0], m[2] * w[0] - m[0] * w[2] + tau[1],
+            m[0] * w[1] - m[1] * w[0] + tau[2]]
+    W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
+    return mdot + [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
+
+
 def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0):
     hy, ft = heyoka_and_type(dtype)
     names = [f"m{i}" for i in range(3)] + [f"q{i}{j}" for i in range(3) for j in range(3)]
@@ -280,17 +299,9 @@ def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0):
         Iw, m0w = [[float(x) for x in row] for row in I_inv], [float(x) for x in m0]
     else:
         Iw, m0w = extended_inertia(Jm, w0, ft, from_moments=True)
-    w = [sum(Iw[i][k] * m[k] for k in range(3)) for i in range(3)]
-    aQ = [[sum(float(am[i, k]) * Q[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-    ap = [[sum(Q[k][i] * aQ[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-    JA = [[sum(float(Jm[i, k]) * ap[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
-    comm = [[JA[i][j] - JA[j][i] for j in range(3)] for i in range(3)]  # [J, ap] (ap symmetric)
-    tau = [comm[2][1], comm[0][2], comm[1][0]]
-    mdot = [m[1] * w[2] - m[2] * w[1] + tau[0], m[2] * w[0] - m[0] * w[2] + tau[1],
-            m[0] * w[1] - m[1] * w[0] + tau[2]]
-    W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
-    Qdot = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
-    odes = list(zip(xs, mdot + Qdot, strict=True))
+    A = [[float(am[i, k]) for k in range(3)] for i in range(3)]
+    J = [[float(Jm[i, k]) for k in range(3)] for i in range(3)]
+    odes = list(zip(xs, rotation_expressions(m, Q, Iw, J, A), strict=True))
     # Q0 and the times are the float64 values themselves (real128(str(x)) would be another number)
     y0 = np.array(m0w + [ft(float(v)) for v in Q0.ravel()])
     grid = np.array([ft(float(v)) for v in np.concatenate([[0.0], tgrid])])
