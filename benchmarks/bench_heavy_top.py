@@ -68,6 +68,21 @@ def err(a, b):
     return max(ew, np.max(np.abs(Q - Qr)))
 
 
+def _method_rows(case, t, ref, quick, repeat, warm):
+    """(method, seconds, error) at the times ``t``: the closed form (set-up + evaluation, best of ``repeat``),
+    DOP853 at rtol 1e-9 (and 1e-12 unless ``quick``), heyoka float64 after a warm-up call at ``warm``."""
+    I, c, Q0, w0, kw = case
+    cost, out = best_of(lambda: solve_heavy_top(I, c, Q0, w0, **kw)(t), repeat=repeat)
+    rows = [("closed form (set-up + evaluation)", cost, err(out, ref))]
+    for rtol in ([1e-9] if quick else [1e-9, 1e-12]):
+        cost, out = best_of(lambda rtol=rtol: integrate_heavy_top(I, c, Q0, w0, t, rtol=rtol, **kw), repeat=1)
+        rows.append((f"DOP853 rtol={rtol:g}", cost, err(out, ref)))
+    integrate_heavy_top(I, c, Q0, w0, warm, method="heyoka", rtol=1e-16, **kw)
+    cost, out = best_of(lambda: integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", rtol=1e-16, **kw), repeat=1)
+    rows.append(("heyoka float64 tol=1e-16", cost, err(out, ref)))
+    return rows
+
+
 def dense(name, case, T, quick):
     I, c, Q0, w0, kw = case
     t = np.linspace(0.0, T, 1001)
@@ -76,15 +91,9 @@ def dense(name, case, T, quick):
     tref = time.perf_counter() - t0
     print(f"\n## {name}: 1001 points on [0, {T:g}]  (reference: heyoka 80-bit, tol 1e-19, {tref:.2f} s "
           "including compilation)")
-    rows = []
-    cost, out = best_of(lambda: solve_heavy_top(I, c, Q0, w0, **kw)(t), repeat=5)
-    rows.append(("thetasol closed form (set-up + evaluation)", cost, err(out, ref)))
-    for rtol in ([1e-9] if quick else [1e-9, 1e-12]):
-        cost, out = best_of(lambda rtol=rtol: integrate_heavy_top(I, c, Q0, w0, t, rtol=rtol, **kw), repeat=1)
-        rows.append((f"DOP853 rtol={rtol:g}", cost, err(out, ref)))
-    integrate_heavy_top(I, c, Q0, w0, t[:3], method="heyoka", rtol=1e-16, **kw)
-    cost, out = best_of(lambda: integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", rtol=1e-16, **kw), repeat=1)
-    rows.append(("heyoka float64 tol=1e-16 (2nd call, compiled code cached)", cost, err(out, ref)))
+    rows = _method_rows(case, t, ref, quick, repeat=5, warm=t[:3])
+    rows[0] = ("thetasol " + rows[0][0], *rows[0][1:])
+    rows[-1] = (rows[-1][0] + " (2nd call, compiled code cached)", *rows[-1][1:])
     print("| method | wall time [s] | max error (omega, Q) |\n|---|---|---|")
     for r in rows:
         print(f"| {r[0]} | {r[1]:.3g} | {r[2]:.2e} |")
@@ -95,15 +104,7 @@ def far(name, case, T, quick):
     I, c, Q0, w0, kw = case
     t = np.array([T])
     ref = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **kw)
-    rows = []
-    cost, out = best_of(lambda: solve_heavy_top(I, c, Q0, w0, **kw)(t), repeat=3)
-    rows.append(("closed form (set-up + evaluation)", cost, err(out, ref)))
-    for rtol in ([1e-9] if quick else [1e-9, 1e-12]):
-        cost, out = best_of(lambda rtol=rtol: integrate_heavy_top(I, c, Q0, w0, t, rtol=rtol, **kw), repeat=1)
-        rows.append((f"DOP853 rtol={rtol:g}", cost, err(out, ref)))
-    integrate_heavy_top(I, c, Q0, w0, t[:1] * 1e-3, method="heyoka", rtol=1e-16, **kw)
-    cost, out = best_of(lambda: integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", rtol=1e-16, **kw), repeat=1)
-    rows.append(("heyoka float64 tol=1e-16", cost, err(out, ref)))
+    rows = _method_rows(case, t, ref, quick, repeat=3, warm=t[:1] * 1e-3)
     print(f"| {name.split(' (')[0]} | " + " | ".join(f"{r[1]:.3g} s, {r[2]:.1e}" for r in rows) + " |")
 
 
