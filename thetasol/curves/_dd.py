@@ -4,7 +4,7 @@ Where the float64 Gauss-Legendre sum of an interval is not accurate enough (node
 close critical values, roots that float64 cannot separate well, see
 :meth:`thetasol.curves._quad.Tracked.critical_intervals`), the interval is re-summed in double-double
 arithmetic (~32 digits): the exact rational coefficients of the curve and of the numerators rounded
-to double-double pairs, Gauss-Legendre nodes and weights (from mpmath once per order, cached), the
+to double-double pairs, Gauss-Legendre nodes and weights (a stored table of mpmath's values), the
 piece's parametrization x(tau), dx/dtau, Newton polishing of all roots from the float seeds, and the
 integrand p(x, y) / f_y dx/dtau, all in double-double and vectorized over every node of every
 critical interval and every track at once.  Only the sum of each interval is rounded to complex128.
@@ -18,6 +18,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cache
+from pathlib import Path
 
 import numpy as np
 
@@ -65,13 +66,46 @@ def numerators_to_cdd(numer_exact):
     return tuple(np.stack([p[c] for p in parts]) for c in range(4))
 
 
+#: The stored orders of :func:`gauss_legendre_dd`: those of :func:`thetasol.curves._quad.n_nodes`.
+TABLE_ORDERS = range(4, 81)
+_TABLE = Path(__file__).with_name("data") / "gauss_legendre_dd.npz"
+
+
 @cache
 def gauss_legendre_dd(N: int):
-    """Gauss-Legendre nodes and weights on [-1, 1] as double-double pairs (t_hi, t_lo, w_hi, w_lo)."""
+    """Gauss-Legendre nodes and weights on [-1, 1] as double-double pairs (t_hi, t_lo, w_hi, w_lo).
+
+    Orders in :data:`TABLE_ORDERS` are read from a table of the values of
+    :func:`gauss_legendre_dd_mp` (curves/data/gauss_legendre_dd.npz, written by
+    :func:`write_gauss_legendre_table`; tests/test_curve_dd.py checks it bit for bit): reading it
+    costs ~1 ms, computing the orders a set-up needs ~150 ms, paid once per process.
+    """
+    if N in TABLE_ORDERS:
+        offsets, nodes = _table()
+        k = offsets[N - TABLE_ORDERS.start]
+        return tuple(nodes[i, k:k + N] for i in range(4))
+    return gauss_legendre_dd_mp(N)
+
+
+@cache
+def _table() -> tuple[np.ndarray, np.ndarray]:
+    with np.load(_TABLE) as f:
+        return f["offsets"], f["nodes"]
+
+
+def gauss_legendre_dd_mp(N: int):
+    """:func:`gauss_legendre_dd` computed: mpmath at 34 digits, split into double-double pairs."""
     import mpmath
     ts, ws = gauss_legendre_mp(N, 24)
     with mpmath.workdps(40):
         return (*dd_split_mp(ts), *dd_split_mp(ws))
+
+
+def write_gauss_legendre_table(path: Path = _TABLE) -> None:
+    """Write the table of :func:`gauss_legendre_dd` for :data:`TABLE_ORDERS` (~3 s of mpmath)."""
+    parts = [np.stack(gauss_legendre_dd_mp(N)) for N in TABLE_ORDERS]
+    offsets = np.cumsum([0] + [p.shape[1] for p in parts])[:-1]
+    np.savez_compressed(path, offsets=offsets, nodes=np.concatenate(parts, axis=1))
 
 
 def _horner(C, z, deriv=False):
