@@ -56,7 +56,6 @@ from thetasol.mechanics.constraints import point_on_sphere
 from thetasol.solutions._neumann_torus import MIN_WIDTH, DegenerateTorus, NeumannTorus, Oscillator
 from thetasol.solutions._symmetry import SNAP_TOL
 from thetasol.solutions.base import ClosedFormUnavailable, Solution
-from thetasol.special.pendulum import pendulum_angle, pendulum_params
 
 __all__ = ["NeumannSolution", "solve_neumann", "NeumannTorus", "Oscillator", "EllipticNeumann",
            "LatitudeCircle", "PlanarNeumann", "neumann_model", "series_or_unavailable",
@@ -330,6 +329,9 @@ def _pendulum(psi0: float, psidot0: float, nu: float):
     ``psidot(t)``) and the kind of motion."""
     if nu == 0.0 or (psidot0 == 0.0 and (np.sin(psi0) == 0.0 or abs(psi0) == np.pi)):     # at rest on an axis
         return {"kind": "uniform", "phi0": 0.0, "w0": 0.5 * psidot0}, ("uniform" if psidot0 else "rest")
+    # scipy.special (~80 ms to import) only once a pendulum is needed: solve_rotation imports this module
+    from thetasol.special.pendulum import pendulum_params
+
     c, _ = pendulum_params(psi0, psidot0, nu)
     return c, c["kind"]
 
@@ -362,6 +364,8 @@ class PlanarNeumann:
 
     def angle(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """(v(t) - v0, vdot(t)): v - v0 = (psi - psi0) / 2."""
+        from thetasol.special.pendulum import pendulum_angle
+
         return pendulum_angle(self.pend, t)
 
     def state(self, dv: np.ndarray, vdot: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -23,8 +23,6 @@ import numpy as np
 from thetasol.core.so3 import rotation_about
 from thetasol.mechanics.equations import invariants as _invariants
 from thetasol.solutions.base import RotationSolution
-from thetasol.special.elliptic import ellipk
-from thetasol.special.pendulum import pendulum_angle as _pendulum_angle, pendulum_params as _pendulum_params
 
 __all__ = ["PendulumRotation", "solve_pendulum"]
 
@@ -40,7 +38,9 @@ class PendulumRotation(RotationSolution):
 
     def _evaluate(self, t: np.ndarray):
         c = self._c
-        phi, phidot = _pendulum_angle(c, t)
+        from thetasol.special.pendulum import pendulum_angle
+
+        phi, phidot = pendulum_angle(c, t)
         Qp = c["Q0p"] @ rotation_about(c["i"], phi)
         wp = np.zeros(t.shape + (3,))
         wp[..., c["i"]] = phidot
@@ -96,7 +96,11 @@ def solve_pendulum(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndar
     # psi = 2 phi + delta - pi [kappa > 0] obeys psi'' = -nu^2 sin psi; phi(0) = 0
     psi0 = np.remainder(delta - (np.pi if kappa > 0 else 0.0) + np.pi, 2 * np.pi) - np.pi
     nu = np.sqrt(abs(kappa))
-    params, m = _pendulum_params(psi0, 2.0 * w0, nu)
+    # scipy.special (~80 ms to import) only once the branch applies: solve_rotation tries it for every body
+    from thetasol.special.elliptic import ellipk
+    from thetasol.special.pendulum import pendulum_params
+
+    params, m = pendulum_params(psi0, 2.0 * w0, nu)
     c.update(params)
     diag = {"pendulum_nu": float(nu), "pendulum_m": float(m)}
     if c["kind"] == "libration":
