@@ -26,6 +26,7 @@ divisor where the component vanishes, and ``t = 0`` returns the initial data to 
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -180,7 +181,8 @@ class FlowEvaluator:
         """:meth:`_from_turning_frame` for one time, on ``Q`` (9 floats, row-major) and ``w`` (3 floats)."""
         ax, spin, P = self.axis, self.spin, self._P_rows
         i, j = (ax + 1) % 3, (ax + 2) % 3
-        c, s = np.cos(-spin * t).item(), np.sin(-spin * t).item()     # numpy's cos and sin, as in the batch
+        x = -spin * t.item()
+        c, s = math.cos(x), math.sin(x)
         Qr = list(Q)
         wr = list(w)
         for r in (0, 3, 6):
