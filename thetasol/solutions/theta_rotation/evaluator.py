@@ -166,8 +166,8 @@ class FlowEvaluator:
 
     def _state_one(self, t: np.ndarray, y: list[float]) -> tuple[np.ndarray, np.ndarray] | None:
         """The 3x3 algebra of :meth:`_state` for one time on the 45 floats of ``Y``, in plain Python
-        floats with the same operations in the same order (the same bits; a third of numpy's fixed cost
-        on one 3x3 matrix); None when the polar factor needs the SVD."""
+        floats with the same operations in the same order (the same bits, tests/test_one_call.py; a third
+        of numpy's fixed cost on one 3x3 matrix); None when the polar factor needs the SVD."""
         Q = polar_near_orthogonal_one(y[:9])
         if Q is None:
             return None
@@ -175,7 +175,7 @@ class FlowEvaluator:
              + (y[29 + k] * y[11 + k] - y[38 + k] * y[20 + k]) for k in (0, 3, 6)]
         if self.axis is not None:
             Q, w = self._from_turning_frame_one(t, Q, w)
-        return np.array(w).reshape(1, 3), np.array(Q).reshape(1, 3, 3)
+        return np.array([w]), np.array([[Q[0:3], Q[3:6], Q[6:9]]])
 
     def _from_turning_frame_one(self, t: np.ndarray, Q: list[float], w: list[float]) -> tuple[list, list]:
         """:meth:`_from_turning_frame` for one time, on ``Q`` (9 floats, row-major) and ``w`` (3 floats)."""
