@@ -2,12 +2,11 @@
 the batched ones.
 
 With few times the evaluation takes shortcuts that compute the same numbers with fewer numpy calls:
-the phases of the Fourier flow gather all their factors at once (``thetasol.theta.flow.FEW_PRODUCTS``), and
-for one time the 3x3 algebra after the last matrix product runs in plain floats
-(``thetasol.core.so3.polar_near_orthogonal_one``).  Both do the same floating-point operations in
-the same order as the batched code: measured bit-identical on the 13 reference bodies.  What differs
-between one call and a batch is the BLAS: a product with one row (gemv) sums in another order than
-with many (gemm).
+the phases of the Fourier flow gather all their factors at once (``thetasol.theta.flow.FEW_PRODUCTS``;
+the same operations in the same order: bit-identical), and for one time the state after the flow runs
+on Python complex numbers and floats around its one matrix product (the 3x3 algebra with the same
+operations as numpy's, ``thetasol.core.so3.polar_near_orthogonal_one``; the complex products round
+differently).  Besides, a product with one row (gemv) sums in another order than with many (gemm).
 """
 import json
 import pathlib
@@ -51,15 +50,17 @@ def test_few_time_phases_equal_the_prefix_products(sol, n, monkeypatch):
     assert np.array_equal(flow.phases(phi, compiled=False), few)
 
 
-def test_one_time_floats_equal_the_numpy_state(sol, monkeypatch):
-    """One time: the 3x3 algebra in plain floats against the numpy rows on the same flow values.
-    Measured 0 ulps (bit-identical) on the 13 reference bodies; bound 2 ulps of the scale (math.cos
-    and math.sin of the turning frame may differ from numpy's in the last bit on other platforms)."""
-    one = [sol(np.array([t])) for t in TIMES]
-    monkeypatch.setattr(FlowEvaluator, "_state_one", lambda self, t, y: None)   # numpy rows for one time
-    rows = [sol(np.array([t])) for t in TIMES]
+def test_one_time_floats_against_the_numpy_rows(sol, monkeypatch):
+    """One time: the state from the flow's values on Python complex numbers and floats against the numpy
+    rows of a batch on the same values (the same formulas; Python's complex products round differently
+    from numpy's).  Measured on the 13 reference bodies at 0 .. 1e9: <= 3 ulps of the largest component
+    (omega <= 4.3e-16 relative, Q <= 3.3e-16); bound 6 ulps."""
+    times = np.append(TIMES, 1e9)
+    one = [sol(np.array([t])) for t in times]
+    monkeypatch.setattr(FlowEvaluator, "_state_one", lambda self, *args: None)   # numpy rows for one time
+    rows = [sol(np.array([t])) for t in times]
     for (w1, Q1), (w2, Q2) in zip(one, rows, strict=True):
-        assert _ulps(w1, w2) <= 2 and _ulps(Q1, Q2) <= 2
+        assert _ulps(w1, w2) <= 6 and _ulps(Q1, Q2) <= 6
 
 
 def test_one_call_against_the_batch(sol):

@@ -30,6 +30,7 @@ divisor where the component vanishes, and ``t = 0`` returns the initial data to 
 """
 from __future__ import annotations
 
+import cmath
 import math
 from dataclasses import dataclass
 
@@ -107,7 +108,8 @@ class FlowEvaluator:
         object.__setattr__(self, "_c1", c1)
         object.__setattr__(self, "_c2", c2)
         object.__setattr__(self, "_c", c)
-        for name, x in (("_c1_flat", c1), ("_c2_flat", c2), ("_c_flat", c)):
+        for name, x in (("_c1_flat", c1), ("_c2_flat", c2), ("_c_flat", c), ("_inu_list", self._inu_flat),
+                        ("_amp_list", self._amp_flat)):
             object.__setattr__(self, name, x.ravel().tolist())
 
     def _linear_map(self) -> np.ndarray:
@@ -154,6 +156,10 @@ class FlowEvaluator:
     def _state(self, t: np.ndarray, v: np.ndarray, dv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """numpy path of :meth:`evaluate` from the flow's values (its compiled twin: ``_state_kernel``)."""
         n = t.shape[0]
+        if n == 1:
+            one = self._state_one(t, v, dv)
+            if one is not None:
+                return one
         vb, vd = v[:, :9].reshape(n, 3, 3), v[:, 9:]              # [n, s, k], [n, k]
         ivd = 1.0 / vd
         q = np.exp(self._turns(t) * TWO_PI_I)                      # exp(i nu t)
@@ -166,10 +172,6 @@ class FlowEvaluator:
         rate += dv[:, :9].reshape(n, 3, 3)
         np.multiply(q, rate, out=Z[:, 1])
         Y = self._lin @ Z.reshape(n, 18).view(float).T             # (45, n)
-        if n == 1:
-            one = self._state_one(t, Y[:, 0].tolist())
-            if one is not None:
-                return one
         Q = polar_near_orthogonal(Y[:9].reshape(3, 3, n))
         w = np.add.reduce((Y[27:36] * Y[9:18] - Y[36:45] * Y[18:27]).reshape(3, 3, n), axis=1)   # vee(F Fd^T)
         if self.axis is not None:
@@ -187,12 +189,7 @@ class FlowEvaluator:
         far).  One time: the same operations on Python floats (``round`` rounds half to even, as
         ``rint``), 2 us cheaper than nine numpy calls."""
         if t.shape[0] == 1 and abs(t.item()) < 2.0 ** 52:
-            x = t.item()
-            t1 = float(round(x))
-            t2 = x - t1
-            return np.array([((x1 - round(x1)) + t1 * b) + t2 * c
-                             for x1, b, c in zip((t1 * a for a in self._c1_flat), self._c2_flat, self._c_flat,
-                                                 strict=True)]).reshape(1, 3, 3)
+            return np.array(self._turns_one(t.item())).reshape(1, 3, 3)
         t1 = np.rint(t)
         t2 = t - t1
         x = np.multiply.outer(t1, self._c1)
@@ -201,24 +198,46 @@ class FlowEvaluator:
         x += np.multiply.outer(t2, self._c)
         return x
 
-    def _state_one(self, t: np.ndarray, y: list[float]) -> tuple[np.ndarray, np.ndarray] | None:
-        """The 3x3 algebra of :meth:`_state` for one time on the 45 floats of ``Y``, in plain Python
-        floats with the same operations in the same order (the same bits, tests/test_one_call.py; a third
-        of numpy's fixed cost on one 3x3 matrix); None when the polar factor needs the SVD."""
+    def _turns_one(self, x: float) -> list[float]:
+        """:meth:`_turns` of one time ``|x| < 2^52`` on Python floats, the same operations (``round``
+        rounds half to even, as ``rint``): the nine turns in the order ``3 s + k``."""
+        t1 = float(round(x))
+        t2 = x - t1
+        return [((y - round(y)) + t1 * b) + t2 * c
+                for y, b, c in zip([t1 * a for a in self._c1_flat], self._c2_flat, self._c_flat, strict=True)]
+
+    def _state_one(self, t: np.ndarray, v: np.ndarray, dv: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """:meth:`_state` for one time on Python complex numbers and floats, around the one matrix product
+        (numpy's calls cost more than their arithmetic on nine elements: one far time 8-12 us cheaper,
+        tests/test_one_call.py); the same formulas, to rounding (complex products round differently
+        from numpy's).  None when the time is too large for :meth:`_turns_one` or the polar factor needs
+        the SVD: the numpy rows then apply."""
+        x = t.item()
+        if not abs(x) < 2.0 ** 52:
+            return None
+        vl, dl, inu, amp = v[0].tolist(), dv[0].tolist(), self._inu_list, self._amp_list
+        Z = [0j] * 18
+        for m, turn in enumerate(self._turns_one(x)):
+            k = m % 3
+            ivd = 1.0 / vl[9 + k]
+            q = cmath.exp(complex(0.0, TWO_PI * turn)) * amp[m] * ivd
+            Z[m] = q * vl[m]
+            Z[9 + m] = q * ((inu[m] - dl[9 + k] * ivd) * vl[m] + dl[m])
+        y = (self._lin @ np.array(Z).view(float)).tolist()
         Q = polar_near_orthogonal_one(y[:9])
         if Q is None:
             return None
         w = [(y[27 + k] * y[9 + k] - y[36 + k] * y[18 + k]) + (y[28 + k] * y[10 + k] - y[37 + k] * y[19 + k])
              + (y[29 + k] * y[11 + k] - y[38 + k] * y[20 + k]) for k in (0, 3, 6)]
         if self.axis is not None:
-            Q, w = self._from_turning_frame_one(t, Q, w)
+            Q, w = self._from_turning_frame_one(x, Q, w)
         return np.array([w]), np.array([[Q[0:3], Q[3:6], Q[6:9]]])
 
-    def _from_turning_frame_one(self, t: np.ndarray, Q: list[float], w: list[float]) -> tuple[list, list]:
-        """:meth:`_from_turning_frame` for one time, on ``Q`` (9 floats, row-major) and ``w`` (3 floats)."""
+    def _from_turning_frame_one(self, t: float, Q: list[float], w: list[float]) -> tuple[list, list]:
+        """:meth:`_from_turning_frame` at one time ``t``, on ``Q`` (9 floats, row-major) and ``w`` (3 floats)."""
         ax, spin, P = self.axis, self.spin, self._P_rows
         i, j = (ax + 1) % 3, (ax + 2) % 3
-        x = -spin * t.item()
+        x = -spin * t
         c, s = math.cos(x), math.sin(x)
         Qr = list(Q)
         wr = list(w)
@@ -254,7 +273,8 @@ class FlowEvaluator:
         return np.abs(Phi.imag).max(axis=(-1, -2))
 
 
-#: ``2 pi i``: ``exp(2 pi i x)`` of the turns ``x``.
+#: ``2 pi`` and ``2 pi i``: ``exp(2 pi i x)`` of the turns ``x``.
+TWO_PI = 2.0 * math.pi
 TWO_PI_I = 2j * math.pi
 
 
