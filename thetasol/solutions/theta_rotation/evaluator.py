@@ -14,11 +14,11 @@ rank-one bodies, tests/test_one_call.py).  After the flow ``Psi`` and its deriva
 more real product (9x9 complex maps folded with ``B``, ``X0^-1``, ``Q0`` and the principal frame) and
 the 3x3 algebra runs on component rows: the polar factor by one Newton-Schulz step
 (:func:`thetasol.core.so3.polar_near_orthogonal`, 20x closer to the long-double polar factor than the
-SVD's, tests/test_theta_evaluation.py); for one time on plain floats, with the same operations.
-One far time is ~40 numpy calls on arrays of a few elements: 35-60 us (CPU time, best of 2100 calls,
-on a shared 2-core machine) against 1-4 us per time in dense evaluation.  With the numba kernels
-switched on (``THETASOL_NUMBA=1``, :mod:`thetasol.core.jit`) that state is one compiled kernel per
-chunk of times.
+SVD's, tests/test_theta_evaluation.py).  One time takes that state on Python complex numbers and
+floats around the one matrix product (:meth:`FlowEvaluator._state_one`): numpy's fixed cost per call
+exceeds the arithmetic on nine elements.  One far time then costs 35-43 us of CPU time, 80 near the
+unstable equilibrium (best of 2100 calls on a shared 2-core machine): 6-50 dense points.  With the numba kernels switched on (``THETASOL_NUMBA=1``,
+:mod:`thetasol.core.jit`) the state is one compiled kernel per chunk of times.
 Working memory is ~2.5 KB per time (the flow's phases go in bounded blocks), so the default chunk of
 :class:`thetasol.solutions.base.Solution` applies.
 
