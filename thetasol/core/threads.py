@@ -41,7 +41,7 @@ _state: dict[str, Any] = {"depth": 0, "saved": [], "controllers": None}
 
 
 def _blas_controllers() -> list:
-    """threadpoolctl's controllers of the loaded BLAS libraries (numpy's and scipy's), found once."""
+    """(controller, its ``get_num_threads``) of the loaded BLAS libraries (numpy's and scipy's), found once."""
     if _state["controllers"] is None:
         if os.environ.get("THETASOL_BLAS_THREADS", "").lower() == "keep":
             _state["controllers"] = []
@@ -52,18 +52,19 @@ def _blas_controllers() -> list:
         except ImportError:
             _state["controllers"] = []
             return []
-        _state["controllers"] = [c for c in ThreadpoolController().lib_controllers if c.user_api == "blas"]
+        _state["controllers"] = [(c, c.get_num_threads) for c in ThreadpoolController().lib_controllers
+                                 if c.user_api == "blas"]
     return _state["controllers"]
 
 
 def _enter() -> None:
     with _lock:
         _state["depth"] += 1
-        if _state["depth"] > 1:
+        if _state["depth"] > 1 or LIMIT is None:
             return
         saved = []
-        for c in (_blas_controllers() if LIMIT is not None else ()):
-            n = c.num_threads
+        for c, get in _blas_controllers():
+            n = get()                             # the bound method: no property lookup per call
             if n is not None and n > LIMIT:
                 c.set_num_threads(LIMIT)
                 saved.append((c, n))
@@ -73,7 +74,7 @@ def _enter() -> None:
 def _exit() -> None:
     with _lock:
         _state["depth"] -= 1
-        if _state["depth"] > 0:
+        if _state["depth"] > 0 or not _state["saved"]:
             return
         for c, n in _state["saved"]:
             c.set_num_threads(n)

@@ -74,6 +74,8 @@ class Solution:
         """The state at times ``t`` (any shape): a tuple of arrays with ``t.shape`` leading."""
         tt, flat = self._times(t)
         out = self._chunked(self._evaluate, flat)
+        if tt.ndim == 1:                                   # the shapes are already t.shape + state
+            return tuple(out)
         return tuple(x.reshape(tt.shape + x.shape[1:]) for x in out)
 
     def evaluate(self, t: ArrayLike) -> tuple[np.ndarray, ...]:

@@ -7,14 +7,18 @@ for a symmetric body ``Q = Q~ R(t)^T``, ``omega = R omega~ + spin e`` back from 
 
 The theta functions along the flow, ``theta(b_sk + t U)`` and ``theta(d_k + t U)``, are Fourier series
 in the ``rdim`` real phases of ``U`` (:class:`thetasol.theta.flow.FlowTheta`): per time only the
-phases and one real matrix product remain, and a far time costs what ``t = 1`` costs.  After it
-``Psi`` and its derivative go through one more real product (9x9 complex maps folded with ``B``,
-``X0^-1``, ``Q0`` and the principal frame) and the 3x3 algebra runs on component rows: the polar
-factor by one Newton-Schulz step (:func:`thetasol.core.so3.polar_near_orthogonal`, 20x closer to the
-long-double polar factor than the SVD's, tests/test_theta_evaluation.py).  With the numba kernels
-switched on (``THETASOL_NUMBA=1``, :mod:`thetasol.core.jit`) that state is one compiled kernel per
-chunk of times: a far time then costs ~20 us instead of ~50 (dozens of numpy calls on 9-element
-arrays).
+phases and one real matrix product remain, and a far time costs what ``t = 1`` costs.  The exponents
+``exp(i nu_sk t)`` take ``nu t / 2 pi`` modulo 1 exactly for ``|t| < 2^31`` (:meth:`FlowEvaluator._turns`):
+rounded products ``nu t`` make the first integrals drift with ``t`` (4e-11 at ``t = 1e6`` on the
+rank-one bodies, tests/test_one_call.py).  After the flow ``Psi`` and its derivative go through one
+more real product (9x9 complex maps folded with ``B``, ``X0^-1``, ``Q0`` and the principal frame) and
+the 3x3 algebra runs on component rows: the polar factor by one Newton-Schulz step
+(:func:`thetasol.core.so3.polar_near_orthogonal`, 20x closer to the long-double polar factor than the
+SVD's, tests/test_theta_evaluation.py).  One time takes that state on Python complex numbers and
+floats around the one matrix product (:meth:`FlowEvaluator._state_one`): numpy's fixed cost per call
+exceeds the arithmetic on nine elements.  One far time then costs 35-43 us of CPU time, 80 near the
+unstable equilibrium (best of 2100 calls on a shared 2-core machine): 6-50 dense points.  With the numba kernels switched on (``THETASOL_NUMBA=1``,
+:mod:`thetasol.core.jit`) the state is one compiled kernel per chunk of times.
 Working memory is ~2.5 KB per time (the flow's phases go in bounded blocks), so the default chunk of
 :class:`thetasol.solutions.base.Solution` applies.
 
@@ -26,12 +30,15 @@ divisor where the component vanishes, and ``t = 0`` returns the initial data to 
 """
 from __future__ import annotations
 
+import cmath
+import math
 from dataclasses import dataclass
 
+import mpmath
 import numpy as np
 
 from thetasol.core.jit import Kernel
-from thetasol.core.so3 import NEWTON_SCHULZ_MAX, polar_near_orthogonal
+from thetasol.core.so3 import NEWTON_SCHULZ_MAX, polar_near_orthogonal, polar_near_orthogonal_one
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.exponents import Exponents
 from thetasol.solutions.theta_rotation.riemann import ThetaShifts
@@ -82,7 +89,7 @@ class FlowEvaluator:
         numba (~0.35 s) inside ``solve_rotation``; the first evaluation pays that instead."""
         _, v, dv = self.flow(t, derivative, compiled=False)
         vb, vd = v[:, :9].reshape(-1, 3, 3), v[:, 9:]          # [n, s, k], [n, k]
-        phase = np.exp(1j * np.multiply.outer(t, self.nu))      # [n, s, k]
+        phase = np.exp(self._turns(t) * TWO_PI_I)               # [n, s, k]: exp(i nu t)
         Psi = self.amp[None] * phase * vb / vd[:, None, :]      # Psi_k(P_s, t)
         B = self.B                                              # components -> principal frame
         Phi = B @ np.einsum("nsk,si->nki", Psi, self.X0inv)    # Phi X0 = B [Psi_c(P_s)]
@@ -96,6 +103,14 @@ class FlowEvaluator:
         object.__setattr__(self, "_inu", 1j * self.nu)
         object.__setattr__(self, "_inu_flat", self._inu.astype(complex).ravel())
         object.__setattr__(self, "_amp_flat", self.amp.astype(complex).ravel())
+        object.__setattr__(self, "_P_rows", np.asarray(self.P, float).tolist())
+        c1, c2, c = _turn_rates(self.nu)
+        object.__setattr__(self, "_c1", c1)
+        object.__setattr__(self, "_c2", c2)
+        object.__setattr__(self, "_c", c)
+        for name, x in (("_c1_flat", c1), ("_c2_flat", c2), ("_c_flat", c), ("_inu_list", self._inu_flat),
+                        ("_amp_list", self._amp_flat)):
+            object.__setattr__(self, name, x.ravel().tolist())
 
     def _linear_map(self) -> np.ndarray:
         """L (45, 36): the float view of ``[Psi | Psi rate]`` (n, 18 complex) -> the real parts of
@@ -131,8 +146,9 @@ class FlowEvaluator:
             return self._state(t, v, dv)
         n = t.shape[0]
         w, Q, bad = np.empty((n, 3)), np.empty((n, 3, 3)), np.zeros(n, bool)
-        kern(t, v, dv, self._inu_flat, self._amp_flat, self._lin, self.P,
-             -1 if self.axis is None else self.axis, float(self.spin), NEWTON_SCHULZ_MAX, w, Q, bad)
+        kern(t, v, dv, self._inu_flat, self._amp_flat, self._c1.ravel(), self._c2.ravel(), self._c.ravel(),
+             self._lin, self.P, -1 if self.axis is None else self.axis, float(self.spin), NEWTON_SCHULZ_MAX,
+             w, Q, bad)
         if bad.any():                                                # the polar factor needs the SVD
             w[bad], Q[bad] = self._state(t[bad], v[bad], dv[bad])
         return w, Q
@@ -140,9 +156,13 @@ class FlowEvaluator:
     def _state(self, t: np.ndarray, v: np.ndarray, dv: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """numpy path of :meth:`evaluate` from the flow's values (its compiled twin: ``_state_kernel``)."""
         n = t.shape[0]
+        if n == 1:
+            one = self._state_one(t, v, dv)
+            if one is not None:
+                return one
         vb, vd = v[:, :9].reshape(n, 3, 3), v[:, 9:]              # [n, s, k], [n, k]
         ivd = 1.0 / vd
-        q = np.exp(np.multiply.outer(t, self._inu))
+        q = np.exp(self._turns(t) * TWO_PI_I)                      # exp(i nu t)
         q *= self.amp
         q *= ivd[:, None, :]
         Z = np.empty((n, 2, 3, 3), complex)
@@ -153,10 +173,81 @@ class FlowEvaluator:
         np.multiply(q, rate, out=Z[:, 1])
         Y = self._lin @ Z.reshape(n, 18).view(float).T             # (45, n)
         Q = polar_near_orthogonal(Y[:9].reshape(3, 3, n))
-        w = (Y[27:36] * Y[9:18] - Y[36:45] * Y[18:27]).reshape(3, 3, n).sum(axis=1)   # vee(F Fd^T)
+        w = np.add.reduce((Y[27:36] * Y[9:18] - Y[36:45] * Y[18:27]).reshape(3, 3, n), axis=1)   # vee(F Fd^T)
         if self.axis is not None:
             Q, w = self._from_turning_frame(t, Q, w)
         return np.ascontiguousarray(w.T), np.ascontiguousarray(Q.transpose(2, 0, 1))
+
+    def _turns(self, t: np.ndarray) -> np.ndarray:
+        """``nu t / (2 pi)`` modulo 1 (n, 3, 3), exact before its last roundings for ``|t| < 2^31``.
+
+        ``t = t1 + t2`` (``t1 = rint(t)``, both exact) and ``nu / 2 pi = c1 + c2`` (``c1`` on 22 bits,
+        :func:`_turn_rates`): ``t1 c1`` is exact and its integer part drops exactly, the rest is small.
+        The plain product ``nu t`` would carry an error of ``|nu t| 1.1e-16`` into the phase (1e-10
+        at ``t = 1e6``), and the nine exponents would no longer combine into an orthogonal
+        ``Phi(0, t)``: the first integrals drift with it (benchmarks/bench_theta_rotation.py, drift
+        far).  One time: the same operations on Python floats (``round`` rounds half to even, as
+        ``rint``), 2 us cheaper than nine numpy calls."""
+        if t.shape[0] == 1 and abs(t.item()) < 2.0 ** 52:
+            return np.array(self._turns_one(t.item())).reshape(1, 3, 3)
+        t1 = np.rint(t)
+        t2 = t - t1
+        x = np.multiply.outer(t1, self._c1)
+        x -= np.rint(x)
+        x += np.multiply.outer(t1, self._c2)
+        x += np.multiply.outer(t2, self._c)
+        return x
+
+    def _turns_one(self, x: float) -> list[float]:
+        """:meth:`_turns` of one time ``|x| < 2^52`` on Python floats, the same operations (``round``
+        rounds half to even, as ``rint``): the nine turns in the order ``3 s + k``."""
+        t1 = float(round(x))
+        t2 = x - t1
+        return [((y - round(y)) + t1 * b) + t2 * c
+                for y, b, c in zip([t1 * a for a in self._c1_flat], self._c2_flat, self._c_flat, strict=True)]
+
+    def _state_one(self, t: np.ndarray, v: np.ndarray, dv: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """:meth:`_state` for one time on Python complex numbers and floats, around the one matrix product
+        (numpy's calls cost more than their arithmetic on nine elements: one far time 8-12 us cheaper,
+        tests/test_one_call.py); the same formulas, to rounding (complex products round differently
+        from numpy's).  None when the time is too large for :meth:`_turns_one` or the polar factor needs
+        the SVD: the numpy rows then apply."""
+        x = t.item()
+        if not abs(x) < 2.0 ** 52:
+            return None
+        vl, dl, inu, amp = v[0].tolist(), dv[0].tolist(), self._inu_list, self._amp_list
+        Z = [0j] * 18
+        for m, turn in enumerate(self._turns_one(x)):
+            k = m % 3
+            ivd = 1.0 / vl[9 + k]
+            q = cmath.exp(complex(0.0, TWO_PI * turn)) * amp[m] * ivd
+            Z[m] = q * vl[m]
+            Z[9 + m] = q * ((inu[m] - dl[9 + k] * ivd) * vl[m] + dl[m])
+        y = (self._lin @ np.array(Z).view(float)).tolist()
+        Q = polar_near_orthogonal_one(y[:9])
+        if Q is None:
+            return None
+        w = [(y[27 + k] * y[9 + k] - y[36 + k] * y[18 + k]) + (y[28 + k] * y[10 + k] - y[37 + k] * y[19 + k])
+             + (y[29 + k] * y[11 + k] - y[38 + k] * y[20 + k]) for k in (0, 3, 6)]
+        if self.axis is not None:
+            Q, w = self._from_turning_frame_one(x, Q, w)
+        return np.array([w]), np.array([[Q[0:3], Q[3:6], Q[6:9]]])
+
+    def _from_turning_frame_one(self, t: float, Q: list[float], w: list[float]) -> tuple[list, list]:
+        """:meth:`_from_turning_frame` at one time ``t``, on ``Q`` (9 floats, row-major) and ``w`` (3 floats)."""
+        ax, spin, P = self.axis, self.spin, self._P_rows
+        i, j = (ax + 1) % 3, (ax + 2) % 3
+        x = -spin * t
+        c, s = math.cos(x), math.sin(x)
+        Qr = list(Q)
+        wr = list(w)
+        for r in (0, 3, 6):
+            Qr[r + i], Qr[r + j] = c * Q[r + i] - s * Q[r + j], s * Q[r + i] + c * Q[r + j]
+        wr[ax] = w[ax] + spin
+        wr[i], wr[j] = c * w[i] - s * w[j], s * w[i] + c * w[j]
+        Qo = [Qr[r] * p[0] + Qr[r + 1] * p[1] + Qr[r + 2] * p[2] for r in (0, 3, 6) for p in P]
+        wo = [p[0] * wr[0] + p[1] * wr[1] + p[2] * wr[2] for p in P]
+        return Qo, wo
 
     def _from_turning_frame(self, t: np.ndarray, Q: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Symmetric body: ``Q = Q~ R^T P^T``, ``omega = P (R omega~ + spin e)``, ``R = exp(-spin t hat(e))``
@@ -182,19 +273,45 @@ class FlowEvaluator:
         return np.abs(Phi.imag).max(axis=(-1, -2))
 
 
-def _state_kernel(t, v, dv, inu, amp, L, P, axis, spin, tol, w_out, Q_out, bad):  # pragma: no cover - numba
-    """Compiled :meth:`FlowEvaluator._state`, time by time, with the same formulas in the same order;
-    ``bad[a]`` marks a time whose polar factor needs the SVD (``|G^T G - 1| > tol``)."""
+#: ``2 pi`` and ``2 pi i``: ``exp(2 pi i x)`` of the turns ``x``.
+TWO_PI = 2.0 * math.pi
+TWO_PI_I = 2j * math.pi
+
+
+def _turn_rates(nu: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``nu / 2 pi`` (3, 3) as ``c1 + c2`` to ~1e-32 relative, ``c1`` with 22 significant bits (so that
+    ``t1 c1`` is exact for integers ``|t1| < 2^31``), and ``c`` its float64 value."""
+    c1, c2, c = np.zeros_like(nu), np.zeros_like(nu), np.zeros_like(nu)
+    with mpmath.workdps(40):
+        for idx in np.ndindex(nu.shape):
+            x = mpmath.mpf(float(nu[idx])) / (2 * mpmath.pi)
+            c[idx] = float(x)
+            if x != 0:
+                k = 21 - math.frexp(c[idx])[1]
+                c1[idx] = math.ldexp(round(math.ldexp(c[idx], k)), -k)
+                c2[idx] = float(x - mpmath.mpf(c1[idx]))
+    return c1, c2, c
+
+
+def _state_kernel(t, v, dv, inu, amp, rc1, rc2, rc, L, P, axis, spin, tol, w_out, Q_out, bad):  # pragma: no cover
+    """Compiled :meth:`FlowEvaluator._state` (numba), time by time, with the same formulas in the same
+    order; ``bad[a]`` marks a time whose polar factor needs the SVD (``|G^T G - 1| > tol``)."""
     Zf, Y = np.empty(36), np.empty(45)
     G, H = np.empty((3, 3)), np.empty((3, 3))
     Q, w = np.empty((3, 3)), np.empty(3)
     for a in range(t.shape[0]):
+        t1 = np.rint(t[a])
+        t2 = t[a] - t1
         for k in range(3):
             ivd = 1.0 / v[a, 9 + k]
             rd = dv[a, 9 + k] * ivd
             for s in range(3):
                 m = 3 * s + k
-                q = np.exp(t[a] * inu[m]) * amp[m] * ivd
+                x = t1 * rc1[m]                                  # the turns of FlowEvaluator._turns
+                x -= np.rint(x)
+                x += t1 * rc2[m]
+                x += t2 * rc[m]
+                q = np.exp(x * TWO_PI_I) * amp[m] * ivd
                 z = q * v[a, m]
                 zd = q * ((inu[m] - rd) * v[a, m] + dv[a, m])
                 Zf[2 * m], Zf[2 * m + 1], Zf[18 + 2 * m], Zf[19 + 2 * m] = z.real, z.imag, zd.real, zd.imag

@@ -1,0 +1,149 @@
+"""One call on a few times (a far time): the few-times paths of the theta-function rotation against
+the batched ones.
+
+With few times the evaluation takes shortcuts that compute the same numbers with fewer numpy calls:
+the phases of the Fourier flow gather all their factors at once (``thetasol.theta.flow.FEW_PRODUCTS``;
+the same operations in the same order: bit-identical), and for one time the state after the flow runs
+on Python complex numbers and floats around its one matrix product (the 3x3 algebra with the same
+operations as numpy's, ``thetasol.core.so3.polar_near_orthogonal_one``; the complex products round
+differently).  Besides, a product with one row (gemv) sums in another order than with many (gemm).
+"""
+import json
+import pathlib
+
+import numpy as np
+import pytest
+
+from thetasol import invariants, solve_rotation
+from thetasol.core import validate as V
+from thetasol.core.so3 import NEWTON_SCHULZ_MAX, polar_near_orthogonal, polar_near_orthogonal_one, rodrigues
+from thetasol.solutions.theta_rotation.evaluator import FlowEvaluator
+from thetasol.theta import flow as F
+
+REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
+TIMES = np.array([0.0, 0.7, 3.1, 17.3, 102.0, 997.0, 4002.0, 1e6])
+
+
+@pytest.fixture(scope="module", params=["generic", "near_unstable_equilibrium", "symmetric_oblate",
+                                        "symmetric_rank_one"])
+def sol(request):
+    r = REFS[request.param]
+    return solve_rotation(np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"]))
+
+
+def _ulps(x: np.ndarray, ref: np.ndarray) -> float:
+    """max |x - ref| in units of the spacing of max |ref| (ulps of the array's scale)."""
+    return float(np.abs(x - ref).max() / np.spacing(np.abs(ref).max()))
+
+
+@pytest.mark.parametrize("n", [1, 3, 16])
+def test_few_time_phases_equal_the_prefix_products(sol, n, monkeypatch):
+    """The one gather and multiply.reduce of few times against the products over prefixes of the modes
+    (the path of many times), each forced with FEW_PRODUCTS: the same bits (measured on all 13 bodies)."""
+    flow = sol.evaluator.flow
+    t = np.linspace(1e6, 1e6 + 37.0, n)
+    phi = np.multiply.outer(t, flow.u)
+    phi -= np.rint(phi)
+    monkeypatch.setattr(F, "FEW_PRODUCTS", 10**9)
+    few = flow.phases(phi, compiled=False)
+    monkeypatch.setattr(F, "FEW_PRODUCTS", 0)
+    assert np.array_equal(flow.phases(phi, compiled=False), few)
+
+
+def test_one_time_floats_against_the_numpy_rows(sol, monkeypatch):
+    """One time: the state from the flow's values on Python complex numbers and floats against the numpy
+    rows of a batch on the same values (the same formulas; Python's complex products round differently
+    from numpy's).  Measured on the 13 reference bodies at 0 .. 1e9: <= 3 ulps of the largest component
+    (omega <= 4.3e-16 relative, Q <= 3.3e-16); bound 6 ulps."""
+    times = np.append(TIMES, 1e9)
+    one = [sol(np.array([t])) for t in times]
+    monkeypatch.setattr(FlowEvaluator, "_state_one", lambda self, *args: None)   # numpy rows for one time
+    rows = [sol(np.array([t])) for t in times]
+    for (w1, Q1), (w2, Q2) in zip(one, rows, strict=True):
+        assert _ulps(w1, w2) <= 6 and _ulps(Q1, Q2) <= 6
+
+
+def test_one_call_against_the_batch(sol):
+    """sol(one time) and sol(16 times) against the same times inside a batch of 4008: the flow's matrix
+    product with one row sums in another order than with many.  Measured, omega relative to its
+    largest component and Q absolute: one time <= 3.9e-15 (6.2e-14 near the unstable equilibrium, whose
+    state is that sensitive), 16 times <= 3.7e-15; bounds 4x."""
+    big = np.concatenate([TIMES, np.linspace(0.0, 50.0, 4000)])
+    wb, Qb = sol(big)
+    bound = 2.5e-13 if sol.diagnostics["fourier_modes"] > 2000 else 1.6e-14
+    for i, t in enumerate(TIMES):
+        w, Q = sol(np.array([t]))
+        assert np.abs(w[0] - wb[i]).max() <= bound * np.abs(wb[i]).max()
+        assert np.abs(Q[0] - Qb[i]).max() <= bound
+    w, Q = sol(big[:16])
+    assert np.abs(w - wb[:16]).max() <= 1.5e-14 * np.abs(wb[:16]).max()
+    assert np.abs(Q - Qb[:16]).max() <= 1.5e-14
+
+
+def test_scalar_and_shaped_times(sol):
+    """A scalar time and a (2, 1) array give the shapes of the protocol and the values of flat times
+    (the same calls, so the same bits)."""
+    w, Q = sol(1e6)
+    assert w.shape == (3,) and Q.shape == (3, 3)
+    w1, Q1 = sol(np.array([1e6]))
+    assert np.array_equal(w, w1[0]) and np.array_equal(Q, Q1[0])
+    w2, Q2 = sol(np.array([[0.7], [1e6]]))
+    w3, Q3 = sol(np.array([0.7, 1e6]))
+    assert w2.shape == (2, 1, 3) and Q2.shape == (2, 1, 3, 3)
+    assert np.array_equal(w2[:, 0], w3) and np.array_equal(Q2[:, 0], Q3)
+
+
+def test_polar_near_orthogonal_one_is_the_batched_step():
+    """The plain-float Newton-Schulz step of one matrix against the batched step: the same bits on 2000
+    rotations perturbed by 1e-15 .. 1e-9 (all within the step's range); None beyond it."""
+    rng = np.random.default_rng(5)
+    R = rodrigues(rng.normal(size=(2000, 3)) * 2.0)
+    S = rng.normal(size=(2000, 3, 3))
+    scale = 10.0 ** rng.uniform(-15, -9, size=(2000, 1, 1))
+    X = R @ (np.eye(3) + scale * 0.5 * (S + S.transpose(0, 2, 1)))
+    batched = polar_near_orthogonal(X.transpose(1, 2, 0)).transpose(2, 0, 1)
+    for k in range(len(X)):
+        one = polar_near_orthogonal_one(X[k].ravel().tolist())
+        assert one is not None and np.array_equal(np.array(one).reshape(3, 3), batched[k])
+    far = R[0] @ (np.eye(3) + 10 * NEWTON_SCHULZ_MAX * np.diag([1.0, 0.0, 0.0]))
+    assert polar_near_orthogonal_one(far.ravel().tolist()) is None
+
+
+def test_times_checks():
+    """A float64 array of times passes as it is; NaN and inf still raise, in any input form."""
+    t = np.array([0.0, 1e6])
+    assert V.times(t) is t
+    assert V.times([1, 2]).dtype == np.float64
+    for bad in (np.array([1.0, np.nan]), np.array([[np.inf]]), [0.0, float("-inf")], np.float64(np.nan)):
+        with pytest.raises(ValueError, match="NaN or inf"):
+            V.times(bad)
+
+
+def _drift(J, a, Q0, w0, w, Q) -> float:
+    """Max drift of the energy and of I2 (4.13) over (w, Q), relative to the sum of the magnitudes of
+    their terms at t = 0 (as benchmarks/bench_theta_rotation.py)."""
+    I = np.trace(J) * np.eye(3) - J
+    m0 = I @ w0
+    u0 = -(Q0.T @ a @ Q0)
+    scale_E = abs(0.5 * w0 @ m0) + abs(0.5 * np.trace(u0 @ J))
+    scale_I2 = 2 * float(m0 @ m0) + abs(2 * np.trace(J @ J @ u0))
+    i0, it = invariants(J, a, Q0, w0), invariants(J, a, Q, w)
+    return float(max(np.abs(it["energy"] - i0["energy"]).max() / scale_E,
+                     np.abs(it["I2"] - i0["I2"]).max() / scale_I2))
+
+
+@pytest.mark.parametrize("name", ["rank_one", "symmetric_fast_spin"])
+def test_far_times_keep_the_first_integrals(name):
+    """The exponents exp(i nu t) take nu t / 2 pi modulo 1 exactly (before its last roundings): the
+    nine of them then still combine into an orthogonal Phi(0, t) far out, and energy and I2 do not drift.
+    Measured on [T, T + 100] at T = 0, 1e6, 1e9: rank_one 6.9e-15, 7.1e-15, 2.8e-14; symmetric_fast_spin
+    1.1e-14, 8.2e-15, 2.7e-12 (with the rounded product nu t: 6.8e-15, 4.3e-11, 4.4e-8 and 4.2e-14,
+    3.5e-10, 3.7e-7).  Bounds 5e-14 (near and 1e6) and 1.5e-11 (1e9)."""
+    r = REFS[name]
+    J, a, Q0, w0 = np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"])
+    sol = solve_rotation(J, a, Q0, w0)
+    grid = np.linspace(0.0, 100.0, 2001)
+    near = _drift(J, a, Q0, w0, *sol(grid))
+    assert near <= 5e-14
+    assert _drift(J, a, Q0, w0, *sol(grid + 1e6)) <= 5e-14
+    assert _drift(J, a, Q0, w0, *sol(grid + 1e9)) <= 1.5e-11
