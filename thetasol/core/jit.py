@@ -9,8 +9,9 @@ with the same formulas (to rounding: the two paths are compared in tests/test_th
 Why compiled kernels at all: the evaluation of a few times is a few dozen numpy calls on arrays of a
 handful of elements, each costing a fixed ~0.5-1 us, and the products of one-dimensional tables that
 make the phases of a Fourier flow are gathers that numpy runs as separate passes.  One far time of
-the theta-function rotation costs 23 us with the kernels and 52 us without them (generic body, 20 and
-69 us on symmetric_oblate); dense evaluation gains 5-20%.
+the theta-function rotation costs ~18 us of CPU time with the kernels and ~39 us without them (generic
+body; ~15 and ~44 us on symmetric_oblate; tests/test_one_call.py checks the two paths agree); dense
+evaluation gains 5-20%.
 
 Why lazily, and the cost: nothing is imported or compiled at ``import thetasol`` nor in a set-up;
 the first evaluation imports numba (~0.35 s) and compiles its kernels (``cache=True``: later processes
