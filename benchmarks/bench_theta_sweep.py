@@ -7,7 +7,7 @@ symmetric, rank-one, rank-two, nearly isotropic, tiny a, huge a, fast spin, zero
 equilibrium; ``--n`` per regime, units of order one).  Times are natural: ``T = 1000 / w``,
 ``w = max(|omega0|, sqrt|a|)``.  Per body, in one run:
 
-* **set-up**: one ``solve_rotation`` (after one warm-up body), against heyoka's propagation to ``T``
+* **set-up**: ``solve_rotation``, best of 3 (after one warm-up body), against heyoka's propagation to ``T``
   (compiled once, float64, tol 1e-16, 20001 output times);
 * **dense**: the solution's cost per time on those 20001 times against heyoka's, best of 3;
 * **one far time**: one call at ``t = 1e6 / w``, in dense points;
@@ -46,7 +46,7 @@ def bench_body(regime: str, J, a, Q0, w0, ta) -> dict:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            row["setup"], sol = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=1, clock=CLOCK[0])
+            row["setup"], sol = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=3, clock=CLOCK[0])
     except ClosedFormUnavailable:
         row["method"] = "refused"
         return row

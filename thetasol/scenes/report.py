@@ -240,7 +240,9 @@ def _load_closed_forms(scene: Scene) -> float:
     if rotation_kind(scene.a) == "elliptic":
         return 0.0
     start = time.perf_counter()
-    for name in ("thetasol.solutions.rotation", "thetasol.solutions.theta_rotation", "sympy", "mpmath"):
+    # sympy imports sympy.tensor.tensor (20-60 ms) at its first symbolic sum, inside the first set-up
+    for name in ("thetasol.solutions.rotation", "thetasol.solutions.theta_rotation", "sympy", "sympy.tensor.tensor",
+                 "mpmath"):
         importlib.import_module(name)
     return time.perf_counter() - start
 
