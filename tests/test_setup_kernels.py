@@ -62,6 +62,8 @@ def test_ellipsoid_candidates_cover_the_box_points_in_order(g):
         cand = ellipsoid_candidates(c, lower_factor(Y), bound, box)
         assert len(cand) < len(full)
         np.testing.assert_array_equal(cand[inside(cand)], full[inside(full)])
+        # the ranges are tight: measured every candidate inside on these 15 draws
+        assert inside(cand).mean() >= 0.99
 
 
 def _horner_plain(chi, clo, z):
