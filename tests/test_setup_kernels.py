@@ -15,7 +15,7 @@ import pytest
 from thetasol.curves import _poly
 from thetasol.mechanics.lax import _solve3
 from thetasol.theta import lattice
-from thetasol.theta.flow import ellipsoid_candidates, lower_factor
+from thetasol.theta.flow import _dense_unique, ellipsoid_candidates, lower_factor
 
 
 def _radius_by_quadrature(tol, rho, g, order, a):
@@ -108,3 +108,12 @@ def test_solve3_matches_mpmath_lu_solve():
             x = _solve3(A, b)
             ref = mpmath.lu_solve(mpmath.matrix(A), mpmath.matrix(b))
             assert max(abs(x[i] - ref[i]) for i in range(3)) < mpmath.mpf(10) ** -35 * (1 + mpmath.norm(ref))
+
+
+def test_dense_unique_is_numpy_unique():
+    rng = np.random.default_rng(5)
+    for size, n in [(936, 38340), (7225, 500), (11, 3), (1, 4), (10**6, 50)]:
+        codes = rng.integers(0, size, n)
+        for got, want in zip(_dense_unique(codes, size), np.unique(codes, return_inverse=True), strict=True):
+            assert got.dtype == want.dtype
+            np.testing.assert_array_equal(got, want)
