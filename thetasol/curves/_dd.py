@@ -77,12 +77,20 @@ def gauss_legendre_dd(N: int):
 def _horner(C, z, deriv=False):
     """sum_k C[..., k] z^k in complex double-double (coefficients along the last axis), and its z-derivative."""
     n = C[0].shape[-1] - 1
+    # Every factor of the products (partial sums of the value and the derivative, parts of z) is
+    # below 4 (n + 1)^2 max|c| max(1, 4 max|z|)^n: where that is below 1e140 the two-products need
+    # not test for huge factors (the same results, without two reductions in each of them).
+    cmax = max(np.abs(c).max(initial=0.0) for c in C)
+    zmax = max(np.abs(v).max(initial=0.0) for v in z)
+    with np.errstate(over="ignore", invalid="ignore"):
+        bound = cmax * 4.0 * (n + 1) ** 2 * np.maximum(1.0, 4.0 * zmax) ** max(n, 0)
+    checked = not bound <= 1e140
     p = tuple(c[..., n] for c in C)
     dp = None
     for k in range(n - 1, -1, -1):
         if deriv:
-            dp = p if dp is None else cdd_add(cdd_mul(dp, z), p)
-        p = cdd_add(cdd_mul(p, z), tuple(c[..., k] for c in C))
+            dp = p if dp is None else cdd_add(cdd_mul(dp, z, checked), p)
+        p = cdd_add(cdd_mul(p, z, checked), tuple(c[..., k] for c in C))
     shape = np.broadcast_shapes(C[0].shape[:-1], z[0].shape)
     p = tuple(np.broadcast_to(v, shape) for v in p)
     if deriv:
