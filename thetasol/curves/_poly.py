@@ -529,8 +529,11 @@ def _cadd_eft(a, b):
     return sr + 1j * si, er + 1j * ei
 
 
-#: Points per block of :func:`comp_horner` (its ~15 temporaries of 4 x block doubles stay in L2).
-_HORNER_BLOCK = 1024
+#: Points per block of :func:`comp_horner`: its ~15 temporaries of 4 x block doubles (64 kB) stay in
+#: L2 and below the allocator's threshold for fresh mappings, and the blocks are few.  The calls of a
+#: set-up replayed (best of 10): generic 34-36 ms with 1024, 29-31 with 2048, 29-30 unblocked;
+#: near_unstable_equilibrium 47-48 ms with 1024, 41-43 with 2048 or 4096.
+_HORNER_BLOCK = 2048
 
 
 def comp_horner(chi, clo, z):
