@@ -88,6 +88,13 @@ def _dense_unique(codes: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]
     return np.flatnonzero(present), rank[codes]
 
 
+def _sorted_unique_rows(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(a, axis=0, return_inverse=True)`` for rows already in lexicographic order (runs of
+    equal rows, no sort)."""
+    new = np.concatenate([[True], (a[1:] != a[:-1]).any(axis=1)]) if len(a) else np.zeros(0, bool)
+    return a[new], np.cumsum(new) - 1
+
+
 class FlowTheta:
     """Values and u-derivatives of theta(s_j + t u) for shifts s_j (S, g) and real u (r,)."""
 
@@ -149,7 +156,7 @@ class FlowTheta:
         canon = modes * np.where(sign < 0, -1, 1)[:, None]
         lo = canon.min(axis=0)
         span = canon.max(axis=0) - lo + 1
-        codes, inv = np.unique(np.ravel_multi_index(tuple((canon - lo).T), span), return_inverse=True)
+        codes, inv = _dense_unique(np.ravel_multi_index(tuple((canon - lo).T), span), int(np.prod(span)))
         pm = lo + np.stack(np.unravel_index(codes, span), axis=-1)
         C = np.concatenate([D, Dd]).T                    # (K, 2S): coefficients of exp(2 pi i m.phi)
         A = np.zeros((len(pm), 2 * S), complex)          # coefficient of cos
@@ -170,7 +177,7 @@ class FlowTheta:
         self._pre_inv, self._pre_idx = None, []
         r = len(span)
         if r > 1:
-            pre, inv = np.unique(pm[:, :r - 1], axis=0, return_inverse=True)
+            pre, inv = _sorted_unique_rows(pm[:, :r - 1])
             self._pre_inv = inv.ravel()
             self._pre_idx = [pre[:, i] - lo[i] for i in range(r - 1)]
         self.n_phases = len(pm)
