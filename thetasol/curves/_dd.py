@@ -133,23 +133,17 @@ def piece_x_dd(kind, a, b, e, tau):
 def _nodes_dd(pieces, crit):
     """Gauss-Legendre nodes of every interval on its piece, in double-double: the points
     ``X`` (complex double-double), ``w dx/dtau`` per node, and the interval of each node."""
-    node_tau_h, node_tau_l, node_w_h, node_w_l = [], [], [], []
-    node_int = []
-    for c, (_, _, (lo, hi, N)) in enumerate(crit):
-        th_, tl_, wh_, wl_ = gauss_legendre_dd(N)
-        mh, ml = dd_add(lo, 0.0, hi, 0.0)
-        hh, hl = dd_add(hi, 0.0, -lo, 0.0)
-        mh, ml, hh, hl = 0.5 * mh, 0.5 * ml, 0.5 * hh, 0.5 * hl   # exact halvings
-        th, tl = dd_add(mh, ml, *dd_mul(th_, tl_, hh, hl))
-        wh, wl = dd_mul(wh_, wl_, hh, hl)
-        node_tau_h.append(th)
-        node_tau_l.append(tl)
-        node_w_h.append(wh)
-        node_w_l.append(wl)
-        node_int.append(np.full(N, c))
-    tau_h, tau_l = np.concatenate(node_tau_h), np.concatenate(node_tau_l)
-    w_h, w_l = np.concatenate(node_w_h), np.concatenate(node_w_l)
-    nint = np.concatenate(node_int)
+    # every node of every interval at once (elementwise: the same operations as interval by interval)
+    Ns = np.array([N for _, _, (_, _, N) in crit])
+    nint = np.repeat(np.arange(len(crit)), Ns)
+    lo = np.array([lo_ for _, _, (lo_, _, _) in crit], dtype=float)[nint]
+    hi = np.array([hi_ for _, _, (_, hi_, _) in crit], dtype=float)[nint]
+    th_, tl_, wh_, wl_ = (np.concatenate(v) for v in zip(*(gauss_legendre_dd(int(N)) for N in Ns)))
+    mh, ml = dd_add(lo, 0.0, hi, 0.0)
+    hh, hl = dd_add(hi, 0.0, -lo, 0.0)
+    mh, ml, hh, hl = 0.5 * mh, 0.5 * ml, 0.5 * hh, 0.5 * hl   # exact halvings
+    tau_h, tau_l = dd_add(mh, ml, *dd_mul(th_, tl_, hh, hl))
+    w_h, w_l = dd_mul(wh_, wl_, hh, hl)
     K = len(tau_h)
     X = [np.zeros(K) for _ in range(4)]
     DX = [np.zeros(K) for _ in range(4)]
@@ -182,17 +176,17 @@ class _Pairs:
 
 
 def _pairs(crit, seeds) -> _Pairs:
-    pair_node, pair_seed, pair_group, pair_q = [], [], [], []
-    base = np.cumsum([0] + [N for _, _, (_, _, N) in crit])
-    gstart = np.cumsum([0] + [s.shape[0] for s in seeds])
-    for c, (_, _, (_, _, N)) in enumerate(crit):
-        m = seeds[c].shape[0]
-        pair_node.append(np.tile(base[c] + np.arange(N), m))
-        pair_q.append(np.tile(np.arange(N), m))
-        pair_group.append(np.repeat(gstart[c] + np.arange(m), N))
-        pair_seed.append(np.asarray(seeds[c], dtype=complex).ravel())
-    return _Pairs(node=np.concatenate(pair_node), seed=np.concatenate(pair_seed),
-                  q=np.concatenate(pair_q), grp=np.concatenate(pair_group), gstart=gstart)
+    Ns = np.array([N for _, _, (_, _, N) in crit], dtype=np.int64)
+    ms = np.array([s.shape[0] for s in seeds], dtype=np.int64)
+    base = np.cumsum(np.concatenate([[0], Ns]))
+    gstart = np.cumsum(np.concatenate([[0], ms]))
+    # interval by interval, track-major: pair r of interval c is node r % N of track r // N
+    cnt = ms * Ns
+    ic = np.repeat(np.arange(len(crit)), cnt)
+    r = np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    q = r % Ns[ic]
+    return _Pairs(node=base[ic] + q, seed=np.concatenate([np.asarray(s, dtype=complex).ravel() for s in seeds]),
+                  q=q, grp=gstart[ic] + r // Ns[ic], gstart=gstart)
 
 
 def _newton_dd(Ap, y0):
