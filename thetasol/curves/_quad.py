@@ -30,6 +30,8 @@ from functools import cache
 
 import numpy as np
 
+from thetasol.curves._walk import walk_safe
+
 EPS = np.finfo(float).eps
 RHO_TARGET = 2.5
 SAFETY = 0.25
@@ -621,11 +623,9 @@ class Tracker:
         SAFE = np.stack([t_["safe"] for t_ in tests])
         nact = np.searchsorted(-Lq, -np.arange(Lmax), side="left")   # tracks with length > k
         unsafe = {}
-        if not scalar and _walk_safe(choice, I, SAFE, pos, nact, tt, kk, tq, n):
-            out = np.empty_like(choice)
-            out[perm] = choice
-            return out, []
-        for k in range(1, Lmax):
+        # the step-by-step loop below only where the fast walk meets a step that fails a test
+        fast = not scalar and walk_safe(choice, I, SAFE, pos, nact, tt, kk, tq, n)
+        for k in range(1, 1 if fast else Lmax):
             na = int(nact[k])
             if na == 0:
                 break
@@ -651,22 +651,6 @@ class Tracker:
         out = np.empty_like(choice)
         out[perm] = choice
         return out, [(p, k, m) for (p, k), m in unsafe.items()]
-
-
-def _walk_safe(choice, I, SAFE, pos, nact, tt, kk, tq, n) -> bool:
-    """The walk of :meth:`Tracker._match_pass` when every step is safe (the usual case), in two numpy
-    calls per step instead of ten: fills ``choice`` and returns True if then every step passed both
-    tests (safe, and no two tracks of a piece on one root), else False (``choice`` to be redone)."""
-    for k in range(1, choice.shape[1]):
-        na = int(nact[k])
-        if na == 0:
-            break
-        choice[:na, k] = I[choice[:na, k - 1], pos[:na, k]]
-    c, i = choice[tt, kk], choice[tt, kk + 1]
-    if not SAFE[c, np.arange(len(tt))].all():
-        return False
-    key = (kk * (int(tq.max(initial=0)) + 1) + tq[tt]) * (n + 1) + i
-    return bool((np.bincount(key)[key] == 1).all())
 
 
 class Tracked:
