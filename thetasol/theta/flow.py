@@ -51,8 +51,8 @@ def ellipsoid_candidates(c: np.ndarray, M: np.ndarray, bound: float, box: list) 
     is widened by 1e-6 relative and every range by 1e-9 of its centre and half-width: more than the
     rounding of these sums (~1e-15 relative), so a superset of the exact test's points (callers apply
     that test), and in practice no more: on the 13 reference bodies of the theta-function rotation
-    every candidate passes FlowTheta's test (widening every range by one integer made 1.5-15x of
-    them, 3.5x on near_unstable_equilibrium).
+    every candidate passes FlowTheta's test (a widening by one integer per range would give 1.5-15x
+    as many, 3.5x on near_unstable_equilibrium).
     """
     g = len(c)
     B = bound * (1 + 1e-6) + 1e-12
