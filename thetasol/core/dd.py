@@ -31,14 +31,21 @@ def split(a: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     return hi, a - hi
 
 
-def two_prod(a: np.ndarray | float, b: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
+def two_prod(a: np.ndarray | float, b: np.ndarray | float, checked: bool = True) -> tuple[np.ndarray, np.ndarray]:
     """``a*b = p + e`` exactly, for any finite a, b whose product does not overflow.
 
     Factors beyond 1e150 are first rebalanced by a power of two (``a 2^-s``, ``b 2^s``: the product
     is unchanged) so that Veltkamp's split cannot overflow (the elliptic argument reduction meets them).
+    ``checked=False`` skips that test, for callers that have bounded both factors by 1e150 (the same
+    result then, without two reductions per call).
     """
     p = a * b
-    if np.max(np.abs(a), initial=0.0) > 1e150 or np.max(np.abs(b), initial=0.0) > 1e150:
+    if not checked:
+        ah, al = split(a)
+        bh, bl = split(b)
+        return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
+    # (the method, not np.max: the test runs on every call, mostly on arrays of a few elements)
+    if np.abs(a).max(initial=0.0) > 1e150 or np.abs(b).max(initial=0.0) > 1e150:
         sh = (np.frexp(a)[1] - np.frexp(b)[1]) // 2
         a, b = np.ldexp(a, -sh), np.ldexp(b, sh)
     ah, al = split(a)
@@ -146,9 +153,9 @@ def dd_add(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | floa
 
 
 def dd_mul(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | float,
-           bl: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
-    """Double-double product of ``ah + al`` and ``bh + bl``."""
-    p, e = two_prod(ah, bh)
+           bl: np.ndarray | float, checked: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """Double-double product of ``ah + al`` and ``bh + bl`` (``checked``: see :func:`two_prod`)."""
+    p, e = two_prod(ah, bh, checked)
     return quick_two_sum(p, e + (ah * bl + al * bh))
 
 
@@ -186,9 +193,11 @@ def cdd_sub(a: Sequence[np.ndarray], b: Sequence[np.ndarray]) -> tuple[np.ndarra
     return dd_add(a[0], a[1], -b[0], -b[1]) + dd_add(a[2], a[3], -b[2], -b[3])
 
 
-def cdd_mul(a: Sequence[np.ndarray], b: Sequence[np.ndarray]) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    rh, rl = dd_add(*dd_mul(a[0], a[1], b[0], b[1]), *(-v for v in dd_mul(a[2], a[3], b[2], b[3])))
-    ih, il = dd_add(*dd_mul(a[0], a[1], b[2], b[3]), *dd_mul(a[2], a[3], b[0], b[1]))
+def cdd_mul(a: Sequence[np.ndarray], b: Sequence[np.ndarray],
+            checked: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Complex double-double product (``checked``: see :func:`two_prod`)."""
+    rh, rl = dd_add(*dd_mul(a[0], a[1], b[0], b[1], checked), *(-v for v in dd_mul(a[2], a[3], b[2], b[3], checked)))
+    ih, il = dd_add(*dd_mul(a[0], a[1], b[2], b[3], checked), *dd_mul(a[2], a[3], b[0], b[1], checked))
     return rh, rl, ih, il
 
 

@@ -111,12 +111,20 @@ def write_gauss_legendre_table(path: Path = _TABLE) -> None:
 def _horner(C, z, deriv=False):
     """sum_k C[..., k] z^k in complex double-double (coefficients along the last axis), and its z-derivative."""
     n = C[0].shape[-1] - 1
+    # Every factor of the products (partial sums of the value and the derivative, parts of z) is
+    # below 4 (n + 1)^2 max|c| max(1, 4 max|z|)^n: where that is below 1e140 the two-products need
+    # not test for huge factors (the same results, without two reductions in each of them).
+    cmax = max(np.abs(c).max(initial=0.0) for c in C)
+    zmax = max(np.abs(v).max(initial=0.0) for v in z)
+    with np.errstate(over="ignore", invalid="ignore"):
+        bound = cmax * 4.0 * (n + 1) ** 2 * np.maximum(1.0, 4.0 * zmax) ** max(n, 0)
+    checked = not bound <= 1e140
     p = tuple(c[..., n] for c in C)
     dp = None
     for k in range(n - 1, -1, -1):
         if deriv:
-            dp = p if dp is None else cdd_add(cdd_mul(dp, z), p)
-        p = cdd_add(cdd_mul(p, z), tuple(c[..., k] for c in C))
+            dp = p if dp is None else cdd_add(cdd_mul(dp, z, checked), p)
+        p = cdd_add(cdd_mul(p, z, checked), tuple(c[..., k] for c in C))
     shape = np.broadcast_shapes(C[0].shape[:-1], z[0].shape)
     p = tuple(np.broadcast_to(v, shape) for v in p)
     if deriv:
@@ -159,23 +167,17 @@ def piece_x_dd(kind, a, b, e, tau):
 def _nodes_dd(pieces, crit):
     """Gauss-Legendre nodes of every interval on its piece, in double-double: the points
     ``X`` (complex double-double), ``w dx/dtau`` per node, and the interval of each node."""
-    node_tau_h, node_tau_l, node_w_h, node_w_l = [], [], [], []
-    node_int = []
-    for c, (_, _, (lo, hi, N)) in enumerate(crit):
-        th_, tl_, wh_, wl_ = gauss_legendre_dd(N)
-        mh, ml = dd_add(lo, 0.0, hi, 0.0)
-        hh, hl = dd_add(hi, 0.0, -lo, 0.0)
-        mh, ml, hh, hl = 0.5 * mh, 0.5 * ml, 0.5 * hh, 0.5 * hl   # exact halvings
-        th, tl = dd_add(mh, ml, *dd_mul(th_, tl_, hh, hl))
-        wh, wl = dd_mul(wh_, wl_, hh, hl)
-        node_tau_h.append(th)
-        node_tau_l.append(tl)
-        node_w_h.append(wh)
-        node_w_l.append(wl)
-        node_int.append(np.full(N, c))
-    tau_h, tau_l = np.concatenate(node_tau_h), np.concatenate(node_tau_l)
-    w_h, w_l = np.concatenate(node_w_h), np.concatenate(node_w_l)
-    nint = np.concatenate(node_int)
+    # every node of every interval at once (elementwise: the same operations as interval by interval)
+    Ns = np.array([N for _, _, (_, _, N) in crit])
+    nint = np.repeat(np.arange(len(crit)), Ns)
+    lo = np.array([lo_ for _, _, (lo_, _, _) in crit], dtype=float)[nint]
+    hi = np.array([hi_ for _, _, (_, hi_, _) in crit], dtype=float)[nint]
+    th_, tl_, wh_, wl_ = (np.concatenate(v) for v in zip(*(gauss_legendre_dd(int(N)) for N in Ns)))
+    mh, ml = dd_add(lo, 0.0, hi, 0.0)
+    hh, hl = dd_add(hi, 0.0, -lo, 0.0)
+    mh, ml, hh, hl = 0.5 * mh, 0.5 * ml, 0.5 * hh, 0.5 * hl   # exact halvings
+    tau_h, tau_l = dd_add(mh, ml, *dd_mul(th_, tl_, hh, hl))
+    w_h, w_l = dd_mul(wh_, wl_, hh, hl)
     K = len(tau_h)
     X = [np.zeros(K) for _ in range(4)]
     DX = [np.zeros(K) for _ in range(4)]
@@ -208,17 +210,17 @@ class _Pairs:
 
 
 def _pairs(crit, seeds) -> _Pairs:
-    pair_node, pair_seed, pair_group, pair_q = [], [], [], []
-    base = np.cumsum([0] + [N for _, _, (_, _, N) in crit])
-    gstart = np.cumsum([0] + [s.shape[0] for s in seeds])
-    for c, (_, _, (_, _, N)) in enumerate(crit):
-        m = seeds[c].shape[0]
-        pair_node.append(np.tile(base[c] + np.arange(N), m))
-        pair_q.append(np.tile(np.arange(N), m))
-        pair_group.append(np.repeat(gstart[c] + np.arange(m), N))
-        pair_seed.append(np.asarray(seeds[c], dtype=complex).ravel())
-    return _Pairs(node=np.concatenate(pair_node), seed=np.concatenate(pair_seed),
-                  q=np.concatenate(pair_q), grp=np.concatenate(pair_group), gstart=gstart)
+    Ns = np.array([N for _, _, (_, _, N) in crit], dtype=np.int64)
+    ms = np.array([s.shape[0] for s in seeds], dtype=np.int64)
+    base = np.cumsum(np.concatenate([[0], Ns]))
+    gstart = np.cumsum(np.concatenate([[0], ms]))
+    # interval by interval, track-major: pair r of interval c is node r % N of track r // N
+    cnt = ms * Ns
+    ic = np.repeat(np.arange(len(crit)), cnt)
+    r = np.arange(int(cnt.sum())) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+    q = r % Ns[ic]
+    return _Pairs(node=base[ic] + q, seed=np.concatenate([np.asarray(s, dtype=complex).ravel() for s in seeds]),
+                  q=q, grp=gstart[ic] + r // Ns[ic], gstart=gstart)
 
 
 def _newton_dd(Ap, y0):

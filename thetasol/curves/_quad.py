@@ -30,6 +30,8 @@ from functools import cache
 
 import numpy as np
 
+from thetasol.curves._walk import walk_safe
+
 EPS = np.finfo(float).eps
 RHO_TARGET = 2.5
 SAFETY = 0.25
@@ -137,12 +139,6 @@ def _ellipse_params(sings, lo, hi):
     return np.maximum(np.abs(t + s), np.abs(t - s))
 
 
-def _rho(sings, lo, hi):
-    if len(sings) == 0:
-        return np.inf
-    return float(np.min(_ellipse_params(sings, lo, hi)))
-
-
 def plan(piece: Piece, sites, tol: float, rho_target: float = RHO_TARGET, max_intervals: int = 4000):
     """Intervals [lo, hi] of tau with their Gauss-Legendre order: list of (lo, hi, N)."""
     sings = piece.singularities(sites)
@@ -150,7 +146,8 @@ def plan(piece: Piece, sites, tol: float, rho_target: float = RHO_TARGET, max_in
     stack = [(0.0, 1.0)]
     while stack:
         lo, hi = stack.pop()
-        rho = _rho(sings, lo, hi)
+        ep = _ellipse_params(sings, lo, hi) if len(sings) else None
+        rho = float(ep.min()) if ep is not None else np.inf
         if rho >= rho_target or hi - lo < 1e-15:
             out.append((lo, hi, n_nodes(rho, tol)))
             if len(out) > max_intervals:
@@ -158,7 +155,7 @@ def plan(piece: Piece, sites, tol: float, rho_target: float = RHO_TARGET, max_in
             continue
         # split at the projection of the nearest singularity, kept inside the middle half
         L = hi - lo
-        z = sings[int(np.argmin(_ellipse_params(sings, lo, hi)))]
+        z = sings[int(ep.argmin())]
         m = min(max(z.real, lo + 0.25 * L), hi - 0.25 * L)
         stack.append((m, hi))
         stack.append((lo, m))
@@ -182,17 +179,18 @@ class _Nodes:
                 continue
             iv = plan(pc, sites, tol)
             self.plans.append(iv)
-            tt = [0.0]
-            ww = [0.0]
+            tt = [np.zeros(1)]
+            ww = [np.zeros(1)]
             for lo, hi, N in iv:
                 t, w = gauss_legendre(N)
-                tt.extend(0.5 * (lo + hi) + 0.5 * (hi - lo) * t)
-                ww.extend(0.5 * (hi - lo) * w)
+                tt.append(0.5 * (lo + hi) + 0.5 * (hi - lo) * t)
+                ww.append(0.5 * (hi - lo) * w)
             if pc.kind == "line":
-                tt.append(1.0)
-                ww.append(0.0)
-            taus.append(np.asarray(tt))
-            wts.append(np.asarray(ww))
+                tt.append(np.ones(1))
+                ww.append(np.zeros(1))
+            tt, ww = np.concatenate(tt), np.concatenate(ww)
+            taus.append(tt)
+            wts.append(ww)
             self.offsets.append(self.offsets[-1] + len(tt))
         self.tau = np.concatenate(taus) if taus else np.zeros(0)
         self.w = np.concatenate(wts) if wts else np.zeros(0)
@@ -625,7 +623,9 @@ class Tracker:
         SAFE = np.stack([t_["safe"] for t_ in tests])
         nact = np.searchsorted(-Lq, -np.arange(Lmax), side="left")   # tracks with length > k
         unsafe = {}
-        for k in range(1, Lmax):
+        # the step-by-step loop below only where the fast walk meets a step that fails a test
+        fast = not scalar and walk_safe(choice, I, SAFE, pos, nact, tt, kk, tq, n)
+        for k in range(1, 1 if fast else Lmax):
             na = int(nact[k])
             if na == 0:
                 break
