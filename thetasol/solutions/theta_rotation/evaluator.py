@@ -115,7 +115,10 @@ class FlowEvaluator:
         object.__setattr__(self, "_c", c)
         object.__setattr__(self, "_coef", coef)
         object.__setattr__(self, "_plain", coef.shape == (9, 9) and np.array_equal(coef, np.eye(9)))
-        object.__setattr__(self, "_terms", [[(j, float(a)) for j, a in enumerate(row) if a != 0] for row in coef])
+        rows, idx = np.unique(coef, axis=0, return_inverse=True)                 # entries alike by symmetry
+        object.__setattr__(self, "_row_terms", [[(j, float(a)) for j, a in enumerate(row) if a != 0] for row in rows])
+        object.__setattr__(self, "_row_of", idx.ravel())
+        object.__setattr__(self, "_row_of_list", idx.ravel().tolist())
         for name, x in (("_c1_flat", c1), ("_c2_flat", c2), ("_c3_flat", c3), ("_c_flat", c), ("_inu_list", self._inu_flat),
                         ("_amp_list", self._amp_flat)):
             object.__setattr__(self, name, x.ravel().tolist())
@@ -204,19 +207,31 @@ class FlowEvaluator:
             return np.array(self._turns_one(t.item())).reshape(1, 3, 3)
         t1 = np.rint(t)
         t2 = t - t1
-        x = np.multiply.outer(t1, self._c1)
+        if self._plain:
+            x = np.multiply.outer(t1, self._c1)
+        else:
+            x = np.multiply.outer(self._c1, t1)                            # (rates, n): rows contiguous
+            t1 = t1[None]
         x -= np.rint(x)
-        y = np.multiply.outer(t1, self._c2)
+        y = np.multiply.outer(t1, self._c2) if self._plain else self._c2[:, None] * t1
         y -= np.rint(y)
         x += y
-        x += np.multiply.outer(t1, self._c3)
-        x += np.multiply.outer(t2, self._c)
         if self._plain:
+            x += np.multiply.outer(t1, self._c3)
+            x += np.multiply.outer(t2, self._c)
             return x.reshape(-1, 3, 3)
-        turns = np.zeros((t.shape[0], 9))
-        for j in range(x.shape[1]):
-            turns += x[:, j:j + 1] * self._coef[:, j]
-        return turns.reshape(-1, 3, 3)
+        x += self._c3[:, None] * t1
+        x += self._c[:, None] * t2
+        rows = np.zeros((len(self._row_terms), t.shape[0]))
+        for acc, terms in zip(rows, self._row_terms, strict=True):   # a x_j with a = +-1: the same bits
+            for j, a in terms:
+                if a == 1.0:
+                    acc += x[j]
+                elif a == -1.0:
+                    acc -= x[j]
+                else:
+                    acc += x[j] * a
+        return rows.T.take(self._row_of, axis=1).reshape(-1, 3, 3)
 
     def _turns_one(self, x: float) -> list[float]:
         """:meth:`_turns` of one time ``|x| < 2^52`` on Python floats, the same operations (``round``
@@ -228,13 +243,13 @@ class FlowEvaluator:
                                    self._c_flat, strict=True)]
         if self._plain:
             return p
-        out = []
-        for terms in self._terms:
+        rows = []
+        for terms in self._row_terms:
             acc = 0.0
             for j, a in terms:
                 acc += p[j] * a
-            out.append(acc)
-        return out
+            rows.append(acc)
+        return [rows[i] for i in self._row_of_list]
 
     def _state_one(self, t: np.ndarray, v: np.ndarray, dv: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """:meth:`_state` for one time on Python complex numbers and floats, around the one matrix product
