@@ -8,9 +8,13 @@ for a symmetric body ``Q = Q~ R(t)^T``, ``omega = R omega~ + spin e`` back from 
 The theta functions along the flow, ``theta(b_sk + t U)`` and ``theta(d_k + t U)``, are Fourier series
 in the ``rdim`` real phases of ``U`` (:class:`thetasol.theta.flow.FlowTheta`): per time only the
 phases and one real matrix product remain, and a far time costs what ``t = 1`` costs.  The exponents
-``exp(i nu_sk t)`` take ``nu t / 2 pi`` modulo 1 exactly for ``|t| < 2^31`` (:meth:`FlowEvaluator._turns`):
-rounded products ``nu t`` make the first integrals drift with ``t`` (4e-11 at ``t = 1e6`` on the
-rank-one bodies, tests/test_one_call.py).  After the flow ``Psi`` and its derivative go through one
+``exp(i nu_sk t)`` take ``nu t / 2 pi`` modulo 1 exactly for ``|t| < 2^31`` (:meth:`FlowEvaluator._turns`),
+as the integer combinations of a few rates' turns that the exponents are exactly
+(:class:`~.exponents.PhaseRates`): rounded products ``nu t`` make the first integrals drift with ``t``
+(4e-11 at ``t = 1e6`` on the rank-one bodies), and so do the rounded floats ``nu_sk``, whose exact
+relations hold only to ~1e-16 (symmetric_oblate 1.9e-11 at ``t = 1e6``, 1.9e-8 at ``1e9``); with the
+combinations the drift at ``t = 1e9`` is at the level of ``t = 0`` (<= 1.2e-14, tests/test_one_call.py)
+but on the fast-spin bodies (6e-13 to 9e-13: the flow's phases ``t u``).  After the flow ``Psi`` and its derivative go through one
 more real product (9x9 complex maps folded with ``B``, ``X0^-1``, ``Q0`` and the principal frame) and
 the 3x3 algebra runs on component rows: the polar factor by one Newton-Schulz step
 (:func:`thetasol.core.so3.polar_near_orthogonal`, 20x closer to the long-double polar factor than the

@@ -7,7 +7,9 @@ that form by weighted least squares (:func:`fit_exponents`); the fit then only p
 the exact values (:func:`exact_exponents`): the involution ``sigma: (E, w) -> (-E, w)`` makes every
 exponent a half lattice rate ``pi n.U`` up to the third-kind rates of the nodes, which come from
 periods (:func:`node_exponent_gap`, :func:`third_kind_periods`).  ``U`` and these periods are summed in
-double-double by the curve engine, so a rate is exact to float64 and the attitude does not drift.
+double-double by the curve engine, so a rate is exact to float64 and the attitude does not drift.  The
+exponents go to the evaluator also as those integers and rates (:class:`PhaseRates`): its phases
+``nu_sk t`` then keep the exact relations at any time, which the rounded floats ``nu_sk`` do not.
 """
 from __future__ import annotations
 
@@ -227,7 +229,10 @@ def exact_exponents(curve: SpectralCurve, P0: Sequence[Place], slopes: Sequence[
 
     Why exact values: the circle means at a node's branches are biased by up to 6e-12 (symmetric body,
     relative axial spin 2e-4; the same at two radii) and fitted rates are off by up to 6e-13 (4.8e-13 on
-    the fast-spin reference), an error that makes the attitude drift linearly.  Returns nu (3, 3)
+    the fast-spin reference), an error that makes the attitude drift linearly.  Rounded to floats, the exact values still satisfy
+the form and the relation with ``U`` only to ~1e-16 (``nu_sk - nu_s0 - nu_0k + nu_00``: 1.1e-16 on
+symmetric_oblate), which made its first integrals drift by 1.9e-11 at ``t = 1e6``: hence the integers
+and rates, from which the evaluator builds the phases (4.9e-15 there).  Returns nu (3, 3)
     and the same exponents as :class:`PhaseRates` (``nu_sk = pi n_sk.U + (dF_s - dG_k) / 2`` exactly,
     with the integers n of the snapped sums), or None where a relation points at no single n or a node
     gap is unknown (the fit is then kept).
