@@ -8,9 +8,13 @@ for a symmetric body ``Q = Q~ R(t)^T``, ``omega = R omega~ + spin e`` back from 
 The theta functions along the flow, ``theta(b_sk + t U)`` and ``theta(d_k + t U)``, are Fourier series
 in the ``rdim`` real phases of ``U`` (:class:`thetasol.theta.flow.FlowTheta`): per time only the
 phases and one real matrix product remain, and a far time costs what ``t = 1`` costs.  The exponents
-``exp(i nu_sk t)`` take ``nu t / 2 pi`` modulo 1 exactly for ``|t| < 2^31`` (:meth:`FlowEvaluator._turns`):
-rounded products ``nu t`` make the first integrals drift with ``t`` (4e-11 at ``t = 1e6`` on the
-rank-one bodies, tests/test_one_call.py).  After the flow ``Psi`` and its derivative go through one
+``exp(i nu_sk t)`` take ``nu t / 2 pi`` modulo 1 exactly for ``|t| < 2^31`` (:meth:`FlowEvaluator._turns`),
+as the integer combinations of a few rates' turns that the exponents are exactly
+(:class:`~.exponents.PhaseRates`): rounded products ``nu t`` make the first integrals drift with ``t``
+(4e-11 at ``t = 1e6`` on the rank-one bodies), and so do the rounded floats ``nu_sk``, whose exact
+relations hold only to ~1e-16 (symmetric_oblate 1.9e-11 at ``t = 1e6``, 1.9e-8 at ``1e9``); with the
+combinations the drift at ``t = 1e9`` is at the level of ``t = 0`` (<= 1.2e-14, tests/test_one_call.py)
+but on the fast-spin bodies (6e-13 to 9e-13: the flow's phases ``t u``).  After the flow ``Psi`` and its derivative go through one
 more real product (9x9 complex maps folded with ``B``, ``X0^-1``, ``Q0`` and the principal frame) and
 the 3x3 algebra runs on component rows: the polar factor by one Newton-Schulz step
 (:func:`thetasol.core.so3.polar_near_orthogonal`, 20x closer to the long-double polar factor than the
@@ -40,7 +44,7 @@ import numpy as np
 from thetasol.core.jit import Kernel
 from thetasol.core.so3 import NEWTON_SCHULZ_MAX, polar_near_orthogonal, polar_near_orthogonal_one
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
-from thetasol.solutions.theta_rotation.exponents import Exponents
+from thetasol.solutions.theta_rotation.exponents import Exponents, PhaseRates
 from thetasol.solutions.theta_rotation.riemann import ThetaShifts
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
 from thetasol.theta.flow import FlowTheta
@@ -58,6 +62,8 @@ class FlowEvaluator:
         Theta at the 9 shifts ``b_sk`` and the 3 shifts ``d_k`` along ``t U``.
     nu : ndarray, shape (3, 3)
         Exponents: ``Psi_k(P_s, t)`` carries ``exp(i nu_sk t)``.
+    phase : PhaseRates
+        The exponents as exact integer combinations of rates: the phases ``nu_sk t`` come from these.
     amp : ndarray, shape (3, 3)
         ``rho_k(P_s) theta(d_k)`` times the separated exponents of the flow's theta values.
     X0inv : ndarray, shape (3, 3)
@@ -74,6 +80,7 @@ class FlowEvaluator:
 
     flow: FlowTheta
     nu: np.ndarray
+    phase: PhaseRates
     amp: np.ndarray
     X0inv: np.ndarray
     B: np.ndarray
@@ -104,11 +111,19 @@ class FlowEvaluator:
         object.__setattr__(self, "_inu_flat", self._inu.astype(complex).ravel())
         object.__setattr__(self, "_amp_flat", self.amp.astype(complex).ravel())
         object.__setattr__(self, "_P_rows", np.asarray(self.P, float).tolist())
-        c1, c2, c = _turn_rates(self.nu)
+        c1, c2, c3, c = _turn_rates(self.phase)
+        coef = np.hstack([self.phase.n, self.phase.e]).astype(float)             # (9, rates)
         object.__setattr__(self, "_c1", c1)
         object.__setattr__(self, "_c2", c2)
+        object.__setattr__(self, "_c3", c3)
         object.__setattr__(self, "_c", c)
-        for name, x in (("_c1_flat", c1), ("_c2_flat", c2), ("_c_flat", c), ("_inu_list", self._inu_flat),
+        object.__setattr__(self, "_coef", coef)
+        object.__setattr__(self, "_plain", coef.shape == (9, 9) and np.array_equal(coef, np.eye(9)))
+        rows, idx = np.unique(coef, axis=0, return_inverse=True)                 # entries alike by symmetry
+        object.__setattr__(self, "_row_terms", [[(j, float(a)) for j, a in enumerate(row) if a != 0] for row in rows])
+        object.__setattr__(self, "_row_of", idx.ravel())
+        object.__setattr__(self, "_row_of_list", idx.ravel().tolist())
+        for name, x in (("_c1_flat", c1), ("_c2_flat", c2), ("_c3_flat", c3), ("_c_flat", c), ("_inu_list", self._inu_flat),
                         ("_amp_list", self._amp_flat)):
             object.__setattr__(self, name, x.ravel().tolist())
 
@@ -146,8 +161,8 @@ class FlowEvaluator:
             return self._state(t, v, dv)
         n = t.shape[0]
         w, Q, bad = np.empty((n, 3)), np.empty((n, 3, 3)), np.zeros(n, bool)
-        kern(t, v, dv, self._inu_flat, self._amp_flat, self._c1.ravel(), self._c2.ravel(), self._c.ravel(),
-             self._lin, self.P, -1 if self.axis is None else self.axis, float(self.spin), NEWTON_SCHULZ_MAX,
+        kern(t, v, dv, self._inu_flat, self._amp_flat, self._c1, self._c2, self._c3, self._c, self._coef, self._lin,
+             self.P, -1 if self.axis is None else self.axis, float(self.spin), NEWTON_SCHULZ_MAX,
              w, Q, bad)
         if bad.any():                                                # the polar factor needs the SVD
             w[bad], Q[bad] = self._state(t[bad], v[bad], dv[bad])
@@ -181,30 +196,64 @@ class FlowEvaluator:
     def _turns(self, t: np.ndarray) -> np.ndarray:
         """``nu t / (2 pi)`` modulo 1 (n, 3, 3), exact before its last roundings for ``|t| < 2^31``.
 
-        ``t = t1 + t2`` (``t1 = rint(t)``, both exact) and ``nu / 2 pi = c1 + c2`` (``c1`` on 22 bits,
-        :func:`_turn_rates`): ``t1 c1`` is exact and its integer part drops exactly, the rest is small.
-        The plain product ``nu t`` would carry an error of ``|nu t| 1.1e-16`` into the phase (1e-10
-        at ``t = 1e6``), and the nine exponents would no longer combine into an orthogonal
-        ``Phi(0, t)``: the first integrals drift with it (benchmarks/bench_theta_rotation.py, drift
-        far).  One time: the same operations on Python floats (``round`` rounds half to even, as
-        ``rint``), 2 us cheaper than nine numpy calls."""
+        The exponents are exact integer combinations of a few rates (:class:`.exponents.PhaseRates`);
+        each rate's turns ``beta_j t`` are reduced modulo 1 exactly: ``t = t1 + t2`` (``t1 = rint(t)``,
+        both exact) and ``beta_j = c1 + c2`` (``c1`` on 22 bits, :func:`_turn_rates`), ``t1 c1`` is exact
+        and its integer part drops exactly, the rest is small.  The turns of ``nu_sk`` are then the
+        integer combinations of these (coefficients in order, the same in every path).  The plain
+        product ``nu t`` would carry an error of ``|nu t| 1.1e-16`` into the phase (1e-10 at ``t =
+        1e6``), and the rounded floats ``nu_sk`` keep their exact relations (the form ``F_s - G_k``,
+        the lattice rate ``U``) only to ~1e-16: either way the nine exponents would no longer combine
+        into an orthogonal ``Phi(0, t)`` and the first integrals drift with ``t``
+        (benchmarks/bench_theta_rotation.py, drift far; tests/test_one_call.py).  One time: the same
+        operations on Python floats (``round`` rounds half to even, as ``rint``), cheaper than numpy."""
         if t.shape[0] == 1 and abs(t.item()) < 2.0 ** 52:
             return np.array(self._turns_one(t.item())).reshape(1, 3, 3)
         t1 = np.rint(t)
         t2 = t - t1
-        x = np.multiply.outer(t1, self._c1)
+        if self._plain:
+            x = np.multiply.outer(t1, self._c1)
+        else:
+            x = np.multiply.outer(self._c1, t1)                            # (rates, n): rows contiguous
+            t1 = t1[None]
         x -= np.rint(x)
-        x += np.multiply.outer(t1, self._c2)
-        x += np.multiply.outer(t2, self._c)
-        return x
+        y = np.multiply.outer(t1, self._c2) if self._plain else self._c2[:, None] * t1
+        y -= np.rint(y)
+        x += y
+        if self._plain:
+            x += np.multiply.outer(t1, self._c3)
+            x += np.multiply.outer(t2, self._c)
+            return x.reshape(-1, 3, 3)
+        x += self._c3[:, None] * t1
+        x += self._c[:, None] * t2
+        rows = np.zeros((len(self._row_terms), t.shape[0]))
+        for acc, terms in zip(rows, self._row_terms, strict=True):   # a x_j with a = +-1: the same bits
+            for j, a in terms:
+                if a == 1.0:
+                    acc += x[j]
+                elif a == -1.0:
+                    acc -= x[j]
+                else:
+                    acc += x[j] * a
+        return rows.T.take(self._row_of, axis=1).reshape(-1, 3, 3)
 
     def _turns_one(self, x: float) -> list[float]:
         """:meth:`_turns` of one time ``|x| < 2^52`` on Python floats, the same operations (``round``
         rounds half to even, as ``rint``): the nine turns in the order ``3 s + k``."""
         t1 = float(round(x))
         t2 = x - t1
-        return [((y - round(y)) + t1 * b) + t2 * c
-                for y, b, c in zip([t1 * a for a in self._c1_flat], self._c2_flat, self._c_flat, strict=True)]
+        p = [(((y - round(y)) + (z - round(z))) + t1 * b) + t2 * c
+             for y, z, b, c in zip([t1 * a for a in self._c1_flat], [t1 * a for a in self._c2_flat], self._c3_flat,
+                                   self._c_flat, strict=True)]
+        if self._plain:
+            return p
+        rows = []
+        for terms in self._row_terms:
+            acc = 0.0
+            for j, a in terms:
+                acc += p[j] * a
+            rows.append(acc)
+        return [rows[i] for i in self._row_of_list]
 
     def _state_one(self, t: np.ndarray, v: np.ndarray, dv: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """:meth:`_state` for one time on Python complex numbers and floats, around the one matrix product
@@ -278,39 +327,55 @@ TWO_PI = 2.0 * math.pi
 TWO_PI_I = 2j * math.pi
 
 
-def _turn_rates(nu: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``nu / 2 pi`` (3, 3) as ``c1 + c2`` to ~1e-32 relative, ``c1`` with 22 significant bits (so that
-    ``t1 c1`` is exact for integers ``|t1| < 2^31``), and ``c`` its float64 value."""
-    c1, c2, c = np.zeros_like(nu), np.zeros_like(nu), np.zeros_like(nu)
-    with mpmath.workdps(40):
-        for idx in np.ndindex(nu.shape):
-            x = mpmath.mpf(float(nu[idx])) / (2 * mpmath.pi)
-            c[idx] = float(x)
-            if x != 0:
-                k = 21 - math.frexp(c[idx])[1]
-                c1[idx] = math.ldexp(round(math.ldexp(c[idx], k)), -k)
-                c2[idx] = float(x - mpmath.mpf(c1[idx]))
-    return c1, c2, c
+def _turn_rates(phase: PhaseRates) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The turn rates ``U / 2`` and ``gaps / 2 pi`` of ``phase`` (r + g,) as ``c1 + c2 + c3`` to ~1e-40
+    relative, ``c1`` and ``c2`` with 22 significant bits each (so that ``t1 c1`` and ``t1 c2`` are exact
+    for integers ``|t1| < 2^31``; the rounding of ``t1 c3`` is then ~``|t c| 2^-97``, where with two
+    pieces ``|t c| 2^-75`` made the first integrals drift by 5e-13 at ``t = 1e9`` on the fast-spin
+    bodies), and ``c`` their float64 values."""
+    with mpmath.workdps(50):
+        rates = ([mpmath.mpf(float(u)) / 2 for u in phase.lattice]
+                 + [mpmath.mpf(float(g)) / (2 * mpmath.pi) for g in phase.gaps])
+        out = np.zeros((4, len(rates)))
+        for idx, x in enumerate(rates):
+            out[3, idx] = float(x)
+            rest = x
+            for piece in range(2):
+                if rest != 0:
+                    k = 21 - math.frexp(float(rest))[1]
+                    out[piece, idx] = math.ldexp(round(math.ldexp(float(rest), k)), -k)
+                    rest -= mpmath.mpf(out[piece, idx])
+            out[2, idx] = float(rest)
+    return out[0], out[1], out[2], out[3]
 
 
-def _state_kernel(t, v, dv, inu, amp, rc1, rc2, rc, L, P, axis, spin, tol, w_out, Q_out, bad):  # pragma: no cover
+def _state_kernel(t, v, dv, inu, amp, rc1, rc2, rc3, rc, coef, L, P, axis, spin, tol, w_out, Q_out,
+                  bad):  # pragma: no cover
     """Compiled :meth:`FlowEvaluator._state` (numba), time by time, with the same formulas in the same
     order; ``bad[a]`` marks a time whose polar factor needs the SVD (``|G^T G - 1| > tol``)."""
-    Zf, Y = np.empty(36), np.empty(45)
+    Zf, Y, p = np.empty(36), np.empty(45), np.empty(rc1.shape[0])
     G, H = np.empty((3, 3)), np.empty((3, 3))
     Q, w = np.empty((3, 3)), np.empty(3)
     for a in range(t.shape[0]):
         t1 = np.rint(t[a])
         t2 = t[a] - t1
+        for j in range(p.shape[0]):                              # the turns of FlowEvaluator._turns
+            x = t1 * rc1[j]
+            x -= np.rint(x)
+            y = t1 * rc2[j]
+            y -= np.rint(y)
+            x += y
+            x += t1 * rc3[j]
+            x += t2 * rc[j]
+            p[j] = x
         for k in range(3):
             ivd = 1.0 / v[a, 9 + k]
             rd = dv[a, 9 + k] * ivd
             for s in range(3):
                 m = 3 * s + k
-                x = t1 * rc1[m]                                  # the turns of FlowEvaluator._turns
-                x -= np.rint(x)
-                x += t1 * rc2[m]
-                x += t2 * rc[m]
+                x = 0.0
+                for j in range(p.shape[0]):
+                    x += p[j] * coef[m, j]
                 q = np.exp(x * TWO_PI_I) * amp[m] * ivd
                 z = q * v[a, m]
                 zd = q * ((inu[m] - rd) * v[a, m] + dv[a, m])
@@ -392,6 +457,6 @@ def flow_evaluator(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
     eb = flow.e[:9].reshape(3, 3)
     amp = ex.means.rho * np.exp(eb - flow.e[9:][None, :])             # rho theta(d) exp(e_b - e_d)
     fr = sd.frame
-    ev = FlowEvaluator(flow=flow, nu=ex.nu, amp=amp, X0inv=np.linalg.inv(sd.B @ ex.means.X0), B=sd.B,
+    ev = FlowEvaluator(flow=flow, nu=ex.nu, phase=ex.phase, amp=amp, X0inv=np.linalg.inv(sd.B @ ex.means.X0), B=sd.B,
                        Q0p=fr.Q0p, P=fr.P, spin=fr.spin, axis=fr.axis)
     return ev, shift_correction

@@ -7,7 +7,9 @@ that form by weighted least squares (:func:`fit_exponents`); the fit then only p
 the exact values (:func:`exact_exponents`): the involution ``sigma: (E, w) -> (-E, w)`` makes every
 exponent a half lattice rate ``pi n.U`` up to the third-kind rates of the nodes, which come from
 periods (:func:`node_exponent_gap`, :func:`third_kind_periods`).  ``U`` and these periods are summed in
-double-double by the curve engine, so a rate is exact to float64 and the attitude does not drift.
+double-double by the curve engine, so a rate is exact to float64 and the attitude does not drift.  The
+exponents go to the evaluator also as those integers and rates (:class:`PhaseRates`): its phases
+``nu_sk t`` then keep the exact relations at any time, which the rounded floats ``nu_sk`` do not.
 """
 from __future__ import annotations
 
@@ -36,7 +38,42 @@ if TYPE_CHECKING:
 #: wrong exponents (off by 1.1e-8 at t = 4002, tests/test_units.py) has 1.4e4.
 MAX_FIT_RESIDUAL = 2e3
 
-__all__ = ["Exponents", "exponents"]
+__all__ = ["Exponents", "PhaseRates", "exponents"]
+
+
+@dataclass(frozen=True, eq=False)
+class PhaseRates:
+    """The exponents as exact integer combinations of float rates: the phases ``nu_sk t`` (stage 5).
+
+    ``nu_sk = pi n_sk.U + sum_g e_skg gaps_g`` holds exactly for the real numbers these floats are
+    (``m = 3 s + k``).  The evaluator reduces ``U t / 2`` and ``gaps t / 2 pi`` modulo 1 exactly and
+    combines them with these integers: the phases then keep the exact relations of the exponents
+    (``nu_sk + nu_{sigma s, sigma k} = 2 pi n_sk.U``, the form ``F_s - G_k``) at any time, which the
+    rounded floats ``nu_sk`` hold only to ~1e-16 (:func:`exact_exponents`).  Where the fit is kept:
+    no lattice part, ``gaps = nu`` (9,) and ``e`` the identity.
+
+    Attributes
+    ----------
+    lattice : ndarray, shape (r,)
+        The lattice rates ``U`` (r = rdim, or 0 where the fit is kept).
+    n : ndarray, shape (9, r)
+        Integer vectors of the lattice part.
+    gaps : ndarray, shape (g,)
+        Rates in radians per unit time: half the node gaps ``F_a - F_b`` and ``G_k0 - G_k1``.
+    e : ndarray, shape (9, g)
+        Their integer coefficients.
+    """
+
+    lattice: np.ndarray
+    n: np.ndarray
+    gaps: np.ndarray
+    e: np.ndarray
+
+    @staticmethod
+    def of_fit(nu: np.ndarray) -> PhaseRates:
+        """Each fitted exponent a rate of its own."""
+        return PhaseRates(lattice=np.zeros(0), n=np.zeros((9, 0), int), gaps=np.asarray(nu, float).ravel().copy(),
+                          e=np.eye(9, dtype=int))
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,6 +86,8 @@ class Exponents:
         ``X0 = psi_k(P_s)``, ``rho_k(P_s) theta(d_k)`` and the raw exponents, at the radius ``r``.
     nu : ndarray, shape (3, 3)
         The exponents ``nu_sk = F_s - G_k`` (real; ``Psi_k(P_s)`` carries ``exp(i nu_sk t)``).
+    phase : PhaseRates
+        The same exponents as integer combinations of rates, exactly (for the phases ``nu_sk t``).
     theta_d : tuple
         ``(ed, vd, dlog_d)``: theta at ``d_k`` (separated exponent and value) and its log-derivative
         along ``U``.
@@ -64,6 +103,7 @@ class Exponents:
 
     means: CauchyMeans
     nu: np.ndarray
+    phase: PhaseRates
     theta_d: tuple
     nu_real_part: float
     nu_fit_residual: float
@@ -156,18 +196,24 @@ def third_kind_periods(curve: SpectralCurve, places: Sequence[Place], numerator:
 def snap_rate(fitted: float, value: float, U: np.ndarray, rdim: int) -> float | None:
     """The rate value + 2 pi n.U (n integer, |n_i| <= 3) the fitted one points at, or None when no single
     n is within 1e-8 (the next candidate at least 1e-4 away)."""
+    snapped = snap_lattice(fitted, value, U, rdim)
+    return None if snapped is None else snapped[0]
+
+
+def snap_lattice(fitted: float, value: float, U: np.ndarray, rdim: int) -> tuple[float, np.ndarray] | None:
+    """:func:`snap_rate` and its integer vector n (rdim,), or None."""
     n = np.array(np.meshgrid(*[np.arange(-3, 4)] * rdim, indexing="ij")).reshape(rdim, -1).T
     cand = value + 2 * np.pi * n @ U[:rdim]
     miss = np.abs(fitted - cand)
     order = np.argsort(miss)
     if miss[order[0]] > 1e-8 * (1 + abs(fitted)) or (len(miss) > 1 and miss[order[1]] <= 1e-4):
         return None
-    return float(cand[order[0]])
+    return float(cand[order[0]]), n[order[0]].copy()
 
 
 def exact_exponents(curve: SpectralCurve, P0: Sequence[Place], slopes: Sequence[complex | None],
                     gap: tuple[int, int, float] | None, G: np.ndarray, U: np.ndarray, rdim: int,
-                    nu_fit: np.ndarray) -> np.ndarray | None:
+                    nu_fit: np.ndarray) -> tuple[np.ndarray, PhaseRates] | None:
     """The exponents nu_sk = F_s - G_k (imaginary parts) from exact relations; the fit picks the integers.
 
     sigma: (E, w) -> (-E, w) maps the curve to itself (L(-E) = L(E)^T) and Omega to -Omega + const (its
@@ -183,8 +229,13 @@ def exact_exponents(curve: SpectralCurve, P0: Sequence[Place], slopes: Sequence[
 
     Why exact values: the circle means at a node's branches are biased by up to 6e-12 (symmetric body,
     relative axial spin 2e-4; the same at two radii) and fitted rates are off by up to 6e-13 (4.8e-13 on
-    the fast-spin reference), an error that makes the attitude drift linearly.  Returns nu (3, 3),
-    or None where a relation points at no single n or a node gap is unknown (the fit is then kept).
+    the fast-spin reference), an error that makes the attitude drift linearly.  Rounded to floats, the exact values still satisfy
+the form and the relation with ``U`` only to ~1e-16 (``nu_sk - nu_s0 - nu_0k + nu_00``: 1.1e-16 on
+symmetric_oblate), which made its first integrals drift by 1.9e-11 at ``t = 1e6``: hence the integers
+and rates, from which the evaluator builds the phases (4.9e-15 there).  Returns nu (3, 3)
+    and the same exponents as :class:`PhaseRates` (``nu_sk = pi n_sk.U + (dF_s - dG_k) / 2`` exactly,
+    with the integers n of the snapped sums), or None where a relation points at no single n or a node
+    gap is unknown (the fit is then kept).
     """
     swap0 = [s_ for s_, slope in enumerate(slopes) if slope is not None]
     if curve.symmetric_body and gap is None:
@@ -192,10 +243,13 @@ def exact_exponents(curve: SpectralCurve, P0: Sequence[Place], slopes: Sequence[
     f = nu_fit
     sig_s, dF = list(range(3)), np.zeros(3)          # sigma on the places over E = 0; F_s - F_sigma(s)
     sig_k, dG = list(range(3)), np.zeros(3)          # sigma on the places at infinity; G_k - G_sigma(k)
+    gaps, e = [], []                                 # the gap rates halved, their coefficients [s, k]
     if gap is not None:
         k0, k1, gval = gap
         sig_k[k0], sig_k[k1] = k1, k0
         dG[k0], dG[k1] = gval, -gval
+        gaps.append(0.5 * gval)
+        e.append(np.outer(np.ones(3), -dG / gval))
     if swap0:
         sa, sb = swap0
         _, pa = third_kind_periods(curve, [P0[sa], P0[sb]], sp.Integer(1), G)
@@ -204,24 +258,31 @@ def exact_exponents(curve: SpectralCurve, P0: Sequence[Place], slopes: Sequence[
             return None
         sig_s[sa], sig_s[sb] = sb, sa
         dF[sa], dF[sb] = zgap, -zgap
+        if zgap != 0:
+            gaps.append(0.5 * zgap)
+            e.append(np.outer(dF / zgap, np.ones(3)))
     # nu_sk + nu_{sigma s, sigma k} = 2 pi n.U and nu_sk - nu_{sigma s, sigma k} = dF_s - dG_k: each entry
     # from one snapped sum and the gaps (fewer roundings than a solve over all relations)
-    nu = np.empty((3, 3))
+    nu, n = np.empty((3, 3)), np.zeros((3, 3, rdim), int)
     for s_ in range(3):
         for k in range(3):
-            total = snap_rate(float(f[s_, k] + f[sig_s[s_], sig_k[k]]), 0.0, U, rdim)
-            if total is None:
+            snapped = snap_lattice(float(f[s_, k] + f[sig_s[s_], sig_k[k]]), 0.0, U, rdim)
+            if snapped is None:
                 return None
+            total, n[s_, k] = snapped
             nu[s_, k] = 0.5 * (total + dF[s_] - dG[k])
     # the F_s - G_k form is implied: nu_sk - nu_s0 - nu_0k + nu_00 = 0
     form = nu - nu[:, :1] - nu[:1, :] + nu[0, 0]
     if np.abs(form).max() > 1e-12 * (1 + np.abs(nu).max()):
         raise RuntimeError("the exact exponents are not of the form F_s - G_k (internal error)")
-    return nu
+    phase = PhaseRates(lattice=np.array(U[:rdim], float), n=n.reshape(9, rdim), gaps=np.array(gaps, float),
+                       e=np.rint(np.array(e).reshape(len(gaps), 9).T).astype(int).reshape(9, len(gaps)))
+    return nu, phase
 
 
 def _fixed_exponents(sd: SpectralData, means, meansb, aux):
-    """(nu, fit residual, node gap change, exact change): the fit, the node gap, the exact relations."""
+    """(nu, phase rates, fit residual, node gap change, exact change): the fit, the node gap, the exact
+    relations."""
     curve, G, U, rdim = sd.curve, sd.G, sd.U, sd.rdim
     nu, nub, X0 = means.nu, meansb.nu, means.X0
     nu_fit, resid = fit_exponents(nu, nub, X0, *aux)
@@ -232,11 +293,11 @@ def _fixed_exponents(sd: SpectralData, means, meansb, aux):
         node_gap_change = float(nu_fit[0, k1] - nu_fit[0, k0]) - val
         nu_fit, resid = fit_exponents(nu, nub, X0, *aux, gap)
     nu_exact_change = None
-    nu_ex = exact_exponents(curve, sd.P0, sd.slopes, gap, G, U, rdim, nu_fit)
-    if nu_ex is not None:
-        nu_exact_change = float(np.abs(nu_ex - nu_fit).max())
-        nu_fit = nu_ex
-    return nu_fit, resid, node_gap_change, nu_exact_change
+    exact = exact_exponents(curve, sd.P0, sd.slopes, gap, G, U, rdim, nu_fit)
+    if exact is None:
+        return nu_fit, PhaseRates.of_fit(nu_fit), resid, node_gap_change, nu_exact_change
+    nu_exact_change = float(np.abs(exact[0] - nu_fit).max())
+    return exact[0], exact[1], resid, node_gap_change, nu_exact_change
 
 
 def exponents(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts) -> Exponents:
@@ -246,7 +307,7 @@ def exponents(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts) -> Exp
     r = dv.radius
     means, meansb = cauchy_means_at(sd, dv, ts, theta_d, (r, 0.5 * r))
     aux = auxiliary_rows(sd, dv, ts, theta_d[2])
-    nu_fit, resid, node_gap_change, nu_exact_change = _fixed_exponents(sd, means, meansb, aux)
+    nu_fit, phase, resid, node_gap_change, nu_exact_change = _fixed_exponents(sd, means, meansb, aux)
     if resid > MAX_FIT_RESIDUAL:
         raise ClosedFormUnavailable(
             f"theta set-up: the exponents do not fit the Cauchy means (residual {resid:.2g} of its error "
@@ -258,7 +319,7 @@ def exponents(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts) -> Exp
                            "the spectral data are inconsistent")
     rho, rhob = means.rho, meansb.rho
     return Exponents(
-        means=means, nu=nu_fit, theta_d=theta_d, nu_real_part=float(np.abs(nu.real).max()),
+        means=means, nu=nu_fit, phase=phase, theta_d=theta_d, nu_real_part=float(np.abs(nu.real).max()),
         nu_fit_residual=resid, node_gap_change=node_gap_change, nu_exact_change=nu_exact_change,
         rho_two_radii=float(np.max(np.abs(rho - rhob) / np.maximum(np.abs(rho), 1e-300))),
         X0_two_radii=float(np.max(np.abs(means.X0 - meansb.X0))))
