@@ -265,7 +265,7 @@ def _break_even(setup: float, per_time: float, rate: float, density: float) -> s
 #: t <= 1000 of DOP853 at rtol 1e-13, heyoka float64 at tol 1e-16 and the theta solution, and theta's to t = 4002.
 _ACCURACY = ("accuracy: an integrator's error grows with the horizon and a closed form's stays near its set-up "
              "accuracy (generic reference body, t <= 1000: DOP853 at rtol 1e-13 4.5e-11, heyoka float64 1.8e-12, "
-             "theta 1.8e-13, and 6.3e-13 to t = 4002; docs/bench_theta_rotation.md); matching it over long horizons "
+             "theta 1.4e-13, and 6.6e-13 to t = 4002; docs/bench_theta_rotation.md); matching it over long horizons "
              "costs an integrator a tighter tolerance or extended precision, so at equal accuracy the closed form "
              "pays off before the horizons above")
 
