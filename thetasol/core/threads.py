@@ -4,8 +4,9 @@ The library's linear algebra is on 3x3 .. 8x8 matrices and stacks of them, far b
 which a multi-threaded BLAS gains; with the BLAS's default threads (one per core) its calls pay the
 threads' wake-up and synchronisation instead.  Measured on the 13 reference bodies on 2 cores, both
 settings in one run (benchmarks/bench_blas_threads.py, docs/bench_theta_rotation.md): with the
-default threads dense evaluation is 1.9-3.9x slower (median 2.9x), the set-up 1.1-2.7x slower, and a
-far time 13-16 ms instead of 0.1-0.3 ms on four genus-4 bodies.
+default threads dense evaluation is 0.85-1.8x the limited cost (median 1.12x) with outliers (11x on one
+body in one of two runs); one far time is ~7 us cheaper (median) without the guard, whose set and restore cost
+3.6 us per call when the BLAS is on 2 threads.
 
 :func:`blas_threads` (a context manager) and :func:`single_blas_thread` (a decorator) set every
 loaded BLAS to :data:`LIMIT` threads for the duration of the call, with threadpoolctl, and restore the
