@@ -118,7 +118,6 @@ class FlowEvaluator:
         object.__setattr__(self, "_c3", c3)
         object.__setattr__(self, "_c", c)
         object.__setattr__(self, "_coef", coef)
-        object.__setattr__(self, "_plain", coef.shape == (9, 9) and np.array_equal(coef, np.eye(9)))
         rows, idx = np.unique(coef, axis=0, return_inverse=True)                 # entries alike by symmetry
         object.__setattr__(self, "_row_terms", [[(j, float(a)) for j, a in enumerate(row) if a != 0] for row in rows])
         object.__setattr__(self, "_row_of", idx.ravel())
@@ -211,19 +210,11 @@ class FlowEvaluator:
             return np.array(self._turns_one(t.item())).reshape(1, 3, 3)
         t1 = np.rint(t)
         t2 = t - t1
-        if self._plain:
-            x = np.multiply.outer(t1, self._c1)
-        else:
-            x = np.multiply.outer(self._c1, t1)                            # (rates, n): rows contiguous
-            t1 = t1[None]
+        x = np.multiply.outer(self._c1, t1)                                # (rates, n): rows contiguous
         x -= np.rint(x)
-        y = np.multiply.outer(t1, self._c2) if self._plain else self._c2[:, None] * t1
+        y = np.multiply.outer(self._c2, t1)
         y -= np.rint(y)
         x += y
-        if self._plain:
-            x += np.multiply.outer(t1, self._c3)
-            x += np.multiply.outer(t2, self._c)
-            return x.reshape(-1, 3, 3)
         x += self._c3[:, None] * t1
         x += self._c[:, None] * t2
         rows = np.zeros((len(self._row_terms), t.shape[0]))
@@ -245,8 +236,6 @@ class FlowEvaluator:
         p = [(((y - round(y)) + (z - round(z))) + t1 * b) + t2 * c
              for y, z, b, c in zip([t1 * a for a in self._c1_flat], [t1 * a for a in self._c2_flat], self._c3_flat,
                                    self._c_flat, strict=True)]
-        if self._plain:
-            return p
         rows = []
         for terms in self._row_terms:
             acc = 0.0
