@@ -40,12 +40,8 @@ def two_prod(a: np.ndarray | float, b: np.ndarray | float, checked: bool = True)
     result then, without two reductions per call).
     """
     p = a * b
-    if not checked:
-        ah, al = split(a)
-        bh, bl = split(b)
-        return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
     # (the method, not np.max: the test runs on every call, mostly on arrays of a few elements)
-    if np.abs(a).max(initial=0.0) > 1e150 or np.abs(b).max(initial=0.0) > 1e150:
+    if checked and (np.abs(a).max(initial=0.0) > 1e150 or np.abs(b).max(initial=0.0) > 1e150):
         sh = (np.frexp(a)[1] - np.frexp(b)[1]) // 2
         a, b = np.ldexp(a, -sh), np.ldexp(b, sh)
     ah, al = split(a)
