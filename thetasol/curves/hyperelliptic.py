@@ -60,6 +60,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike
 
+from thetasol.curves._quad import gauss_legendre
 from thetasol.theta.lattice import lll_gram
 from thetasol.theta.riemann import RiemannTheta
 
@@ -69,11 +70,6 @@ GAUSS_MAX = 64          # nodes of a Gauss rule before tanh-sinh takes over
 DE_T = 4.0              # tanh-sinh truncation: weights below 1e-37 beyond
 DE_LEVELS = (3, 11)     # steps 2^-3 .. 2^-10 (65 .. 8193 nodes)
 EPS = 1e-16
-
-
-@lru_cache(maxsize=32)
-def _legendre(n: int) -> tuple[np.ndarray, np.ndarray]:
-    return np.polynomial.legendre.leggauss(n)
 
 
 @lru_cache(maxsize=16)
@@ -334,7 +330,7 @@ class HyperellipticCurve:
 
         n = _gauss_nodes(float(np.min(rho))) if np.isfinite(np.min(rho)) else 8
         if n:
-            s, w = _legendre(n)
+            s, w = gauss_legendre(n)
             val = rule(s, 0.5 * w)[0]
         else:
             val = _adaptive(lambda lo, hi, w: rule(0.5 * lo, 0.5 * w))
