@@ -3,17 +3,14 @@
 Each kernel must give the plain computation's values: the decisions of the theta radius (closed-form
 tail against the quadrature), the lattice points of the flow's ellipsoids (enumeration against the
 whole box), the compensated Horner scheme (stacked against per-component error-free transformations,
-including the rescaled path above 1e150) and the 3x3 mpmath solve of the pole polishing (against
-mpmath.lu_solve).
+including the rescaled path above 1e150).
 """
 import math
 
-import mpmath
 import numpy as np
 import pytest
 
 from thetasol.curves import _poly
-from thetasol.mechanics.lax import _solve3
 from thetasol.theta import lattice
 from thetasol.theta.flow import _dense_unique, _sorted_unique_rows, ellipsoid_candidates, lower_factor
 
@@ -97,17 +94,6 @@ def test_compensated_horner_in_blocks_is_bit_identical(layout):
     z = rng.normal(size=(K, m)) + 1j * rng.normal(size=(K, m))
     for a, b in zip(_horner_plain(chi, clo, z), _poly.comp_horner(chi, clo, z), strict=True):
         np.testing.assert_array_equal(a, b)
-
-
-def test_solve3_matches_mpmath_lu_solve():
-    rng = np.random.default_rng(2)
-    with mpmath.workdps(40):
-        for _ in range(20):
-            A = [[mpmath.mpc(*rng.normal(size=2)) for _ in range(3)] for _ in range(3)]
-            b = [mpmath.mpc(*rng.normal(size=2)) for _ in range(3)]
-            x = _solve3(A, b)
-            ref = mpmath.lu_solve(mpmath.matrix(A), mpmath.matrix(b))
-            assert max(abs(x[i] - ref[i]) for i in range(3)) < mpmath.mpf(10) ** -35 * (1 + mpmath.norm(ref))
 
 
 def test_dense_unique_is_numpy_unique():

@@ -134,8 +134,8 @@ def polish_eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha:
     Jf = np.asarray(J, float)
     free = np.empty(idx.size, bool)
     s0 = np.empty(idx.size, complex)
-    for q, n in enumerate(idx):
-        v0 = right_eigenvector(lax_matrix(Jf, M, u, Eo[n]), wo[n])
+    V0 = right_eigenvector(lax_matrix(Jf, M, u, Eo[idx]), wo[idx])
+    for q, v0 in enumerate(V0):
         y0 = np.linalg.lstsq(B, v0, rcond=None)[0]
         free[q] = abs(y0[0]) >= abs(y0[1])                 # normalize the larger coefficient to 1
         s0[q] = y0[1] / y0[0] if free[q] else y0[0] / y0[1]
@@ -144,13 +144,14 @@ def polish_eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha:
     dv = np.where(free[:, None], b2[None, :], b1[None, :])
     one = cdd(np.ones(idx.size))
     eye = np.eye(3)
+    b1_dd, b2_dd, u_dd = cdd(b1[None, :]), cdd(b2[None, :]), cdd(u[None].astype(complex))
     for _ in range(iters):
         e, ww, sv = X
         y1 = tuple(np.where(free, a, b) for a, b in zip(one, sv, strict=True))
         y2 = tuple(np.where(free, b, a) for a, b in zip(one, sv, strict=True))
-        v = cdd_add(cdd_mul(_col(y1), cdd(b1[None, :])), cdd_mul(_col(y2), cdd(b2[None, :])))   # (m, 3)
+        v = cdd_add(cdd_mul(_col(y1), b1_dd), cdd_mul(_col(y2), b2_dd))                        # (m, 3)
         diag = cdd_sub(cdd_scale(_col(cdd_mul(e, e)), J2[0][None, :], J2[1][None, :]), _col(ww))
-        L = cdd_add(cdd_scale(tuple(c[:, None, None] for c in e), M[None]), cdd(u[None].astype(complex)))
+        L = cdd_add(cdd_scale(tuple(c[:, None, None] for c in e), M[None]), u_dd)
         L = cdd_add(L, tuple(c[:, :, None] * eye for c in diag))                              # (m, 3, 3)
         P = cdd_mul(L, tuple(c[:, None, :] for c in v))
         F = cdd_value(cdd_add(cdd_add(tuple(c[..., 0] for c in P), tuple(c[..., 1] for c in P)),
@@ -170,19 +171,3 @@ def polish_eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha:
 def _col(a):
     """A complex double-double vector (m,) as a column (m, 1)."""
     return tuple(c[:, None] for c in a)
-
-
-def _solve3(A: list, b: list) -> list:
-    """A x = b for a 3 x 3 system of mpmath numbers: Gaussian elimination with partial pivoting
-    (at the working precision; the Newton steps of :func:`polish_eigenvector_poles` need no more)."""
-    A = [row[:] + [bi] for row, bi in zip(A, b, strict=True)]
-    for c in range(3):
-        piv = max(range(c, 3), key=lambda r: abs(complex(A[r][c])))
-        A[c], A[piv] = A[piv], A[c]
-        for r in range(c + 1, 3):
-            f = A[r][c] / A[c][c]
-            A[r] = [A[r][k] - f * A[c][k] for k in range(4)]
-    x = [0, 0, 0]
-    for r in (2, 1, 0):
-        x[r] = (A[r][3] - sum(A[r][k] * x[k] for k in range(r + 1, 3))) / A[r][r]
-    return x
