@@ -121,10 +121,9 @@ def _chars(chars, g: int) -> tuple[np.ndarray, np.ndarray]:
     return ab[:, 0], ab[:, 1]
 
 
-def _radius(Y: np.ndarray, k1n: np.ndarray, k2n: np.ndarray, A: _Blocks, B: _Blocks, tol: float) -> float:
-    """``r + rho`` (see the module docstring): the terms kept are ``|nu|_Y <= r + rho``."""
-    g = len(Y)
-    M = lower_factor(Y)
+def _radius(M: np.ndarray, k1n: np.ndarray, k2n: np.ndarray, A: _Blocks, B: _Blocks, tol: float) -> float:
+    """``r + rho`` (see the module docstring): the terms kept are ``|nu|_Y <= r + rho`` (``Y = M^T M``)."""
+    g = len(M)
     cube = (np.arange(1 << g)[:, None] >> np.arange(g)[None, :]) & 1
     rho = float(np.max(np.linalg.norm((cube - 0.5) @ M.T, axis=1)))
     ha, hb = np.max(np.abs(A.offset), 1), np.max(np.abs(B.offset), 1)
@@ -154,13 +153,12 @@ def _terms(Y: np.ndarray, M: np.ndarray, r: float, alphas: np.ndarray) -> tuple[
 
 @dataclass(frozen=True)
 class _Centres:
-    """Per block ``(P, Q)``: the lattice shift ``K``, ``c``, ``xi``, ``n0 = -round(c)`` and ``o = n0 + c``."""
+    """Per block ``(P, Q)``: the lattice shift ``K``, ``c``, ``xi`` and ``n0 = -round(c)``."""
 
     K: np.ndarray       # (P, Q, 2g)
     c: np.ndarray       # (P, Q, g)
     xi: np.ndarray      # (P, Q, g)
     n0: np.ndarray      # (P, Q, g)
-    o: np.ndarray       # (P, Q, g)
 
 
 def _centres(tau, z0, k1, k2, A: _Blocks, B: _Blocks) -> _Centres:
@@ -172,7 +170,7 @@ def _centres(tau, z0, k1, k2, A: _Blocks, B: _Blocks) -> _Centres:
     c0 = np.linalg.solve(Y, z0.imag)
     c = c0 + f[..., g:]
     n0 = -np.round(c)
-    return _Centres(K, c, (z0.real - X @ c0) + f[..., :g], n0, n0 + c)
+    return _Centres(K, c, (z0.real - X @ c0) + f[..., :g], n0)
 
 
 def _coefficients(tau, cen: _Centres, nu, valid, al2, be2, ia, V):
@@ -180,7 +178,7 @@ def _coefficients(tau, cen: _Centres, nu, valid, al2, be2, ia, V):
     ``valid`` the terms of each alpha, ``ia`` the alpha of each characteristic)."""
     g = tau.shape[0]
     # -pi d.Y.d from d itself (summing the expanded form loses |nu.Y.nu| eps when Im tau is large)
-    d = nu + cen.o[:, :, None, None, :]                                          # (P, Q, nal, S, g)
+    d = nu + (cen.n0 + cen.c)[:, :, None, None, :]                               # (P, Q, nal, S, g)
     X, Y = tau.real, tau.imag
     E = np.exp(np.pi * (1j * np.sum((d @ X) * d, -1) - np.sum((d @ Y) * d, -1))
                + 2j * np.pi * np.sum(d * cen.xi[:, :, None, None, :], -1)) * valid   # (P, Q, nal, S)
@@ -273,10 +271,11 @@ def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: A
     cen = _centres(tau, z0, k1, k2, A, B)
     nout = nch if V is None else 2 * nch
     out = np.empty((nout, P, sa, Q, sb), complex)
-    r = _radius(tau.imag, k1[g:], k2[g:], A, B, tol)
+    M = lower_factor(tau.imag)
+    r = _radius(M, k1[g:], k2[g:], A, B, tol)
     alphas, ia = np.unique(al2, axis=0, return_inverse=True)
     ia = ia.ravel()
-    nu, valid = _terms(tau.imag, lower_factor(tau.imag), r, alphas / 2.0)
+    nu, valid = _terms(tau.imag, M, r, alphas / 2.0)
     C = _coefficients(tau, cen, nu, valid, al2, be2, ia, V)                    # (P, Q, nout, S)
     Am = _phases(A.offset, nu, alphas / 2.0, u)                                 # (nal, P, sa, S)
     Bm = _phases(B.offset, nu, alphas / 2.0, w).transpose(0, 1, 3, 2)           # (nal, Q, S, sb)
