@@ -212,8 +212,8 @@ def _local_entry(curve, meta, p, y1, tr2, q):
 
 def prefetch_local(curve, targets):
     """Compute in one batch the local data that the Abel map of ``targets`` (places and (x, y)
-    pairs) will read: the circles under critical and infinite places, and those whose series
-    PlaneCurve._near_place takes for a point close to a critical value or far out."""
+    pairs) will read: the circles under critical and infinite places, and those of :func:`near_site`
+    (the rule PlaneCurve._near_place uses) for a point close to a critical value or far out."""
     lds = local_sites(curve)
     sites = curve._sites
     which = []
@@ -222,15 +222,22 @@ def prefetch_local(curve, targets):
         if kind in ("critical", "infinity"):
             which.append(t._site if kind == "critical" else -1)
             continue
-        x0 = t.x if kind == "regular" else t[0]
-        if len(sites):
-            kk = int(np.argmin(np.abs(sites - x0)))
-            if abs(x0 - sites[kk]) < 0.25 * abs(lds.x1(kk) - sites[kk]):
-                which.append(kk)
-                continue
-        if abs(x0) > 4 * abs(lds.x1(len(lds) - 1)):
-            which.append(-1)
+        k = near_site(lds, sites, t.x if kind == "regular" else t[0])
+        if k is not None:
+            which.append(k)
     lds.prefetch(which)
+
+
+def near_site(lds, sites: np.ndarray, x0: complex) -> int | None:
+    """The site whose local series serve a point over ``x0``: the nearest critical value when ``x0`` is
+    within a quarter of its series' approach distance, -1 (infinity) far out, else None."""
+    if len(sites):
+        kk = int(np.argmin(np.abs(sites - x0)))
+        if abs(x0 - sites[kk]) < 0.25 * abs(lds.x1(kk) - sites[kk]):
+            return kk
+    if abs(x0) > 4 * abs(lds.x1(len(lds) - 1)):
+        return -1
+    return None
 
 
 def local_of(curve, place):

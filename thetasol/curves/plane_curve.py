@@ -34,6 +34,7 @@ from thetasol.curves._places import (
     laurent,
     local_of,
     local_sites,
+    near_site,
     noise_level,
     perm_cycles,
     place_series,
@@ -624,16 +625,10 @@ class PlaneCurve:
     def _near_place(self, x0, y0):
         """If (x0, y0) is inside the disc where a local series converges fast: (place, t)."""
         lds = self._local()
-        ld = None
-        if len(self._sites):
-            kk = int(np.argmin(np.abs(self._sites - x0)))
-            b = self._sites[kk]
-            if abs(x0 - b) < 0.25 * abs(lds.x1(kk) - b):
-                ld = lds[kk]
-        if ld is None and abs(x0) > 4 * abs(lds.x1(len(lds) - 1)):
-            ld = lds[-1]
-        if ld is None:
+        k = near_site(lds, self._sites, x0)
+        if k is None:
             return None
+        ld = lds[k]
         cands = self._site_places(ld.site)
         best = []
         for P in cands:
