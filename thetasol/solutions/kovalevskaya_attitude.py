@@ -78,19 +78,14 @@ class Reference:
     lam: float
     axis: int
 
-    def vectors(self, P: np.ndarray, I: np.ndarray, center: np.ndarray, mg: float, omega: np.ndarray,
-                gamma: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``b`` and its space rate in body coordinates ``bdot`` along states ``(omega, gamma)``."""
+    def vector(self, P: np.ndarray, I: np.ndarray, omega: np.ndarray) -> np.ndarray:
+        """``b`` in body coordinates along the angular velocities ``omega``."""
         b = np.zeros_like(omega)
-        bdot = np.zeros_like(omega)
         if self.mu:
             b = b + self.mu * (omega @ I.T)
-            bdot = bdot + (self.mu * mg) * np.cross(gamma, center)
         if self.lam:
-            d = P[:, self.axis]
-            b = b + self.lam * d
-            bdot = bdot + self.lam * np.cross(omega, d)
-        return b, bdot
+            b = b + self.lam * P[:, self.axis]
+        return b
 
     def __str__(self) -> str:
         if not self.lam:
@@ -150,7 +145,7 @@ class KovalevskayaAttitude:
     def __call__(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         t = np.asarray(t, float)
         omega, gamma = self.motion(t)
-        b = self.ref.vectors(self.motion.P, self.I, self.center, self.mg, omega, gamma)[0]
+        b = self.ref.vector(self.motion.P, self.I, omega)
         u = b - np.sum(b * gamma, -1)[..., None] * gamma
         u /= np.linalg.norm(u, axis=-1)[..., None]
         B = np.stack([u, np.cross(gamma, u), gamma], -1)
@@ -358,7 +353,7 @@ def kovalevskaya_attitude(motion: KovalevskayaMotion, I: ArrayLike, center: Arra
     e1 /= np.linalg.norm(e1)
     E = np.stack([e1, np.cross(up, e1), up], 1)
     gam0 = Q0.T @ up
-    b0 = ref.vectors(motion.P, I, center, mg, np.asarray(omega0, float), gam0)[0]
+    b0 = ref.vector(motion.P, I, np.asarray(omega0, float))
     u0 = b0 - (b0 @ gam0) * gam0
     us = E.T @ (Q0 @ (u0 / np.linalg.norm(u0)))
     return KovalevskayaAttitude(motion, I, center, mg, E, ref, (nu, np.zeros(2)), modes, coef, (mean, 0.0),
