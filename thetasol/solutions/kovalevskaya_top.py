@@ -355,7 +355,7 @@ class KovalevskayaMotion:
         return omega, gamma_up
 
 
-def _memoir_state(val, der, coef, c0, l1, with_pdot=False):
+def _memoir_state(val, der, coef, c0, l1):
     lam, nu, mu, rho = coef
     D, Dd = val[..., 1:4] @ lam, der[..., 1:4] @ lam
     Nr, Nrd = val[..., 4:7] @ mu, der[..., 4:7] @ mu
@@ -364,11 +364,7 @@ def _memoir_state(val, der, coef, c0, l1, with_pdot=False):
     g3 = val[..., 4:7] @ rho / D
     g2 = (Nrd * D - Nr * Dd) / (D * D) / c0
     g1 = (2 * (p * p + q * q) + r * r - 6 * l1) / (2 * c0)
-    if not with_pdot:
-        return p, q, r, g1, g2, g3
-    pd = (der[..., 1:4] @ nu * D - Np * Dd) / (D * D)
-    qd = (der[..., 0] * D - val[..., 0] * Dd) / (D * D)
-    return p, q, r, g1, g2, g3, pd, qd
+    return p, q, r, g1, g2, g3
 
 
 def _refine(coef, val, der, rows, c0, l1, l, k):
