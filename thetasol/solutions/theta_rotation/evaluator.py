@@ -13,8 +13,9 @@ as the integer combinations of a few rates' turns that the exponents are exactly
 (:class:`~.exponents.PhaseRates`): rounded products ``nu t`` make the first integrals drift with ``t``
 (4e-11 at ``t = 1e6`` on the rank-one bodies), and so do the rounded floats ``nu_sk``, whose exact
 relations hold only to ~1e-16 (symmetric_oblate 1.9e-11 at ``t = 1e6``, 1.9e-8 at ``1e9``); with the
-combinations the drift at ``t = 1e9`` is at the level of ``t = 0`` (<= 1.2e-14, tests/test_one_call.py)
-but on the fast-spin bodies (6e-13 to 9e-13: the flow's phases ``t u``).  After the flow ``Psi`` and its derivative go through one
+combinations, and the flow's phases ``t u`` reduced as exactly (:meth:`thetasol.theta.flow.FlowTheta.turns`), the
+drift on ``[T, T + 100]`` stays at the level of ``T = 0`` up to ``T = 1e9`` (<= 3.0e-14 on six bodies, the
+fast-spin ones included, tests/test_one_call.py).  After the flow ``Psi`` and its derivative go through one
 more real product (9x9 complex maps folded with ``B``, ``X0^-1``, ``Q0`` and the principal frame) and
 the 3x3 algebra runs on component rows: the polar factor by one Newton-Schulz step
 (:func:`thetasol.core.so3.polar_near_orthogonal`, 20x closer to the long-double polar factor than the
