@@ -24,6 +24,7 @@ import math
 import numpy as np
 
 from thetasol.core.jit import Kernel
+from thetasol.core.turns import rate_turns, rate_turns_one, split_rate
 
 __all__ = []
 
@@ -101,26 +102,6 @@ def _sorted_unique_rows(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return a[new], np.cumsum(new) - 1
 
 
-def split_rate(u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``u = u1 + u2 + u3`` exactly, ``u1`` and ``u2`` with 22 significant bits, ``u3`` with at most 9:
-    the products of these pieces with integers below ``2^31`` are exact."""
-    def top22(x):
-        e = np.frexp(x)[1]
-        return np.ldexp(np.rint(np.ldexp(x, 21 - e)), e - 21)
-    u1 = top22(u)
-    u2 = top22(u - u1)
-    return u1, u2, (u - u1) - u2
-
-
-def _turn_one(x: float, c: tuple[float, float, float, float]) -> float:
-    """:meth:`FlowTheta.turns` of one time ``|x| < 2^31`` and one rate ``c = (u1, u2, u3, u)`` on Python
-    floats: the same operations (``round`` rounds half to even, as ``rint``)."""
-    t1 = float(round(x))
-    y1, y2 = t1 * c[0], t1 * c[1]
-    z = (((y1 - round(y1)) + (y2 - round(y2))) + t1 * c[2]) + (x - t1) * c[3]
-    return z - round(z)
-
-
 class FlowTheta:
     """Values and u-derivatives of theta(s_j + t u) for shifts s_j (S, g) and real u (r,)."""
 
@@ -164,8 +145,8 @@ class FlowTheta:
         self.Dd = D * (2j * math.pi * (self.modes @ u))[None, :]
         self.u = u
         self.r = r
-        self._u1, self._u2, self._u3 = split_rate(u)
-        self._u_split = [tuple(float(c[i]) for c in (self._u1, self._u2, self._u3, u)) for i in range(r)]
+        self._u_pieces = (*split_rate(u), u)
+        self._u_split = list(zip(*(c.tolist() for c in self._u_pieces), strict=True))
         self._pair(self.modes, D, self.Dd)
 
     def _pair(self, modes: np.ndarray, D: np.ndarray, Dd: np.ndarray) -> None:
@@ -243,30 +224,15 @@ class FlowTheta:
         return last if X is None else X.take(self._pre_inv, axis=1) * last
 
     def turns(self, t: np.ndarray) -> np.ndarray:
-        """``t u`` modulo 1 (n, r) in ``[-1/2, 1/2]``, exact before its last roundings for ``|t| < 2^31``.
-
-        ``t = t1 + t2`` (``t1 = rint(t)``) and ``u = u1 + u2 + u3`` (22, 22 and at most 9 significant
-        bits, :func:`split_rate`): ``t1 u1``, ``t1 u2`` and ``t1 u3`` are exact and the integer parts of
-        the first two drop exactly.  The plain product ``t u`` carries ``|t u| 1.1e-16`` into the
+        """``t u`` modulo 1 (n, r) in ``[-1/2, 1/2]``, exact before its last roundings for ``|t| < 2^31``
+        (:mod:`thetasol.core.turns`).  The plain product ``t u`` carries ``|t u| 1.1e-16`` into the
         phases, which the exponents of a theta quotient (reduced exactly the same way) then no longer
         match: the first integrals of the fast-spin reference bodies drift by ~1e-12 at ``t = 1e9``
-        (tests/test_one_call.py).  Beyond ``2^31`` the plain product."""
+        (tests/test_one_call.py)."""
         if t.shape[0] == 1:
-            x = t.item()
-            if abs(x) < 2.0 ** 31:
-                return np.array([_turn_one(x, c) for c in self._u_split]).reshape(1, -1)
-        t1 = np.rint(t)
-        big = np.abs(t1) >= 2.0 ** 31
-        if big.any():
-            t1[big] = 0.0                                # their t2 = t: the plain product
-        t2 = t - t1
-        x = np.multiply.outer(t1, self._u1)
-        x -= np.rint(x)
-        y = np.multiply.outer(t1, self._u2)
-        y -= np.rint(y)
-        x += y
-        x += np.multiply.outer(t1, self._u3)
-        x += np.multiply.outer(t2, self.u)
+            x = np.array([rate_turns_one(t.item(), self._u_split)])
+        else:
+            x = np.ascontiguousarray(rate_turns(t, *self._u_pieces).T)
         x -= np.rint(x)
         return x
 

@@ -44,6 +44,7 @@ import numpy as np
 
 from thetasol.core.jit import Kernel
 from thetasol.core.so3 import NEWTON_SCHULZ_MAX, polar_near_orthogonal, polar_near_orthogonal_one
+from thetasol.core.turns import TURNS_EXACT, rate_turns, rate_turns_one
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.exponents import Exponents, PhaseRates
 from thetasol.solutions.theta_rotation.riemann import ThetaShifts
@@ -112,19 +113,16 @@ class FlowEvaluator:
         object.__setattr__(self, "_inu_flat", self._inu.astype(complex).ravel())
         object.__setattr__(self, "_amp_flat", self.amp.astype(complex).ravel())
         object.__setattr__(self, "_P_rows", np.asarray(self.P, float).tolist())
-        c1, c2, c3, c = _turn_rates(self.phase)
+        pieces = _turn_rates(self.phase)                                          # c1, c2, c3, c
         coef = np.hstack([self.phase.n, self.phase.e]).astype(float)             # (9, rates)
-        object.__setattr__(self, "_c1", c1)
-        object.__setattr__(self, "_c2", c2)
-        object.__setattr__(self, "_c3", c3)
-        object.__setattr__(self, "_c", c)
+        object.__setattr__(self, "_pieces", pieces)
+        object.__setattr__(self, "_rates", list(zip(*(x.tolist() for x in pieces), strict=True)))
         object.__setattr__(self, "_coef", coef)
         rows, idx = np.unique(coef, axis=0, return_inverse=True)                 # entries alike by symmetry
         object.__setattr__(self, "_row_terms", [[(j, float(a)) for j, a in enumerate(row) if a != 0] for row in rows])
         object.__setattr__(self, "_row_of", idx.ravel())
         object.__setattr__(self, "_row_of_list", idx.ravel().tolist())
-        for name, x in (("_c1_flat", c1), ("_c2_flat", c2), ("_c3_flat", c3), ("_c_flat", c), ("_inu_list", self._inu_flat),
-                        ("_amp_list", self._amp_flat)):
+        for name, x in (("_inu_list", self._inu_flat), ("_amp_list", self._amp_flat)):
             object.__setattr__(self, name, x.ravel().tolist())
 
     def _linear_map(self) -> np.ndarray:
@@ -161,7 +159,7 @@ class FlowEvaluator:
             return self._state(t, v, dv)
         n = t.shape[0]
         w, Q, bad = np.empty((n, 3)), np.empty((n, 3, 3)), np.zeros(n, bool)
-        kern(t, v, dv, self._inu_flat, self._amp_flat, self._c1, self._c2, self._c3, self._c, self._coef, self._lin,
+        kern(t, v, dv, self._inu_flat, self._amp_flat, *self._pieces, self._coef, self._lin,
              self.P, -1 if self.axis is None else self.axis, float(self.spin), NEWTON_SCHULZ_MAX,
              w, Q, bad)
         if bad.any():                                                # the polar factor needs the SVD
@@ -197,46 +195,27 @@ class FlowEvaluator:
         """``nu t / (2 pi)`` modulo 1 (n, 3, 3), exact before its last roundings for ``|t| < 2^31``.
 
         The exponents are exact integer combinations of a few rates (:class:`.exponents.PhaseRates`);
-        each rate's turns ``beta_j t`` are reduced modulo 1 exactly: ``t = t1 + t2`` (``t1 = rint(t)``,
-        both exact) and ``beta_j = c1 + c2`` (``c1`` on 22 bits, :func:`_turn_rates`), ``t1 c1`` is exact
-        and its integer part drops exactly, the rest is small.  The turns of ``nu_sk`` are then the
-        integer combinations of these (coefficients in order, the same in every path).  The plain
-        product ``nu t`` would carry an error of ``|nu t| 1.1e-16`` into the phase (1e-10 at ``t =
-        1e6``), and the rounded floats ``nu_sk`` keep their exact relations (the form ``F_s - G_k``,
-        the lattice rate ``U``) only to ~1e-16: either way the nine exponents would no longer combine
-        into an orthogonal ``Phi(0, t)`` and the first integrals drift with ``t``
-        (benchmarks/bench_theta_rotation.py, drift far; tests/test_one_call.py).  One time: the same
-        operations on Python floats (``round`` rounds half to even, as ``rint``), cheaper than numpy."""
-        if t.shape[0] == 1 and abs(t.item()) < 2.0 ** 52:
+        each rate's turns are reduced modulo 1 exactly (:mod:`thetasol.core.turns`, the pieces from
+        :func:`_turn_rates`), and the turns of ``nu_sk`` are the integer combinations of these
+        (coefficients in order, the same in every path).  The plain product ``nu t`` would carry an error
+        of ``|nu t| 1.1e-16`` into the phase (1e-10 at ``t = 1e6``), and the rounded floats ``nu_sk``
+        keep their exact relations (the form ``F_s - G_k``, the lattice rate ``U``) only to ~1e-16:
+        either way the nine exponents would no longer combine into an orthogonal ``Phi(0, t)`` and the
+        first integrals drift with ``t`` (benchmarks/bench_theta_rotation.py, drift far;
+        tests/test_one_call.py).  One time: on Python floats, cheaper than numpy."""
+        if t.shape[0] == 1:
             return np.array(self._turns_one(t.item())).reshape(1, 3, 3)
-        t1 = np.rint(t)
-        t2 = t - t1
-        x = np.multiply.outer(self._c1, t1)                                # (rates, n): rows contiguous
-        x -= np.rint(x)
-        y = np.multiply.outer(self._c2, t1)
-        y -= np.rint(y)
-        x += y
-        x += self._c3[:, None] * t1
-        x += self._c[:, None] * t2
+        x = rate_turns(t, *self._pieces)                                 # (rates, n): rows contiguous
         rows = np.zeros((len(self._row_terms), t.shape[0]))
-        for acc, terms in zip(rows, self._row_terms, strict=True):   # a x_j with a = +-1: the same bits
+        for acc, terms in zip(rows, self._row_terms, strict=True):
             for j, a in terms:
-                if a == 1.0:
-                    acc += x[j]
-                elif a == -1.0:
-                    acc -= x[j]
-                else:
-                    acc += x[j] * a
+                acc += x[j] * a
         return rows.T.take(self._row_of, axis=1).reshape(-1, 3, 3)
 
     def _turns_one(self, x: float) -> list[float]:
-        """:meth:`_turns` of one time ``|x| < 2^52`` on Python floats, the same operations (``round``
-        rounds half to even, as ``rint``): the nine turns in the order ``3 s + k``."""
-        t1 = float(round(x))
-        t2 = x - t1
-        p = [(((y - round(y)) + (z - round(z))) + t1 * b) + t2 * c
-             for y, z, b, c in zip([t1 * a for a in self._c1_flat], [t1 * a for a in self._c2_flat], self._c3_flat,
-                                   self._c_flat, strict=True)]
+        """:meth:`_turns` of one time on Python floats, the same operations: the nine turns in the order
+        ``3 s + k``."""
+        p = rate_turns_one(x, self._rates)
         rows = []
         for terms in self._row_terms:
             acc = 0.0
@@ -249,11 +228,8 @@ class FlowEvaluator:
         """:meth:`_state` for one time on Python complex numbers and floats, around the one matrix product
         (numpy's calls cost more than their arithmetic on nine elements: one far time 8-12 us cheaper,
         tests/test_one_call.py); the same formulas, to rounding (complex products round differently
-        from numpy's).  None when the time is too large for :meth:`_turns_one` or the polar factor needs
-        the SVD: the numpy rows then apply."""
+        from numpy's).  None when the polar factor needs the SVD: the numpy rows then apply."""
         x = t.item()
-        if not abs(x) < 2.0 ** 52:
-            return None
         vl, dl, inu, amp = v[0].tolist(), dv[0].tolist(), self._inu_list, self._amp_list
         Z = [0j] * 18
         for m, turn in enumerate(self._turns_one(x)):
@@ -348,8 +324,10 @@ def _state_kernel(t, v, dv, inu, amp, rc1, rc2, rc3, rc, coef, L, P, axis, spin,
     Q, w = np.empty((3, 3)), np.empty(3)
     for a in range(t.shape[0]):
         t1 = np.rint(t[a])
+        if not abs(t1) < TURNS_EXACT:
+            t1 = 0.0
         t2 = t[a] - t1
-        for j in range(p.shape[0]):                              # the turns of FlowEvaluator._turns
+        for j in range(p.shape[0]):                              # the turns of core.turns.rate_turns
             x = t1 * rc1[j]
             x -= np.rint(x)
             y = t1 * rc2[j]
