@@ -61,7 +61,8 @@ class FlowEvaluator:
     Attributes
     ----------
     flow : FlowTheta
-        Theta at the 9 shifts ``b_sk`` and the 3 shifts ``d_k`` along ``t U``.
+        Theta at the 9 shifts ``b_sk`` and at ``d`` along ``t U`` (the three ``d_k`` are equal,
+        :class:`~.riemann.ThetaShifts`: one denominator serves the three components).
     nu : ndarray, shape (3, 3)
         Exponents: ``Psi_k(P_s, t)`` carries ``exp(i nu_sk t)``.
     phase : PhaseRates
@@ -97,7 +98,7 @@ class FlowEvaluator:
         numpy only: the set-up's check at one time (``imaginary_residual``) would otherwise import
         numba (~0.35 s) inside ``solve_rotation``; the first evaluation pays that instead."""
         _, v, dv = self.flow(t, derivative, compiled=False)
-        vb, vd = v[:, :9].reshape(-1, 3, 3), v[:, 9:]          # [n, s, k], [n, k]
+        vb, vd = v[:, :9].reshape(-1, 3, 3), v[:, 9:]          # [n, s, k], [n, 1]
         phase = np.exp(self._turns(t) * TWO_PI_I)               # [n, s, k]: exp(i nu t)
         Psi = self.amp[None] * phase * vb / vd[:, None, :]      # Psi_k(P_s, t)
         B = self.B                                              # components -> principal frame
@@ -173,7 +174,7 @@ class FlowEvaluator:
             one = self._state_one(t, v, dv)
             if one is not None:
                 return one
-        vb, vd = v[:, :9].reshape(n, 3, 3), v[:, 9:]              # [n, s, k], [n, k]
+        vb, vd = v[:, :9].reshape(n, 3, 3), v[:, 9:]              # [n, s, k], [n, 1]
         ivd = 1.0 / vd
         q = np.exp(self._turns(t) * TWO_PI_I)                      # exp(i nu t)
         q *= self.amp
@@ -232,12 +233,12 @@ class FlowEvaluator:
         x = t.item()
         vl, dl, inu, amp = v[0].tolist(), dv[0].tolist(), self._inu_list, self._amp_list
         Z = [0j] * 18
+        ivd = 1.0 / vl[9]
+        rd = dl[9] * ivd
         for m, turn in enumerate(self._turns_one(x)):
-            k = m % 3
-            ivd = 1.0 / vl[9 + k]
             q = cmath.exp(complex(0.0, TWO_PI * turn)) * amp[m] * ivd
             Z[m] = q * vl[m]
-            Z[9 + m] = q * ((inu[m] - dl[9 + k] * ivd) * vl[m] + dl[m])
+            Z[9 + m] = q * ((inu[m] - rd) * vl[m] + dl[m])
         y = (self._lin @ np.array(Z).view(float)).tolist()
         Q = polar_near_orthogonal_one(y[:9])
         if Q is None:
@@ -336,9 +337,9 @@ def _state_kernel(t, v, dv, inu, amp, rc1, rc2, rc3, rc, coef, L, P, axis, spin,
             x += t1 * rc3[j]
             x += t2 * rc[j]
             p[j] = x
+        ivd = 1.0 / v[a, 9]
+        rd = dv[a, 9] * ivd
         for k in range(3):
-            ivd = 1.0 / v[a, 9 + k]
-            rd = dv[a, 9 + k] * ivd
             for s in range(3):
                 m = 3 * s + k
                 x = 0.0
@@ -421,7 +422,7 @@ def flow_evaluator(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
                    ex: Exponents) -> tuple[FlowEvaluator, float]:
     """Stage 5: the evaluator, and the size of the shift correction (module docstring)."""
     b, shift_correction = corrected_shifts(sd, dv, ts, ex)
-    flow = FlowTheta(sd.tau, sd.U[:sd.rdim], np.concatenate([b, ts.d]))
+    flow = FlowTheta(sd.tau, sd.U[:sd.rdim], np.concatenate([b, ts.d[:1]]))   # the three d_k are equal
     eb = flow.e[:9].reshape(3, 3)
     amp = ex.means.rho * np.exp(eb - flow.e[9:][None, :])             # rho theta(d) exp(e_b - e_d)
     fr = sd.frame

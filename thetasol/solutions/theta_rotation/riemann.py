@@ -54,7 +54,8 @@ class ThetaShifts:
     e : ndarray, shape (3, g)
         ``e_k`` reduced modulo the lattice: the numerators are ``theta(A(P) + t U - e_k)``.
     d : ndarray, shape (3, g)
-        ``d_k = A(inf_k) - e_k`` reduced: the denominators are ``theta(d_k + t U)``.
+        ``d_k = A(inf_k) - e_k`` reduced: the denominators are ``theta(d_k + t U)``.  The three rows
+        are equal (``d_k = sum_s A(P_s) - A(D0) - K`` for every k, module docstring).
     """
 
     K: np.ndarray
