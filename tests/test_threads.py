@@ -96,3 +96,24 @@ def test_several_python_threads(two_threads):
         worker.join()
         assert done == [True] and set(_blas_threads()) == {1}
     assert set(_blas_threads()) == {2}
+
+
+def test_scipy_blas_found_once_loaded():
+    """The theta-function set-up loads no scipy.linalg (its import costs ~0.1 s at a process's first call);
+    a scipy BLAS loaded afterwards is limited from the next call on."""
+    import subprocess
+    import sys
+    code = (
+        "import sys, numpy as np, thetasol\n"
+        "from thetasol.core import threads\n"
+        "thetasol.solve_rotation(np.diag([2.0, 3.0, 4.5]), np.diag([0.3, -0.2, 0.5]), np.eye(3),"
+        " np.array([0.4, 1.1, -0.7]))\n"
+        "assert 'scipy.linalg' not in sys.modules, 'scipy.linalg loaded by the set-up'\n"
+        "n0 = len(threads._blas_controllers())\n"
+        "import scipy.linalg\n"
+        "n1 = len(threads._blas_controllers())\n"
+        "import threadpoolctl\n"
+        "print(n0, n1, sum(i['user_api'] == 'blas' for i in threadpoolctl.threadpool_info()))\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    n0, n1, n_all = (int(x) for x in out)
+    assert n0 >= 1 and n1 == n_all

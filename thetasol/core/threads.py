@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import functools
 import os
+import sys
 import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
@@ -38,17 +39,23 @@ LIMIT: int | None = 1
 F = TypeVar("F", bound=Callable[..., Any])
 
 _lock = threading.Lock()
-_state: dict[str, Any] = {"depth": 0, "saved": [], "controllers": None}
+_state: dict[str, Any] = {"depth": 0, "saved": [], "controllers": None, "key": None}
 
 
 def _blas_controllers() -> list:
-    """(controller, its ``get_num_threads``) of the loaded BLAS libraries (numpy's and scipy's), found once."""
-    if _state["controllers"] is None:
+    """(controller, its ``get_num_threads``) of the loaded BLAS libraries (numpy's, and scipy's once
+    ``scipy.linalg`` is loaded), found once per state of ``scipy.linalg``.
+
+    Importing ``scipy.linalg`` here to load its BLAS would cost ~0.1 s at the first call of a process,
+    and the theta-function rotation makes no scipy call: a scipy BLAS first loaded inside a call is
+    found at the next call."""
+    key = "scipy.linalg" in sys.modules
+    if _state["controllers"] is None or _state["key"] != key:
+        _state["key"] = key
         if os.environ.get("THETASOL_BLAS_THREADS", "").lower() == "keep":
             _state["controllers"] = []
             return []
         try:
-            import scipy.linalg  # noqa: F401  (loads scipy's own BLAS, so that it is found too)
             from threadpoolctl import ThreadpoolController
         except ImportError:
             _state["controllers"] = []

@@ -29,7 +29,6 @@ import math
 from functools import lru_cache
 
 import numpy as np
-from scipy.linalg import solve_triangular
 
 from thetasol.core.dd import DD, dd_sum, two_prod
 from thetasol.theta.lattice import babai, radius_for, shortest_vector, union_set
@@ -205,7 +204,7 @@ def group_jets(lat: ReducedLattice, lset: dict, u: np.ndarray, alpha: np.ndarray
     Wr_re = (DD(u.real.T) + DD(u_lo.real.T + beta[:, None]) + dX).value().T
     Wr_im = (DD(u.imag.T) + DD(u_lo.imag.T) + dY).value().T
     Wr_re -= np.rint(Wr_re)  # the m-sum is 1-periodic in Re Wr
-    s_T = solve_triangular(T, Wr_im.T, trans="T", lower=False).T  # T f, with T^T (T f) = Im Wr
+    s_T = _solve_transposed_upper(T, Wr_im)  # T f, with T^T (T f) = Im Wr
     # moments G[p, b, T] = sum_m (-1)^{m.b} prod_{i in T} (v_i . m) E[p, m]
     if engine == "auto":
         engine = "split" if _split_ok(lat, lset, s_T, Wr_im) else "direct"
@@ -227,6 +226,21 @@ def group_jets(lat: ReducedLattice, lset: dict, u: np.ndarray, alpha: np.ndarray
         + DD((0.5 * lat.X_lo.reshape(-1)) @ dd_)
     ph = 2 * math.pi * acc.frac()[:, None] + math.pi * (d @ bits.T.astype(float))
     return G * np.exp(1j * ph)[:, :, None]
+
+
+def _solve_transposed_upper(T: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Rows ``x`` with ``T^T x = b`` for the rows ``b`` of ``B`` (P, g), ``T`` upper triangular (g, g).
+
+    Forward substitution over the g coordinates, vectorized over the points: scipy.linalg's
+    ``solve_triangular`` would cost its import (~0.1 s) at the first set-up of a process.
+    """
+    X = np.empty(B.shape)
+    for i in range(T.shape[0]):
+        acc = B[:, i].copy()
+        for k in range(i):
+            acc -= T[k, i] * X[:, k]
+        X[:, i] = acc / T[i, i]
+    return X
 
 
 def _moments_direct(lat, lset, Wr_re, s_T, bits, jet, V):
