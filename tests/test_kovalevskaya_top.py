@@ -149,11 +149,14 @@ def test_solve_heavy_top_divisor_next_to_infinity():
     assert np.all(err < 5e-13), err
 
 
-@pytest.mark.parametrize("seed, bound", [(0, 1e-12), (10, 5e-12), (39, 6e-13)])
+@pytest.mark.parametrize("seed, bound", [(0, 1e-12), (10, 1.2e-11), (39, 6e-13)])
 def test_phase_reference_where_axes_and_momentum_pass_near_the_vertical(seed, bound):
     # tops whose angular momentum or body axes come near the vertical on the torus: the reference is the one
     # whose rate series converges fastest (seed 0: e3, where M needed more than 512 x 512 samples; 10 and 39:
-    # M/|M(0)| + lam e_k, grids 128 x 256 and 128 x 128).  Measured at t <= 100: 1.8e-13, 2.6e-12, 6.8e-14
+    # M/|M(0)| + lam e_k, grids 128 x 256 and 128 x 128).  Measured at t <= 100: 1.8e-13, 5.9e-12, 7.3e-14.
+    # Seed 10 is that sensitive to rounding: its error is 2.6e-12 with the last bits of one triangular solve in
+    # the theta jets as OpenBLAS's dtrsm kernel rounds them (FMA), 5.9e-12 with plain or compensated forward
+    # substitution (the library's, deterministic across machines); seeds 0, 1, 5, 39 move by 0.8-1.3x
     pytest.importorskip("heyoka")
     from thetasol.solutions.heavy_top import solve_heavy_top
 

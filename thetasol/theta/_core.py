@@ -232,7 +232,8 @@ def _solve_transposed_upper(T: np.ndarray, B: np.ndarray) -> np.ndarray:
     """Rows ``x`` with ``T^T x = b`` for the rows ``b`` of ``B`` (P, g), ``T`` upper triangular (g, g).
 
     Forward substitution over the g coordinates, vectorized over the points: scipy.linalg's
-    ``solve_triangular`` would cost its import (~0.1 s) at the first set-up of a process.
+    ``solve_triangular`` would cost its import (~0.1 s) at the first set-up of a process, and its bits
+    depend on the BLAS kernel (OpenBLAS's dtrsm rounds with FMA), these do not.
     """
     X = np.empty(B.shape)
     for i in range(T.shape[0]):
