@@ -256,7 +256,7 @@ class CurvePoly:
         # derivative coefficients (j a_j) in double-double
         dhi, dlo = _two_prod_c(Ahi[:, 1:], jj)
         dlo = dlo + Alo[:, 1:] * jj
-        Y, delta, step = _newton_dd(Ahi, Alo, dhi, dlo, Y, iters)
+        Y, delta, step, fy, stale = _newton_dd(Ahi, Alo, dhi, dlo, Y, iters)
         # A close pair of roots far from y = 0 (two sheets 6 apart at |y| ~ 1e8, next to the far
         # branch points of a symmetric body with a small axial spin) can leave the companion matrix
         # a third of the gap off or more: 4 Newton steps then stop 1e-3..0.1 short, and more of them
@@ -274,9 +274,11 @@ class CurvePoly:
             Ys = Y[rows]
             # roots that coincide in float64 are pulled apart first (Aberth needs distinct iterates)
             Ys = np.where(close[rows], Ys * (1 + 1e-9 * np.exp(2j * np.arange(m)))[None, :], Ys)
-            Y[rows], delta[rows], _ = _newton_dd(Ahi[rows], Alo[rows], dhi[rows], dlo[rows], Ys, 60, aberth=True)
-        fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
-        fy = fh + fl
+            Y[rows], delta[rows], _, fy[rows], stale[rows] = _newton_dd(Ahi[rows], Alo[rows], dhi[rows], dlo[rows],
+                                                                        Ys, 60, aberth=True)
+        if stale.any():   # (the Newton pass has f_y at the final roots of the other rows, the same bits)
+            fh, fl = comp_horner(dhi[stale][:, None, :], dlo[stale][:, None, :], Y[stale])
+            fy[stale] = fh + fl
         # f_y at the exact root, not at its float64 rounding: where two sheets nearly coincide,
         # f_y changes by f_yy * delta, a relative eps |y| / gap (1e-12 next to close branch points)
         small = np.abs(delta) <= 1e-10 * (np.abs(Y) + 1e-300)
@@ -609,10 +611,14 @@ def _two_prod_c(a, k):
 
 def _newton_dd(Ahi, Alo, dhi, dlo, Y, iters, aberth=False):
     """Up to ``iters`` Newton steps on the roots Y (K, m) with compensated residuals (see
-    CurvePoly.polish_dd); returns (Y, delta, last step).  ``aberth``: Y holds all the roots of each
-    row and the steps are Ehrlich-Aberth's, N / (1 - N sum_j 1 / (y - y_j)) with N the Newton step."""
+    CurvePoly.polish_dd); returns (Y, delta, last step, f_y, stale).  f_y is the compensated value
+    at the returned Y on the rows where ``stale`` is False (their last step left them unchanged),
+    at the row's last iterate elsewhere.  ``aberth``: Y holds all the roots of each row and the
+    steps are Ehrlich-Aberth's, N / (1 - N sum_j 1 / (y - y_j)) with N the Newton step."""
     delta = np.zeros_like(Y)
     step = np.zeros_like(Y)
+    fyk = np.zeros_like(Y)
+    stale = np.ones(Y.shape[0], bool)
     # f and f_y in one compensated Horner pass over [Y, Y]: f_y's coefficients get a leading zero,
     # whose first step leaves exactly f_y's own start (s = 0 z + c, compensation 0 z + c_lo)
     K, m = Y.shape
@@ -646,12 +652,13 @@ def _newton_dd(Ahi, Alo, dhi, dlo, Y, iters, aberth=False):
         # what the float64 root misses of the exact one: (Y - step) - fl(Y - step), exact
         # subtraction of nearby floats minus the (tiny, accurately known) step
         delta[act] = np.where(oka, (Ya - Ynew) - st, 0)
-        step[act], ok[act], Y[act] = st, oka, Ynew
+        step[act], ok[act], Y[act], fyk[act] = st, oka, Ynew, fy
         moving = (Ynew.view(np.uint64) != Ya.view(np.uint64)).any(axis=1)
+        stale[act] = moving
         act = act[moving]
         if act.size == 0 or not np.any(ok & (np.abs(step) > 1e-17 * np.abs(Y))):
             break
-    return Y, delta, step
+    return Y, delta, step, fyk, stale
 
 
 class _Numerators(np.ndarray):

@@ -692,17 +692,23 @@ class Tracked:
         total = max(float(mass[offs[p]:offs[p + 1]].sum()) for p in range(len(self.pieces))) if self.pieces else 0.0
         thr = 1e-14 * total
         for p, pc in enumerate(self.pieces):
-            k = offs[p] + 1
-            for lo, hi, N in self.nodes.plans[p]:
-                xl, xh = pc.x(lo), pc.x(hi)
-                ell = abs(xh - xl)
-                mid = 0.5 * (lo + hi)
-                jit = eps * (abs(pc.dx(mid)) * abs(mid) + max(abs(xl), abs(xh)))
-                rel = float(np.max(self.rel[k:k + N])) if self.rel is not None else 0.0
-                m_int = float(mass[k:k + N].sum())
-                if ell > 0 and (dd_all or jit / ell * m_int > thr or rel * m_int > 10 * thr):
-                    out.append((p, k, (lo, hi, N)))
-                k += N
+            iv = self.nodes.plans[p]
+            if not iv:
+                continue
+            lo, hi, N = (np.array(v) for v in zip(*iv))
+            # the piece's ends and node rounding, all intervals at once (elementwise: the same values)
+            xl, xh = pc.x(lo), pc.x(hi)
+            mid = 0.5 * (lo + hi)
+            ell = np.abs(xh - xl).tolist()
+            jit = (eps * (np.abs(pc.dx(mid)) * np.abs(mid) + np.maximum(np.abs(xl), np.abs(xh)))).tolist()
+            first = np.concatenate([[0], np.cumsum(N)[:-1]])
+            ks = (offs[p] + 1 + first).tolist()
+            rels = (np.maximum.reduceat(self.rel[ks[0]:ks[0] + int(N.sum())], first).tolist()
+                    if self.rel is not None else [0.0] * len(iv))
+            for c, (k, (lo_, hi_, N_)) in enumerate(zip(ks, iv)):
+                m_int = float(mass[k:k + N_].sum())
+                if ell[c] > 0 and (dd_all or jit[c] / ell[c] * m_int > thr or rels[c] * m_int > 10 * thr):
+                    out.append((p, k, (lo_, hi_, N_)))
         return out
 
     def integrate(self, numerators, exact=None, dd_all: bool = False):
