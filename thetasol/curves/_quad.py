@@ -686,29 +686,22 @@ class Tracked:
         y to float64, eps |y| / gap).  An interval is re-summed in double-double when the first exceeds 1e-14,
         or the second 1e-13, of the largest piece mass.  With ``dd_all``, every interval of non-zero length.
         """
-        out = []
-        eps = EPS
-        offs = self.nodes.offsets
-        total = max(float(mass[offs[p]:offs[p + 1]].sum()) for p in range(len(self.pieces))) if self.pieces else 0.0
-        thr = 1e-14 * total
+        offs, out = self.nodes.offsets, []
+        thr = 1e-14 * max((float(mass[offs[p]:offs[p + 1]].sum()) for p in range(len(self.pieces))), default=0.0)
         for p, pc in enumerate(self.pieces):
-            iv = self.nodes.plans[p]
-            if not iv:
+            if not self.nodes.plans[p]:
                 continue
-            lo, hi, N = (np.array(v) for v in zip(*iv))
             # the piece's ends and node rounding, all intervals at once (elementwise: the same values)
-            xl, xh = pc.x(lo), pc.x(hi)
-            mid = 0.5 * (lo + hi)
-            ell = np.abs(xh - xl).tolist()
-            jit = (eps * (np.abs(pc.dx(mid)) * np.abs(mid) + np.maximum(np.abs(xl), np.abs(xh)))).tolist()
-            first = np.concatenate([[0], np.cumsum(N)[:-1]])
-            ks = (offs[p] + 1 + first).tolist()
-            rels = (np.maximum.reduceat(self.rel[ks[0]:ks[0] + int(N.sum())], first).tolist()
-                    if self.rel is not None else [0.0] * len(iv))
-            for c, (k, (lo_, hi_, N_)) in enumerate(zip(ks, iv)):
-                m_int = float(mass[k:k + N_].sum())
-                if ell[c] > 0 and (dd_all or jit[c] / ell[c] * m_int > thr or rels[c] * m_int > 10 * thr):
-                    out.append((p, k, (lo_, hi_, N_)))
+            lo, hi, N = (np.array(v) for v in zip(*self.nodes.plans[p]))
+            xl, xh, mid = pc.x(lo), pc.x(hi), 0.5 * (lo + hi)
+            ell = np.abs(xh - xl)
+            jit = EPS * (np.abs(pc.dx(mid)) * np.abs(mid) + np.maximum(np.abs(xl), np.abs(xh)))
+            ks = offs[p] + 1 + np.cumsum(N) - N
+            rel = np.maximum.reduceat(self.rel[:ks[-1] + N[-1]], ks) if self.rel is not None else np.zeros(len(N))
+            for c, k in enumerate(ks.tolist()):
+                m_int = float(mass[k:k + N[c]].sum())
+                if ell[c] > 0 and (dd_all or jit[c] / ell[c] * m_int > thr or rel[c] * m_int > 10 * thr):
+                    out.append((p, k, self.nodes.plans[p][c]))
         return out
 
     def integrate(self, numerators, exact=None, dd_all: bool = False):
