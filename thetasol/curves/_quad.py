@@ -392,7 +392,7 @@ class Tracker:
 
     def _eval_nodes(self, x, dx, precise=True, ddx=None):
         poly = self.poly
-        R, A = poly.roots(x)
+        R, A = poly.roots(x, any_order=True)
         if precise:
             R, fy, fx, err = self._polish_nodes(x, R, A)
         else:  # tracking-only points (refinement): plain float64 is enough to match sheets
