@@ -68,7 +68,7 @@ def numerators_to_cdd(numer_exact):
     return tuple(np.stack([p[c] for p in parts]) for c in range(4))
 
 
-#: The stored orders of :func:`gauss_legendre_dd`: those of :func:`thetasol.curves._quad.n_nodes`.
+#: The stored orders of :func:`gauss_legendre_dd`: those of :func:`thetasol.curves._nodes.n_nodes`.
 TABLE_ORDERS = range(4, 81)
 _TABLE = Path(__file__).with_name("data") / "gauss_legendre_dd.npz"
 
