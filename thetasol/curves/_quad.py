@@ -521,7 +521,7 @@ class Tracker:
         tq = tp[perm]
         Lq = L[tq]
         choice = np.full((T, Lmax), -1, dtype=int)
-        choice[:, 0] = np.broadcast_to(c0, (T,))[perm]
+        choice[:, 0] = c0[perm]
         NODE = S[tq]
         tt, kk = np.nonzero(Lq[:, None] > np.arange(1, Lmax)[None, :])   # every step k = kk + 1
         pos = np.zeros((T, Lmax), dtype=int)
