@@ -162,7 +162,7 @@ def test_polish_separates_a_close_pair_far_from_zero(start):
     Y, _ = poly.polish_dd(Ahi, Alo, Y0.copy())
     assert np.array_equal(np.sort_complex(Y[0]), exact)
     dhi, dlo = _two_prod_c(Ahi[:, 1:], np.arange(1, 4))
-    plain, _, _ = _newton_dd(Ahi, Alo, dhi, dlo + Alo[:, 1:] * np.arange(1, 4), Y0.copy(), 4)
+    plain, _, _, _, _ = _newton_dd(Ahi, Alo, dhi, dlo + Alo[:, 1:] * np.arange(1, 4), Y0.copy(), 4)
     assert np.abs(np.sort_complex(plain[0]) - exact).max() > 1e-8
 
 

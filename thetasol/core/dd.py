@@ -97,7 +97,7 @@ def dd_sum(x: DD) -> DD:
     axes come first, so every numpy loop runs over long contiguous rows.
     """
     hi = x.hi
-    lo = np.broadcast_to(x.lo, hi.shape)
+    lo = x.lo if x.lo.shape == hi.shape else np.broadcast_to(x.lo, hi.shape)
     while hi.shape[0] > 1:
         n = hi.shape[0]
         h = n // 2

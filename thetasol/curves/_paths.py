@@ -264,11 +264,11 @@ def _merge_vertices(cells_poly, allsites, bx: _Box):
         else:
             first[key] = i
     P = np.asarray(pts)
-    for i in range(len(P)):
-        dsite = np.min(np.abs(allsites - P[i])) if m else H
-        close = np.nonzero(np.abs(P[:i] - P[i]) <= max(2 * tol, 1e-9 * dsite))[0]
-        for j in close:
-            parent[find(i)] = find(int(j))
+    # corners closer than the rounding tolerance, all pairs j < i at once
+    dsite = np.abs(allsites[None, :] - P[:, None]).min(axis=1) if m else np.full(len(P), H)
+    near = np.abs(P[None, :] - P[:, None]) <= np.maximum(2 * tol, 1e-9 * dsite)[:, None]
+    for i, j in zip(*np.nonzero(np.tril(near, -1))):
+        parent[find(int(i))] = find(int(j))
     groups = {}
     for i in range(len(keys)):
         groups.setdefault(find(i), []).append(i)

@@ -180,16 +180,19 @@ class CurvePoly:
         """sum_i |c_ij| |x|^i: for rounding-error bounds; ax = |x|."""
         return _horner_x(self.absC, ax)
 
-    def roots(self, x, polish: int = 2):
+    def roots(self, x, polish: int = 2, any_order: bool = False):
         """All n roots in y of f(x, y) at each x (1-D array): shape (K, n), unordered.
 
         Companion-matrix eigenvalues (backward stable), then ``polish`` vectorized Newton steps.
+        ``any_order``: for callers that match the roots by value (the tracker), the roots of a cubic
+        come from the closed form in another order than the eigenvalues' (a fifteenth of their cost:
+        ~1.5 us a point; rows where its backward error exceeds 1e-8 fall back to eigenvalues).
         Raises ValueError where the leading coefficient vanishes (a pole of y).
         """
         A = self.coeff_polys(x)
-        return self.roots_from_coeffs(A, polish), A
+        return self.roots_from_coeffs(A, polish, any_order), A
 
-    def roots_from_coeffs(self, A, polish: int = 2):
+    def roots_from_coeffs(self, A, polish: int = 2, any_order: bool = False):
         n = self.n
         lead = A[:, n]
         if np.any(lead == 0):
@@ -197,11 +200,13 @@ class CurvePoly:
         if n == 1:
             return (-A[:, 0] / lead)[:, None]
         mon = A[:, :n] / lead[:, None]
-        K = A.shape[0]
-        comp = np.zeros((K, n, n), dtype=complex)
-        comp[:, 1:, :-1] = np.eye(n - 1)
-        comp[:, :, -1] = -mon
-        Y = np.linalg.eigvals(comp)
+        if n == 3 and any_order:
+            Y = _cubic_roots(mon)
+            bad = ~_accurate_cubic(mon, Y)
+            if bad.any():
+                Y[bad] = _companion_roots(mon[bad])
+        else:
+            Y = _companion_roots(mon)
         for _ in range(polish):
             p, dp = self.horner_y(A, Y)
             ok = dp != 0
@@ -214,7 +219,8 @@ class CurvePoly:
     def horner_y(A, Y):
         """p(Y), p'(Y) for p(y) = sum_j A[:, j] y^j, Y of shape (K, m)."""
         n = A.shape[1] - 1
-        p = np.broadcast_to(A[:, n:n + 1], Y.shape).copy()
+        p = np.empty(Y.shape, A.dtype)   # (filled by broadcasting: 1 us, np.broadcast_to().copy() 6 us)
+        p[...] = A[:, n:n + 1]
         dp = np.zeros_like(p)
         for j in range(n - 1, -1, -1):
             dp = dp * Y + p
@@ -234,7 +240,8 @@ class CurvePoly:
         """First-order bound on the rounding error of each computed root: eps * sum|c||x|^i|y|^j / |f_y|."""
         absA = self.abs_coeff_polys(np.abs(x))
         aY = np.abs(Y)
-        s = np.broadcast_to(absA[:, -1:], Y.shape).copy()
+        s = np.empty(Y.shape, absA.dtype)
+        s[...] = absA[:, -1:]
         for j in range(self.n - 1, -1, -1):
             s = s * aY + absA[:, j:j + 1]
         return 4 * self.n * EPS * s / np.maximum(np.abs(fy), 1e-300)
@@ -244,10 +251,8 @@ class CurvePoly:
         """a_j(x) in double-double: (hi, lo) arrays (K, n + 1), x exact floats."""
         x = np.asarray(x, dtype=complex)
         C = self.C  # (dx + 1, n + 1): coefficient of x^i y^j
-        chi = np.broadcast_to(C.T[None, :, :], (len(x),) + C.T.shape)  # (K, n+1, dx+1)
-        clo = np.broadcast_to(self.Clo.T[None, :, :], chi.shape)
-        hi, lo = comp_horner(chi, clo, np.broadcast_to(x[:, None], (len(x), self.n + 1)))
-        return hi, lo
+        # coefficients (1, n + 1, dx + 1), broadcast against the points inside comp_horner
+        return comp_horner(C.T[None], self.Clo.T[None], np.broadcast_to(x[:, None], (len(x), self.n + 1)))
 
     def polish_dd(self, Ahi, Alo, Y, iters=4):
         """Newton steps on the roots Y (K, m) with compensated residuals; returns (Y, f_y)."""
@@ -256,7 +261,7 @@ class CurvePoly:
         # derivative coefficients (j a_j) in double-double
         dhi, dlo = _two_prod_c(Ahi[:, 1:], jj)
         dlo = dlo + Alo[:, 1:] * jj
-        Y, delta, step = _newton_dd(Ahi, Alo, dhi, dlo, Y, iters)
+        Y, delta, step, fy, stale = _newton_dd(Ahi, Alo, dhi, dlo, Y, iters)
         # A close pair of roots far from y = 0 (two sheets 6 apart at |y| ~ 1e8, next to the far
         # branch points of a symmetric body with a small axial spin) can leave the companion matrix
         # a third of the gap off or more: 4 Newton steps then stop 1e-3..0.1 short, and more of them
@@ -274,15 +279,18 @@ class CurvePoly:
             Ys = Y[rows]
             # roots that coincide in float64 are pulled apart first (Aberth needs distinct iterates)
             Ys = np.where(close[rows], Ys * (1 + 1e-9 * np.exp(2j * np.arange(m)))[None, :], Ys)
-            Y[rows], delta[rows], _ = _newton_dd(Ahi[rows], Alo[rows], dhi[rows], dlo[rows], Ys, 60, aberth=True)
-        fh, fl = comp_horner(dhi[:, None, :], dlo[:, None, :], Y)
-        fy = fh + fl
+            Y[rows], delta[rows], _, fy[rows], stale[rows] = _newton_dd(Ahi[rows], Alo[rows], dhi[rows], dlo[rows],
+                                                                        Ys, 60, aberth=True)
+        if stale.any():   # (the Newton pass has f_y at the final roots of the other rows, the same bits)
+            fh, fl = comp_horner(dhi[stale][:, None, :], dlo[stale][:, None, :], Y[stale])
+            fy[stale] = fh + fl
         # f_y at the exact root, not at its float64 rounding: where two sheets nearly coincide,
         # f_y changes by f_yy * delta, a relative eps |y| / gap (1e-12 next to close branch points)
         small = np.abs(delta) <= 1e-10 * (np.abs(Y) + 1e-300)
         if n > 1 and np.any(small & (delta != 0)):
             d2 = Ahi[:, 2:] * (jj[1:] * (jj[1:] - 1))
-            fyy = np.broadcast_to(d2[:, -1:], Y.shape).astype(complex)
+            fyy = np.empty(Y.shape, complex)
+            fyy[...] = d2[:, -1:]
             for j in range(d2.shape[1] - 2, -1, -1):
                 fyy = fyy * Y + d2[:, j:j + 1]
             fy = np.where(small, fy + fyy * delta, fy)
@@ -323,9 +331,7 @@ class CurvePoly:
         """a_j(b + xi) in double-double from the shifted coefficients of :meth:`shifted_dd`."""
         xi = np.asarray(xi, dtype=complex)
         K = len(xi)
-        chi = np.broadcast_to(Chi.T[None, :, :], (K,) + Chi.T.shape)
-        clo = np.broadcast_to(Clo.T[None, :, :], (K,) + Clo.T.shape)
-        return comp_horner(chi, clo, np.broadcast_to(xi[:, None], (K, self.n + 1)))
+        return comp_horner(Chi.T[None], Clo.T[None], np.broadcast_to(xi[:, None], (K, self.n + 1)))
 
     def second_derivatives(self, x, Y, A=None):
         """f_xx, f_xy, f_yy at (x[k], Y[k, s]) (plain float64; used only for step control).
@@ -365,9 +371,50 @@ class CurvePoly:
         return out
 
 
+_CUBE_ROOTS_OF_UNITY = np.exp(2j * np.pi * np.arange(3) / 3)
+
+
+def _companion_roots(mon):
+    """Roots of the monic polynomials y^n + sum_j mon[:, j] y^j: companion-matrix eigenvalues (K, n)."""
+    K, n = mon.shape
+    comp = np.zeros((K, n, n), dtype=complex)
+    comp[:, 1:, :-1] = np.eye(n - 1)
+    comp[:, :, -1] = -mon
+    return np.linalg.eigvals(comp)
+
+
+def _accurate_cubic(mon, Y):
+    """Rows whose roots Y of the monic cubics are finite with backward error below 1e-8."""
+    ay, am = np.abs(Y), np.abs(mon)[:, None, :]
+    with np.errstate(all="ignore"):
+        res = np.abs(((Y + mon[:, None, 2]) * Y + mon[:, None, 1]) * Y + mon[:, None, 0])
+        bound = ((ay + am[..., 2]) * ay + am[..., 1]) * ay + am[..., 0]
+        return (res <= 1e-8 * bound).all(axis=1)
+
+
+def _cubic_roots(mon):
+    """Roots of y^3 + a y^2 + b y + c for rows mon = [c, b, a] (K, 3): Cardano's formula, the cube
+    root taken of the larger of -q/2 +- sqrt(q^2/4 + p^3/27) (no cancellation); not backward stable
+    for every cubic (see :func:`_accurate_cubic`)."""
+    c, b, a = mon[:, 0], mon[:, 1], mon[:, 2]
+    with np.errstate(all="ignore"):   # overflows (roots beyond ~1e100) leave rows that the check rejects
+        s = a / 3
+        p = b - a * s                     # t^3 + p t + q, y = t - a/3
+        q = c - b * s + 2 * s * s * s
+        h = np.sqrt(0.25 * q * q + p * p * p / 27)
+        w1, w2 = -0.5 * q + h, -0.5 * q - h
+        w = np.where(np.abs(w1) >= np.abs(w2), w1, w2)
+        C = w ** (1 / 3)
+        Ck = C[:, None] * _CUBE_ROOTS_OF_UNITY
+        t = Ck - p[:, None] / (3 * Ck)
+    t = np.where(C[:, None] == 0, 0, t)
+    return t - s[:, None]
+
+
 def _horner_x(coef, x):
     """sum_i coef[i] x^i (coef rows indexed by the power of x) at every x: shape x.shape + coef.shape[1:]."""
-    A = np.broadcast_to(coef[-1], x.shape + coef.shape[1:]).copy()
+    A = np.empty(x.shape + coef.shape[1:], coef.dtype)
+    A[...] = coef[-1]
     for i in range(coef.shape[0] - 2, -1, -1):
         A *= x[..., None]
         A += coef[i]
@@ -609,19 +656,21 @@ def _two_prod_c(a, k):
 
 def _newton_dd(Ahi, Alo, dhi, dlo, Y, iters, aberth=False):
     """Up to ``iters`` Newton steps on the roots Y (K, m) with compensated residuals (see
-    CurvePoly.polish_dd); returns (Y, delta, last step).  ``aberth``: Y holds all the roots of each
-    row and the steps are Ehrlich-Aberth's, N / (1 - N sum_j 1 / (y - y_j)) with N the Newton step."""
+    CurvePoly.polish_dd); returns (Y, delta, last step, f_y, stale).  f_y is the compensated value
+    at the returned Y on the rows where ``stale`` is False (their last step left them unchanged),
+    at the row's last iterate elsewhere.  ``aberth``: Y holds all the roots of each row and the
+    steps are Ehrlich-Aberth's, N / (1 - N sum_j 1 / (y - y_j)) with N the Newton step."""
     delta = np.zeros_like(Y)
     step = np.zeros_like(Y)
+    fyk = np.zeros_like(Y)
+    stale = np.ones(Y.shape[0], bool)
     # f and f_y in one compensated Horner pass over [Y, Y]: f_y's coefficients get a leading zero,
     # whose first step leaves exactly f_y's own start (s = 0 z + c, compensation 0 z + c_lo)
     K, m = Y.shape
-    shape = (K, m, Ahi.shape[1])
-    pad = np.zeros((K, 1), complex)
-    Chi = np.concatenate([np.broadcast_to(Ahi[:, None, :], shape),
-                          np.broadcast_to(np.concatenate([dhi, pad], axis=1)[:, None, :], shape)], axis=1)
-    Clo = np.concatenate([np.broadcast_to(Alo[:, None, :], shape),
-                          np.broadcast_to(np.concatenate([dlo, pad], axis=1)[:, None, :], shape)], axis=1)
+    n1 = Ahi.shape[1]
+    Chi, Clo = np.zeros((K, 2 * m, n1), complex), np.zeros((K, 2 * m, n1), complex)
+    Chi[:, :m], Chi[:, m:, :n1 - 1], Clo[:, :m], Clo[:, m:, :n1 - 1] = (
+        Ahi[:, None, :], dhi[:, None, :], Alo[:, None, :], dlo[:, None, :])
     # A row whose steps all round away (Y - step == Y bit for bit) sits at a fixed point: every later
     # step repeats this one exactly, so it leaves the iteration ("act": the rows still moving).
     # Most rows get there after two steps; the last steps run on the few others.
@@ -646,12 +695,13 @@ def _newton_dd(Ahi, Alo, dhi, dlo, Y, iters, aberth=False):
         # what the float64 root misses of the exact one: (Y - step) - fl(Y - step), exact
         # subtraction of nearby floats minus the (tiny, accurately known) step
         delta[act] = np.where(oka, (Ya - Ynew) - st, 0)
-        step[act], ok[act], Y[act] = st, oka, Ynew
+        step[act], ok[act], Y[act], fyk[act] = st, oka, Ynew, fy
         moving = (Ynew.view(np.uint64) != Ya.view(np.uint64)).any(axis=1)
+        stale[act] = moving
         act = act[moving]
         if act.size == 0 or not np.any(ok & (np.abs(step) > 1e-17 * np.abs(Y))):
             break
-    return Y, delta, step
+    return Y, delta, step, fyk, stale
 
 
 class _Numerators(np.ndarray):

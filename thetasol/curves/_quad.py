@@ -26,31 +26,17 @@ allowed dependencies offers vectorized polynomial root tracking.
 """
 from __future__ import annotations
 
-from functools import cache
-
 import numpy as np
 
+from thetasol.curves._nodes import Nodes
 from thetasol.curves._walk import walk_safe
 
 EPS = np.finfo(float).eps
-RHO_TARGET = 2.5
 SAFETY = 0.25
 MOVE = 0.5
 FLAG = 1e-4
 JITTER = 1e-13
 REL = 1e-11
-
-
-@cache
-def gauss_legendre(N: int):
-    t, w = np.polynomial.legendre.leggauss(N)
-    return t, w
-
-
-def n_nodes(rho: float, tol: float) -> int:
-    if not np.isfinite(rho):
-        return 4
-    return int(max(4, min(80, np.ceil((np.log(1.0 / tol) + np.log(8.0)) / (2 * np.log(rho))))))
 
 
 class Piece:
@@ -130,79 +116,6 @@ class Piece:
         k = np.arange(e)
         roots = r[:, None] * np.exp(1j * (th[:, None] + 2 * np.pi * k[None, :] / e))
         return (1.0 - roots).ravel()
-
-
-def _ellipse_params(sings, lo, hi):
-    """Parameter rho of the Bernstein ellipse of [lo, hi] through each singularity."""
-    t = (2 * sings - (lo + hi)) / (hi - lo)
-    s = np.sqrt(t - 1) * np.sqrt(t + 1)
-    return np.maximum(np.abs(t + s), np.abs(t - s))
-
-
-def plan(piece: Piece, sites, tol: float, rho_target: float = RHO_TARGET, max_intervals: int = 4000):
-    """Intervals [lo, hi] of tau with their Gauss-Legendre order: list of (lo, hi, N)."""
-    sings = piece.singularities(sites)
-    out = []
-    stack = [(0.0, 1.0)]
-    while stack:
-        lo, hi = stack.pop()
-        ep = _ellipse_params(sings, lo, hi) if len(sings) else None
-        rho = float(ep.min()) if ep is not None else np.inf
-        if rho >= rho_target or hi - lo < 1e-15:
-            out.append((lo, hi, n_nodes(rho, tol)))
-            if len(out) > max_intervals:
-                raise ValueError("path too close to a critical value (quadrature refinement exhausted)")
-            continue
-        # split at the projection of the nearest singularity, kept inside the middle half
-        L = hi - lo
-        z = sings[int(ep.argmin())]
-        m = min(max(z.real, lo + 0.25 * L), hi - 0.25 * L)
-        stack.append((m, hi))
-        stack.append((lo, m))
-    out.sort()
-    return out
-
-
-class _Nodes:
-    """All tracking/quadrature nodes of a batch of pieces, flattened."""
-
-    def __init__(self, pieces, sites, tol):
-        taus, wts = [], []
-        self.offsets = [0]
-        self.plans = []
-        for pc in pieces:
-            if pc.taus is not None:
-                taus.append(np.asarray(pc.taus, dtype=float))
-                wts.append(np.zeros(len(pc.taus)))
-                self.offsets.append(self.offsets[-1] + len(pc.taus))
-                self.plans.append([])
-                continue
-            iv = plan(pc, sites, tol)
-            self.plans.append(iv)
-            tt = [np.zeros(1)]
-            ww = [np.zeros(1)]
-            for lo, hi, N in iv:
-                t, w = gauss_legendre(N)
-                tt.append(0.5 * (lo + hi) + 0.5 * (hi - lo) * t)
-                ww.append(0.5 * (hi - lo) * w)
-            if pc.kind == "line":
-                tt.append(np.ones(1))
-                ww.append(np.zeros(1))
-            tt, ww = np.concatenate(tt), np.concatenate(ww)
-            taus.append(tt)
-            wts.append(ww)
-            self.offsets.append(self.offsets[-1] + len(tt))
-        self.tau = np.concatenate(taus) if taus else np.zeros(0)
-        self.w = np.concatenate(wts) if wts else np.zeros(0)
-        xs, dxs, ddxs = [], [], []
-        for p, pc in enumerate(pieces):
-            t = self.tau[self.offsets[p]:self.offsets[p + 1]]
-            xs.append(pc.x(t))
-            dxs.append(pc.dx(t))
-            ddxs.append(pc.ddx(t))
-        self.x = np.concatenate(xs) if xs else np.zeros(0, complex)
-        self.dx = np.concatenate(dxs) if dxs else np.zeros(0, complex)
-        self.ddx = np.concatenate(ddxs) if ddxs else np.zeros(0, complex)
 
 
 def _collision_times(R, Dt, sep):
@@ -392,7 +305,7 @@ class Tracker:
 
     def _eval_nodes(self, x, dx, precise=True, ddx=None):
         poly = self.poly
-        R, A = poly.roots(x)
+        R, A = poly.roots(x, any_order=True)
         if precise:
             R, fy, fx, err = self._polish_nodes(x, R, A)
         else:  # tracking-only points (refinement): plain float64 is enough to match sheets
@@ -504,7 +417,7 @@ class Tracker:
         subdivided for all pieces at once (one vectorized evaluation per round), and the matching is
         rerun until every step is safe (scalar recursive subdivision as a last resort).
         """
-        nodes = _Nodes(pieces, self.sites, self.tol)
+        nodes = Nodes(pieces, self.sites, self.tol)
         if not pieces:
             return Tracked(self, pieces, nodes, None, None, None, [], np.zeros(0, int), np.zeros((0, 0), int))
         R, A, fy, Dt, sep, tc = self._eval_nodes(nodes.x, nodes.dx, ddx=nodes.ddx)
@@ -608,7 +521,7 @@ class Tracker:
         tq = tp[perm]
         Lq = L[tq]
         choice = np.full((T, Lmax), -1, dtype=int)
-        choice[:, 0] = np.broadcast_to(c0, (T,))[perm]
+        choice[:, 0] = c0[perm]
         NODE = S[tq]
         tt, kk = np.nonzero(Lq[:, None] > np.arange(1, Lmax)[None, :])   # every step k = kk + 1
         pos = np.zeros((T, Lmax), dtype=int)
@@ -686,23 +599,22 @@ class Tracked:
         y to float64, eps |y| / gap).  An interval is re-summed in double-double when the first exceeds 1e-14,
         or the second 1e-13, of the largest piece mass.  With ``dd_all``, every interval of non-zero length.
         """
-        out = []
-        eps = EPS
-        offs = self.nodes.offsets
-        total = max(float(mass[offs[p]:offs[p + 1]].sum()) for p in range(len(self.pieces))) if self.pieces else 0.0
-        thr = 1e-14 * total
+        offs, out = self.nodes.offsets, []
+        thr = 1e-14 * max((float(mass[offs[p]:offs[p + 1]].sum()) for p in range(len(self.pieces))), default=0.0)
         for p, pc in enumerate(self.pieces):
-            k = offs[p] + 1
-            for lo, hi, N in self.nodes.plans[p]:
-                xl, xh = pc.x(lo), pc.x(hi)
-                ell = abs(xh - xl)
-                mid = 0.5 * (lo + hi)
-                jit = eps * (abs(pc.dx(mid)) * abs(mid) + max(abs(xl), abs(xh)))
-                rel = float(np.max(self.rel[k:k + N])) if self.rel is not None else 0.0
-                m_int = float(mass[k:k + N].sum())
-                if ell > 0 and (dd_all or jit / ell * m_int > thr or rel * m_int > 10 * thr):
-                    out.append((p, k, (lo, hi, N)))
-                k += N
+            if not self.nodes.plans[p]:
+                continue
+            # the piece's ends and node rounding, all intervals at once (elementwise: the same values)
+            lo, hi, N = (np.array(v) for v in zip(*self.nodes.plans[p]))
+            xl, xh, mid = pc.x(lo), pc.x(hi), 0.5 * (lo + hi)
+            ell = np.abs(xh - xl)
+            jit = EPS * (np.abs(pc.dx(mid)) * np.abs(mid) + np.maximum(np.abs(xl), np.abs(xh)))
+            ks = offs[p] + 1 + np.cumsum(N) - N
+            rel = np.maximum.reduceat(self.rel[:ks[-1] + N[-1]], ks) if self.rel is not None else np.zeros(len(N))
+            for c, k in enumerate(ks.tolist()):
+                m_int = float(mass[k:k + N[c]].sum())
+                if ell[c] > 0 and (dd_all or jit[c] / ell[c] * m_int > thr or rel[c] * m_int > 10 * thr):
+                    out.append((p, k, self.nodes.plans[p][c]))
         return out
 
     def integrate(self, numerators, exact=None, dd_all: bool = False):
