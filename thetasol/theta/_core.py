@@ -161,11 +161,14 @@ class ReducedLattice:
             m = union_set(self.T, Rq)
             mf = m.astype(float)
             Tm = mf @ self.T.T
-            # pi m.X.m mod 2 pi, exactly (m integer, X up to 1/2 but m.X.m up to ~100)
+            # pi m.X.m mod 2 pi, exactly (m integer, X up to 1/2 but m.X.m up to ~100): the g^2 exact
+            # products in one call, summed in the order (i, j) row by row
+            g = self.g
+            mm = (mf.T[:, None, :] * mf.T[None, :, :]).reshape(g * g, len(m))
+            p, e = two_prod(np.broadcast_to(0.5 * self.X.reshape(-1, 1), mm.shape), mm)
             acc = DD(np.zeros(len(m)))
-            for i in range(self.g):
-                for j in range(self.g):
-                    acc = acc + DD(*two_prod(np.full(len(m), 0.5 * self.X[i, j]), mf[:, i] * mf[:, j]))
+            for r in range(g * g):
+                acc = acc + DD(p[r], e[r])
             self._sets[Rq] = {
                 "m": m,
                 "mf": mf,
@@ -268,8 +271,7 @@ def _split_data(lset: dict) -> dict:
     """Factor the set as n = (n_1, k): tails k, the n_1 range, and Q[n_1, k] = exp(a_n)."""
     if lset["split"] is None:
         m = lset["m"]
-        tails, kidx = np.unique(m[:, 1:], axis=0, return_inverse=True)
-        kidx = np.asarray(kidx).reshape(-1)
+        tails, kidx = _unique_rows(m[:, 1:])
         lo, hi = int(m[:, 0].min()), int(m[:, 0].max())
         Qm = np.zeros((hi - lo + 1, len(tails)), dtype=complex)
         Qm[m[:, 0] - lo, kidx] = np.exp(lset["a"])
@@ -277,6 +279,26 @@ def _split_data(lset: dict) -> dict:
         lset["split"] = {"tails": tails.astype(float), "lo": lo, "n1": np.arange(lo, hi + 1, dtype=float),
                          "Q": Qm, "tail_index": tail_index}
     return lset["split"]
+
+
+def _unique_rows(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(t, axis=0, return_inverse=True)`` for small integer rows (N, c): rows in
+    lexicographic order and the index of each row, through one mixed-radix integer key per row
+    (0.1 ms instead of 0.9 ms for N = 2105, c = 3)."""
+    if t.size == 0:  # g = 1 (no tail coordinates)
+        rows, inv = np.unique(t, axis=0, return_inverse=True)
+        return rows, np.asarray(inv).reshape(-1)
+    lo = t.min(axis=0)
+    radix = t.max(axis=0) - lo + 1
+    key = t[:, 0] - lo[0]
+    for j in range(1, t.shape[1]):
+        key = key * radix[j] + (t[:, j] - lo[j])
+    keys, inv = np.unique(key, return_inverse=True)
+    rows = np.empty((len(keys), t.shape[1]), dtype=t.dtype)
+    for j in range(t.shape[1] - 1, -1, -1):
+        keys, rows[:, j] = np.divmod(keys, radix[j])
+        rows[:, j] += lo[j]
+    return rows, np.asarray(inv).reshape(-1)
 
 
 def _powers(w: np.ndarray, lo: int, count: int) -> np.ndarray:

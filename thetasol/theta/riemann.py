@@ -176,7 +176,10 @@ class RiemannTheta:
         # K carries phases of size ~1e3 (large Q, c0 after inversions): sum it in mpmath, as the quadratic
         # form of (alpha, beta) assembled once (_char_form) and evaluated per characteristic
         tau0, Qm, lm, Mm = mp["tau0"], mp["Q"], mp["l"], mp["M"]
-        H, h, c = _char_form(mp, Lam, shift)
+        # the zero characteristic (the theta-function rotation's only one) needs c alone: the
+        # 2g x 2g form H costs ~2 ms of mpmath dot products
+        zero = not (np.any(alpha) or np.any(beta))
+        H, h, c = ([], [], _char_constant(mp, shift)) if zero else _char_form(mp, Lam, shift)
         n = alpha.shape[0]
         K = np.empty(n, dtype=complex)
         two_pi_i = 2j * ctx.pi
@@ -457,8 +460,19 @@ def _char_form(mp: dict, Lam: np.ndarray, shift: np.ndarray) -> tuple[list, list
     h = [2 * pi_i * (ctx.fdot(lm, [D[k][j] for k in range(g)]) - ctx.fdot(Ts, [A[k][j] for k in range(g)])
                      - ctx.fdot(sa, [A[g + k][j] for k in range(g)]) - ctx.fdot(sb, [A[k][j] for k in range(g)]))
          for j in r2]
-    c = mp["c0"] - pi_i * ctx.fdot(sa, Ts) - 2 * pi_i * ctx.fdot(sa, sb)
-    return H, h, c
+    return H, h, _char_constant(mp, shift)
+
+
+def _char_constant(mp: dict, shift: np.ndarray):
+    """The constant ``c = c0 - pi i sa.taur.sa - 2 pi i sa.sb`` of :func:`_char_form` (mpmath), with
+    ``(sa, sb) = shift``: all of ``K`` at the zero characteristic."""
+    ctx = mp["ctx"]
+    taur = mp["tau"]
+    g = len(taur)
+    pi_i = ctx.pi * 1j
+    sa, sb = [ctx.mpf(x) for x in shift[:g]], [ctx.mpf(x) for x in shift[g:]]
+    Ts = [ctx.fdot(taur[i], sa) for i in range(g)]
+    return mp["c0"] - pi_i * ctx.fdot(sa, Ts) - 2 * pi_i * ctx.fdot(sa, sb)
 
 
 def riemann_theta(z: ArrayLike, tau: ArrayLike, char: str | tuple[ArrayLike, ArrayLike] | None = None,
