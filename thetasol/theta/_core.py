@@ -38,6 +38,10 @@ TWO_PI_I = 2j * math.pi
 _LOG_SAFE = 600.0
 #: Target size (complex entries) of the per-chunk work arrays.
 _CHUNK_ENTRIES = 1 << 20
+#: The same for the split engine, whose several (points x tails) arrays are each read once or twice:
+#: 1 MB arrays stay in cache (the Cauchy circles' 588 points x 393 tails of the generic body's set-up:
+#: 4.8 ms per evaluation against 6.5 with 16 MB).
+_SPLIT_CHUNK_ENTRIES = 1 << 16
 
 
 # ----------------------------------------------------------------------------------------
@@ -277,8 +281,44 @@ def _split_data(lset: dict) -> dict:
         Qm[m[:, 0] - lo, kidx] = np.exp(lset["a"])
         tail_index = [(int(tails[:, j].min()), tails[:, j] - tails[:, j].min()) for j in range(tails.shape[1])]
         lset["split"] = {"tails": tails.astype(float), "lo": lo, "n1": np.arange(lo, hi + 1, dtype=float),
-                         "Q": Qm, "tail_index": tail_index}
+                         "Q": Qm, "tail_index": tail_index, "fold": _tail_fold(tail_index, len(tails))}
     return lset["split"]
+
+
+def _tail_fold(tail_index: list, nK: int) -> tuple[int, np.ndarray | None]:
+    """``(f, index)``: the first ``f`` tail coordinates whose box of powers (the product of their ranges)
+    has at most ``nK`` entries, and each tail's row-major position in that box."""
+    f, size, index = 0, 1, None
+    for klo, kidx in tail_index:
+        span = int(kidx.max()) + 1
+        if size * span > nK:
+            break
+        index = kidx if index is None else index * span + kidx
+        f, size = f + 1, size * span
+    return f, index
+
+
+def _tail_factors(sp: dict, w: np.ndarray, s_T: np.ndarray) -> np.ndarray:
+    """``Wk[p, k] = exp(-pi ||T f_p||^2) prod_j w_pj^{k_j}`` (P, |K|) for the tail coordinates ``w``
+    (P, g - 1), multiplied left to right.
+
+    Power tables per coordinate (a few ns per entry instead of a ~20 ns complex exponential); the
+    first coordinates are multiplied out on their box (81 entries for the 393 tails of the generic
+    body's order-1 set) and gathered once, the rest gathered and multiplied per tail: the same
+    products in the same order as gathering every coordinate.
+    """
+    f, index = sp["fold"]
+    tab = np.exp(-math.pi * np.einsum("pi,pi->p", s_T, s_T))[:, None]
+    P = len(w)
+    for jj in range(f):
+        klo, kidx = sp["tail_index"][jj]
+        pj = _powers(w[:, jj], klo, int(kidx.max()) + 1)
+        tab = (tab[:, :, None] * pj[:, None, :]).reshape(P, -1)
+    Wk = tab[:, index] if f else np.repeat(tab, len(sp["tails"]), axis=1)
+    for jj in range(f, len(sp["tail_index"])):
+        klo, kidx = sp["tail_index"][jj]
+        Wk *= _powers(w[:, jj], klo, int(kidx.max()) + 1)[:, kidx]
+    return Wk
 
 
 def _unique_rows(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -361,7 +401,7 @@ def _moments_split(lat, lset, Wr_re, Wr_im, s_T, bits, jet, V):
     sgn_rest = sign_matrix(rest_u, tails.astype(np.int64)) if g > 1 else np.ones((nK, 1))  # (nK, nr)
     R = (sgn_rest[None, :, :, None] * H[:, :, None, :]).reshape(o + 1, nK, -1)  # (o+1, nK, nr*size)
     out = np.zeros((P, len(b1_vals), len(rest_u), jet.size), dtype=complex)
-    step = max(1, _CHUNK_ENTRIES // max(nK * (o + 1) * len(b1_vals), N1, 1))
+    step = max(1, _SPLIT_CHUNK_ENTRIES // max(nK * (o + 1) * len(b1_vals), N1, 1))
     for s0 in range(0, P, step):
         sl = slice(s0, s0 + step)
         pw = _powers(Wr_re[sl, 0] + 1j * Wr_im[sl, 0], sp["lo"], N1)
@@ -373,17 +413,10 @@ def _moments_split(lat, lset, Wr_re, Wr_im, s_T, bits, jet, V):
         L = np.stack(lhs, axis=1)  # (p, nb1*(o+1), N1)
         Pn = L.shape[0]
         A = (L.reshape(-1, N1) @ Qm).reshape(Pn, len(b1_vals), o + 1, nK)
-        # Wk = exp(-pi ||T f||^2) prod_j w_j^{k_j}: per-coordinate power tables and gathers
-        # (a few ns per entry instead of a ~20 ns complex exponential)
-        Wk = np.broadcast_to(np.exp(-math.pi * np.einsum("pi,pi->p", s_T[sl], s_T[sl]))[:, None],
-                             (Pn, nK))
-        for jj, (klo, kidx) in enumerate(sp["tail_index"]):
-            wj = Wr_re[sl, jj + 1] + 1j * Wr_im[sl, jj + 1]
-            Wk = Wk * _powers(wj, klo, int(kidx.max()) + 1)[:, kidx]
-        A *= Wk[:, None, None, :]
+        Wk = _tail_factors(sp, Wr_re[sl, 1:] + 1j * Wr_im[sl, 1:], s_T[sl])[:, None, :]
         acc = np.zeros((Pn, len(b1_vals), len(rest_u) * jet.size), dtype=complex)
-        for j in range(o + 1):
-            acc += (A[:, :, j, :].reshape(-1, nK) @ R[j]).reshape(Pn, len(b1_vals), -1)
+        for j in range(o + 1):  # A * Wk formed per j, contiguous for the product
+            acc += ((A[:, :, j, :] * Wk).reshape(-1, nK) @ R[j]).reshape(Pn, len(b1_vals), -1)
         out[sl] = acc.reshape(Pn, len(b1_vals), len(rest_u), jet.size)
     b1_pos = np.searchsorted(b1_vals, bits[:, 0])
     return out[:, b1_pos, rest_idx, :]
