@@ -158,6 +158,21 @@ class ReducedLattice:
             self._radii[key] = radius_for(tol / (2 * math.pi) ** order, self.rho, self.g, order, key[2])
         return self._radii[key]
 
+    def _half_form(self, mf: np.ndarray) -> np.ndarray:
+        """``m.X.m / 2`` modulo 1 for integer points m (N, g), from exact products summed in double-double
+        (X up to 1/2 but m.X.m up to ~100).  X is symmetric (the reduction keeps it so): the g (g + 1) / 2
+        products ``X_ij m_i m_j`` (halved on the diagonal) in one call and one pairwise sum, ~0.3 ms
+        for 2000 points instead of ~1.2 ms for g^2 sequential additions."""
+        g = self.g
+        if np.array_equal(self.X, self.X.T):
+            i, j = np.triu_indices(g)
+            w = np.where(i == j, 0.5, 1.0) * self.X[i, j]
+        else:  # pragma: no cover - the reduced tau is exactly symmetric
+            i, j = (x.ravel() for x in np.indices((g, g)))
+            w = 0.5 * self.X[i, j]
+        mm = mf.T[i] * mf.T[j]  # exact: small integers
+        return dd_sum(DD(*two_prod(np.broadcast_to(w[:, None], mm.shape), mm))).frac()
+
     def points(self, R: float):
         """Union set for radius R (rounded up to a 0.05 grid so nearby requests share it)."""
         Rq = math.ceil(R * 20.0) / 20.0
@@ -165,20 +180,12 @@ class ReducedLattice:
             m = union_set(self.T, Rq)
             mf = m.astype(float)
             Tm = mf @ self.T.T
-            # pi m.X.m mod 2 pi, exactly (m integer, X up to 1/2 but m.X.m up to ~100): the g^2 exact
-            # products in one call, summed in the order (i, j) row by row
-            g = self.g
-            mm = (mf.T[:, None, :] * mf.T[None, :, :]).reshape(g * g, len(m))
-            p, e = two_prod(np.broadcast_to(0.5 * self.X.reshape(-1, 1), mm.shape), mm)
-            acc = DD(np.zeros(len(m)))
-            for r in range(g * g):
-                acc = acc + DD(p[r], e[r])
             self._sets[Rq] = {
                 "m": m,
                 "mf": mf,
                 "Tm": Tm,
                 # -pi ||T m||^2 + i pi m.X.m: the point-independent part of the exponent
-                "a": -math.pi * np.einsum("ni,ni->n", Tm, Tm) + 2j * math.pi * acc.frac(),
+                "a": -math.pi * np.einsum("ni,ni->n", Tm, Tm) + 2j * math.pi * self._half_form(mf),
                 "split": None,
             }
         return self._sets[Rq]

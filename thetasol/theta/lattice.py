@@ -186,8 +186,10 @@ def _replay(tau0: np.ndarray, steps: list, dps: int) -> Reduction:
     I = np.eye(g, dtype=np.int64)
     Z = np.zeros((g, g), np.int64)
 
-    def matmul(A, Bm):  # A integer ndarray or nested list, Bm nested list
-        return [[ctx.fsum(A[i][k] * Bm[k][j] for k in range(g)) for j in range(g)] for i in range(g)]
+    def matmul(A, Bm):  # A integer nested list, Bm nested list
+        # the zero entries of the unimodular A are skipped: fsum adds exactly and drops zeros anyway
+        return [[ctx.fsum(a * Bm[k][j] for k, a in nz) for j in range(g)] for nz in
+                ([(k, a) for k, a in enumerate(row) if a] for row in A)]
 
     for kind, data in steps:
         if kind == "U":
