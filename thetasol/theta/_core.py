@@ -296,7 +296,7 @@ def _tail_fold(tail_index: list, nK: int) -> tuple[int, np.ndarray | None]:
     """``(f, index)``: the first ``f`` tail coordinates whose box of powers (the product of their ranges)
     has at most ``nK`` entries, and each tail's row-major position in that box."""
     f, size, index = 0, 1, None
-    for klo, kidx in tail_index:
+    for _, kidx in tail_index:
         span = int(kidx.max()) + 1
         if size * span > nK:
             break

@@ -227,8 +227,10 @@ class RiemannTheta:
         """``z = zr + tau k + j`` (k by Babai on (Im tau)^{-1} Im z); zr as DD (g, P), k, j as (P, g)."""
         k0 = babai(z.imag @ self._Y0inv, self._T0)
         kT = k0.T
-        re = DD(z.real.T) - dd_sum(dd_prod(self._X0.T[:, :, None], kT[:, None, :]))  # [j, i, p]
-        im = DD(z.imag.T) - dd_sum(dd_prod(self._Y0.T[:, :, None], kT[:, None, :]))
+        # X k and Y k in one call (the same operations per entry)
+        XY = np.stack([self._X0.T, self._Y0.T], axis=1)[:, :, :, None]  # [j, re/im, i, 1]
+        zk = DD(np.stack([z.real.T, z.imag.T])) - dd_sum(dd_prod(XY, kT[:, None, None, :]))  # (2, g, P)
+        re, im = DD(zk.hi[0], zk.lo[0]), DD(zk.hi[1], zk.lo[1])
         j0 = np.rint(re.hi)
         return re - j0, im, k0, j0.T
 
@@ -269,8 +271,13 @@ class RiemannTheta:
         phi0 = 2 * math.pi * ph.frac().T  # (P, nchar)
         # 2. map into the reduced frame, u = M zr (double-double)
         Mr_hi, Mr_lo, Mi_hi, Mi_lo = self._M_dd
-        ur = dd_matvec(Mr_hi, Mr_lo, zr_re) - dd_matvec(Mi_hi, Mi_lo, zr_im)
-        ui = dd_matvec(Mr_hi, Mr_lo, zr_im) + dd_matvec(Mi_hi, Mi_lo, zr_re)
+        # [Re M; Im M] times [Re zr | Im zr] in one call (the same operations per entry): blocks (2g, 2P)
+        Mz = dd_matvec(np.concatenate([Mr_hi, Mi_hi]), np.concatenate([Mr_lo, Mi_lo]),
+                       DD(np.concatenate([zr_re.hi, zr_im.hi], axis=1), np.concatenate([zr_re.lo, zr_im.lo], axis=1)))
+        rows, cols = (slice(0, g), slice(g, 2 * g)), (slice(0, P), slice(P, 2 * P))
+        blk = lambda a, b: DD(Mz.hi[rows[a], cols[b]], Mz.lo[rows[a], cols[b]])  # noqa: E731
+        ur = blk(0, 0) - blk(1, 1)
+        ui = blk(0, 1) + blk(1, 0)
         u = (ur.hi + 1j * ui.hi).T
         u_lo = (ur.lo + 1j * ui.lo).T
         # prefactor exp(K + pi i zr.Q.zr) (L = 0: the transformation law has no linear term);
