@@ -212,11 +212,12 @@ def group_jets(lat: ReducedLattice, lset: dict, u: np.ndarray, alpha: np.ndarray
     # Wr = u + tau d + beta, d = alpha - k, in double-double: |Y k| can be ~100 for elongated Y
     # while Im Wr = Y f is small, and the Gaussian weights need Im Wr to full relative accuracy
     # double-double work in the (g, P) layout of riemann.py (point axis last)
+    # (real and imaginary parts stacked: one call each, the same operations per entry)
     dT = d.T
-    dX = dd_sum(DD(*two_prod(dT[:, None, :], X.T[:, :, None]))) + DD(lat.X_lo @ dT)  # [j, i, p]
-    dY = dd_sum(DD(*two_prod(dT[:, None, :], Y.T[:, :, None]))) + DD(lat.Y_lo @ dT)
-    Wr_re = (DD(u.real.T) + DD(u_lo.real.T + beta[:, None]) + dX).value().T
-    Wr_im = (DD(u.imag.T) + DD(u_lo.imag.T) + dY).value().T
+    XY = np.stack([X.T, Y.T], axis=1)[:, :, :, None]  # [j, re/im, i, 1]
+    dXY = dd_sum(DD(*two_prod(dT[:, None, None, :], XY))) + DD(np.stack([lat.X_lo @ dT, lat.Y_lo @ dT]))
+    Wr = (DD(np.stack([u.real.T, u.imag.T])) + DD(np.stack([u_lo.real.T + beta[:, None], u_lo.imag.T])) + dXY).value()
+    Wr_re, Wr_im = Wr[0].T, Wr[1].T
     Wr_re -= np.rint(Wr_re)  # the m-sum is 1-periodic in Re Wr
     s_T = _solve_transposed_upper(T, Wr_im)  # T f, with T^T (T f) = Im Wr
     # moments G[p, b, T] = sum_m (-1)^{m.b} prod_{i in T} (v_i . m) E[p, m]
@@ -373,6 +374,58 @@ def _split_ok(lat, lset, s_T, Wr_im) -> bool:
     return max(log1, logk) < _LOG_SAFE
 
 
+def _tail_polynomials(jet: Jet, V: np.ndarray, tails: np.ndarray, o: int) -> np.ndarray:
+    """Tail polynomials ``H[j, k, T] = sum_{A subset T, |A| = j} prod_{i in A} v_i1 prod_{i in T \\ A} (v_i,rest . k)``
+    of :func:`_moments_split`, (o + 1, |K|, jet.size).
+
+    Up to order 2 a term has at most two factors and an entry at most two terms, so the entries are
+    written directly, with the operands in the order of the general loop (the same values, in one
+    numpy call per kind of subset instead of ~10 per subset: 0.9 -> 0.2 ms for the 37 subsets of
+    order 2 in 8 directions); higher orders run the general loop.
+    """
+    nK = len(tails)
+    vk = tails @ V[:, 1:].T if jet.r else np.zeros((nK, 0))  # (nK, r)
+    H = np.zeros((o + 1, nK, jet.size), dtype=complex)
+    if o > 2:
+        return _tail_polynomials_loop(jet, V, vk, H)
+    masks, pc = jet.masks, jet.popcount
+    one_c = np.ones((nK, 1), dtype=complex)  # the loop's products start from ones, its sums from zero
+    H[0, :, 0] += one_c[:, 0]
+    one = np.flatnonzero(pc == 1)
+    if len(one):
+        t = np.array([masks[p].bit_length() - 1 for p in one])
+        H[0][:, one] += one_c * vk[:, t]
+        H[1][:, one] += one_c * V[t, 0][None, :]
+    two = np.flatnonzero(pc == 2)
+    if len(two):
+        lo = np.array([(masks[p] & -masks[p]).bit_length() - 1 for p in two])
+        hi = np.array([masks[p].bit_length() - 1 for p in two])
+        H[2][:, two] += (one_c * V[lo, 0][None, :]) * V[hi, 0][None, :]
+        # the subsets in the loop's order: {hi} (term vk_lo v_hi), then {lo} (term v_lo vk_hi)
+        H[1][:, two] += (one_c * vk[:, lo]) * V[hi, 0][None, :]
+        H[1][:, two] += (one_c * V[lo, 0][None, :]) * vk[:, hi]
+        H[0][:, two] += (one_c * vk[:, lo]) * vk[:, hi]
+    return H
+
+
+def _tail_polynomials_loop(jet: Jet, V: np.ndarray, vk: np.ndarray, H: np.ndarray) -> np.ndarray:
+    """:func:`_tail_polynomials` by the general loop over subsets (any order)."""
+    nK = len(vk)
+    for pos, mask in enumerate(jet.masks):
+        A = mask
+        while True:
+            j = bin(A).count("1")
+            term = np.ones(nK, dtype=complex)
+            for i in range(jet.r):
+                if mask >> i & 1:
+                    term = term * (V[i, 0] if A >> i & 1 else vk[:, i])
+            H[j, :, pos] += term
+            if A == 0:
+                break
+            A = (A - 1) & mask
+    return H
+
+
 def _moments_split(lat, lset, Wr_re, Wr_im, s_T, bits, jet, V):
     """Same moments as :func:`_moments_direct`, with E[p, (n_1, k)] = W1[p, n_1] Q[n_1, k] Wk[p, k].
 
@@ -390,21 +443,7 @@ def _moments_split(lat, lset, Wr_re, Wr_im, s_T, bits, jet, V):
     rest = bits[:, 1:]
     rest_u, rest_idx = np.unique(rest, axis=0, return_inverse=True)
     rest_idx = np.asarray(rest_idx).reshape(-1)
-    # tail polynomials H_{T,j}(k) = sum_{A subset T, |A| = j} prod_{A} v_i1 prod_{T \ A} (v_i,rest . k)
-    vk = tails @ V[:, 1:].T if jet.r else np.zeros((nK, 0))  # (nK, r)
-    H = np.zeros((o + 1, nK, jet.size), dtype=complex)
-    for pos, mask in enumerate(jet.masks):
-        A = mask
-        while True:
-            j = bin(A).count("1")
-            term = np.ones(nK, dtype=complex)
-            for i in range(jet.r):
-                if mask >> i & 1:
-                    term = term * (V[i, 0] if A >> i & 1 else vk[:, i])
-            H[j, :, pos] += term
-            if A == 0:
-                break
-            A = (A - 1) & mask
+    H = _tail_polynomials(jet, V, tails, o)
     sgn_rest = sign_matrix(rest_u, tails.astype(np.int64)) if g > 1 else np.ones((nK, 1))  # (nK, nr)
     R = (sgn_rest[None, :, :, None] * H[:, :, None, :]).reshape(o + 1, nK, -1)  # (o+1, nK, nr*size)
     out = np.zeros((P, len(b1_vals), len(rest_u), jet.size), dtype=complex)
