@@ -411,3 +411,29 @@ def test_flow_theta_against_riemann_theta(g, r):
         # measured 2.1e-15 and 2.6e-15; one coefficient of the series off by 1e-11 shows as 1.1e-11
         close(np.exp(e[j]) * v[:, j], ref, 1e-13, scale=np.abs(ref).max())
         close(np.exp(e[j]) * dv[:, j], dref, 1e-13, scale=np.abs(dref).max())
+
+
+@pytest.mark.parametrize("g", [2, 3, 4])
+def test_flow_theta_inside_level_implies_the_exact_test(g):
+    """FlowTheta skips its exact ellipsoid test for candidates whose row-by-row sum is below
+    ``_surely_inside``: on ill-conditioned Y (eigenvalues 0.02 .. 2) every such candidate passes the exact
+    test, and the two sums differ by less than the stated bound (measured 1e-15 .. 7e-15 against 1e-13 .. 6e-13)."""
+    import math
+
+    from thetasol.theta.flow import _surely_inside, ellipsoid_candidates_many, lower_factor, row_sums
+
+    rng = np.random.default_rng(90 + g)
+    Y = random_tau(g, rng, small=0.02).imag
+    bound = 12.0
+    cs = rng.normal(size=(6, g))
+    half = np.sqrt(bound * np.diag(np.linalg.inv(Y)))
+    boxes = [[(math.floor(-c[i] - half[i]), math.ceil(-c[i] + half[i])) for i in range(g)] for c in cs]
+    pts, own, used = ellipsoid_candidates_many(cs, lower_factor(Y), bound, boxes)
+    d = pts + cs[own]
+    form = row_sums((d @ Y) * d)
+    inner = _surely_inside(Y, bound)
+    assert inner > 0.99 * bound
+    assert np.all(form[used <= inner] <= bound)
+    lam = np.linalg.eigvalsh(Y)[0]
+    disc = 8 * g * np.finfo(float).eps * (math.sqrt(np.trace(Y) / lam) + np.linalg.norm(Y) / lam)
+    assert np.max(np.abs(form - used) / used) < disc
