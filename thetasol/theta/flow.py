@@ -149,6 +149,17 @@ def _surely_inside(Y: np.ndarray, bound: float) -> float:
     return bound * (1 - 1e-6) if disc < 1e-7 else -1.0
 
 
+def _quadratic_form(m: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """``row_sums((m @ tau) * m)`` for real points m (n, g): the same products from two real matrix
+    products (the complex product of real m has the real products as its parts, and the complex
+    multiplication by real m gives ``Re * m`` and ``Im * m``), summed in the order of the complex sum,
+    without converting m to complex twice (1.2 -> 0.6 ms for near_unstable_equilibrium's 57 000 terms)."""
+    P = np.empty(m.shape, complex)
+    P.real = (m @ tau.real) * m
+    P.imag = (m @ tau.imag) * m
+    return row_sums(P)
+
+
 def _series_terms(tau: np.ndarray, shifts: np.ndarray, r: int, tol: float) -> tuple:
     """``(e (S,), keys, terms, rows)``: per shift s_j the exponent ``e_j``, and for the points m of its
     ellipsoid the mode ``m[:r]``, the term ``exp(pi i m.tau.m + 2 pi i m.s_j - e_j)`` and ``j``."""
@@ -178,7 +189,7 @@ def _series_terms(tau: np.ndarray, shifts: np.ndarray, r: int, tol: float) -> tu
             keep = np.ones(len(m), bool)
             keep[near] = math.pi * row_sums((d @ Y) * d) <= R2
             m = m[keep]
-        expo = 1j * math.pi * row_sums((m @ tau) * m) + 2j * math.pi * m @ s - e[j]
+        expo = 1j * math.pi * _quadratic_form(m, tau) + 2j * math.pi * m @ s - e[j]
         keys.append(m[:, :r].astype(np.int64))
         terms.append(np.exp(expo))
         rows.append(np.full(len(m), j))
