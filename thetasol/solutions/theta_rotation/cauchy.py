@@ -147,45 +147,16 @@ def auxiliary_rows(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
 
 
 def auxiliary_points(sd: SpectralData, dv: EigenvectorDivisors) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The points of :func:`auxiliary_rows`: ``(psi, dpsi, A)``, eigenvector (components of ``B``), its
-    t-derivative, (n, 3), and the Abel images (n, g)."""
+    """The points of :func:`auxiliary_rows` (:func:`~.divisors.auxiliary_places`, Abel images from stage
+    2): ``(psi, dpsi, A)``, eigenvector (components of ``B``), its t-derivative, (n, 3), and the Abel
+    images (n, g)."""
     curve, Bc = sd.curve, sd.Bc
     Jp, M, u, W0, alpha = sd.frame.Jp, curve.M, curve.u, sd.frame.W0, dv.alpha
-    bp = np.asarray(curve.branch_points)
-    scale = float(np.abs(bp).max())
-    R = float(np.abs(bp)[np.abs(bp) > 1e-8 * scale].min())   # a branch point may sit at E = 0 (rank-one a)
-    trial = [0.35 * R * np.exp(1j * ang) for ang in (0.3, 1.1, 1.9, 2.7)]
-    # Far branch points (|E| ~ 1/(J_2 - J_1) for nearly symmetric bodies) are where L ~ J^2 E^2 and
-    # eigenvectors lose accuracy: use the core of the set only.
-    core = bp[np.abs(bp) <= 10.0 * np.median(np.abs(bp))]
-    for b in core:
-        sep = np.abs(bp - b)
-        sep = min(sep[sep > 0].min(), abs(b))
-        if sep <= 1e-8 * scale:
-            continue                        # a branch point at E = 0 (rank-one a): a singular point
-        trial += [b + 0.25 * sep * np.exp(1j * ang) for ang in (0.4, 2.5, 4.6)]
-    cands = {}
-    # every eigenvector of every trial point in one batched call (the same operations per point)
-    Et = np.array(trial)
-    Lt = lax_matrix(Jp, M, u, Et)
-    Wt = np.linalg.eigvals(Lt)
-    Vt = right_eigenvector(np.broadcast_to(Lt[:, None], (len(Et), 3, 3, 3)), Wt)
-    for E, ws, vs in zip(trial, Wt, Vt, strict=True):
-        for w, v in zip(ws, vs, strict=True):
-            v = v @ Bc
-            h = np.abs(v) / np.linalg.norm(v)
-            order = np.argsort(h)
-            pair = tuple(sorted(order[1:]))
-            if h[order[1]] > cands.get(pair, (0.0,))[0]:
-                cands[pair] = (h[order[1]], E, w)
-    pts = sorted(cands.values(), key=lambda c: -c[0])
-    E = np.array([c[1] for c in pts])
-    w = np.array([c[2] for c in pts])
-    A = sd.abel([(complex(a_), complex(b_)) for a_, b_ in zip(E, w, strict=True)])
+    E, w = dv.aux_places
     v = right_eigenvector(lax_matrix(Jp, M, u, E), w)
     psi = v / (v @ alpha)[:, None]
     dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * E[:, None, None] + W0[None], psi) @ Bc
-    return psi @ Bc, dpsi, A
+    return psi @ Bc, dpsi, dv.A_aux
 
 
 def auxiliary_nu(rows: tuple, jets: tuple, U: np.ndarray, dlog_d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
