@@ -147,8 +147,7 @@ class RiemannTheta:
         self._M_dd = (*dd_split_mp([[x.real for x in row] for row in Mmp]),
                       *dd_split_mp([[x.imag for x in row] for row in Mmp]))
         ctx = self.reduction.mp["ctx"]
-        Yinv_mp = ctx.matrix([[ctx.mpf(float(self._Y0[i, j])) for j in range(g)] for i in range(g)]) ** -1
-        self._Y0inv_dd = dd_split_mp([[Yinv_mp[i, j] for j in range(g)] for i in range(g)])
+        self._Y0inv_dd = dd_split_mp(_mp_inverse_spd(ctx, self._Y0))
         Qmp = self.reduction.mp["Q"]
         self._Q_dd = (*dd_split_mp([[x.real for x in row] for row in Qmp]),
                       *dd_split_mp([[x.imag for x in row] for row in Qmp]))
@@ -176,7 +175,10 @@ class RiemannTheta:
         # K carries phases of size ~1e3 (large Q, c0 after inversions): sum it in mpmath, as the quadratic
         # form of (alpha, beta) assembled once (_char_form) and evaluated per characteristic
         tau0, Qm, lm, Mm = mp["tau0"], mp["Q"], mp["l"], mp["M"]
-        H, h, c = _char_form(mp, Lam, shift)
+        # the zero characteristic (the theta-function rotation's only one) needs c alone: the
+        # 2g x 2g form H costs ~2 ms of mpmath dot products
+        zero = not (np.any(alpha) or np.any(beta))
+        H, h, c = ([], [], _char_constant(mp, shift)) if zero else _char_form(mp, Lam, shift)
         n = alpha.shape[0]
         K = np.empty(n, dtype=complex)
         two_pi_i = 2j * ctx.pi
@@ -224,8 +226,10 @@ class RiemannTheta:
         """``z = zr + tau k + j`` (k by Babai on (Im tau)^{-1} Im z); zr as DD (g, P), k, j as (P, g)."""
         k0 = babai(z.imag @ self._Y0inv, self._T0)
         kT = k0.T
-        re = DD(z.real.T) - dd_sum(dd_prod(self._X0.T[:, :, None], kT[:, None, :]))  # [j, i, p]
-        im = DD(z.imag.T) - dd_sum(dd_prod(self._Y0.T[:, :, None], kT[:, None, :]))
+        # X k and Y k in one call (the same operations per entry)
+        XY = np.stack([self._X0.T, self._Y0.T], axis=1)[:, :, :, None]  # [j, re/im, i, 1]
+        zk = DD(np.stack([z.real.T, z.imag.T])) - dd_sum(dd_prod(XY, kT[:, None, None, :]))  # (2, g, P)
+        re, im = DD(zk.hi[0], zk.lo[0]), DD(zk.hi[1], zk.lo[1])
         j0 = np.rint(re.hi)
         return re - j0, im, k0, j0.T
 
@@ -266,8 +270,13 @@ class RiemannTheta:
         phi0 = 2 * math.pi * ph.frac().T  # (P, nchar)
         # 2. map into the reduced frame, u = M zr (double-double)
         Mr_hi, Mr_lo, Mi_hi, Mi_lo = self._M_dd
-        ur = dd_matvec(Mr_hi, Mr_lo, zr_re) - dd_matvec(Mi_hi, Mi_lo, zr_im)
-        ui = dd_matvec(Mr_hi, Mr_lo, zr_im) + dd_matvec(Mi_hi, Mi_lo, zr_re)
+        # [Re M; Im M] times [Re zr | Im zr] in one call (the same operations per entry): blocks (2g, 2P)
+        Mz = dd_matvec(np.concatenate([Mr_hi, Mi_hi]), np.concatenate([Mr_lo, Mi_lo]),
+                       DD(np.concatenate([zr_re.hi, zr_im.hi], axis=1), np.concatenate([zr_re.lo, zr_im.lo], axis=1)))
+        rows, cols = (slice(0, g), slice(g, 2 * g)), (slice(0, P), slice(P, 2 * P))
+        blk = lambda a, b: DD(Mz.hi[rows[a], cols[b]], Mz.lo[rows[a], cols[b]])  # noqa: E731
+        ur = blk(0, 0) - blk(1, 1)
+        ui = blk(0, 1) + blk(1, 0)
         u = (ur.hi + 1j * ui.hi).T
         u_lo = (ur.lo + 1j * ui.lo).T
         # prefactor exp(K + pi i zr.Q.zr) (L = 0: the transformation law has no linear term);
@@ -402,6 +411,22 @@ class RiemannTheta:
         return (res[0], res[3]) if separated else res[2]
 
 
+def _mp_inverse_spd(ctx, Y: np.ndarray) -> list:
+    """Inverse of a symmetric positive definite float matrix in mpmath at ``ctx``'s precision, by
+    Gauss-Jordan elimination without pivoting (stable for positive definite matrices), as nested lists:
+    ~0.1 ms for g = 4 where mpmath's matrix inverse costs ~0.4 ms."""
+    g = len(Y)
+    A = [[ctx.mpf(float(Y[i, j])) for j in range(g)] + [ctx.mpf(int(i == j)) for j in range(g)] for i in range(g)]
+    for k in range(g):
+        r = 1 / A[k][k]
+        A[k] = [x * r for x in A[k]]
+        for i in range(g):
+            if i != k and A[i][k]:
+                f = A[i][k]
+                A[i] = [x - f * y for x, y in zip(A[i], A[k], strict=True)]
+    return [row[g:] for row in A]
+
+
 def _half_images(v2: np.ndarray, Lam: np.ndarray, shift: np.ndarray, ctx) -> tuple:
     """:func:`_general_images` for half-integer characteristics (``v2 = 2 (alpha, beta)`` integer), exactly
     in integers: the images are half-integers, ``a1 - p`` and ``b1 - q`` in ``{0, 1/2}``."""
@@ -457,8 +482,19 @@ def _char_form(mp: dict, Lam: np.ndarray, shift: np.ndarray) -> tuple[list, list
     h = [2 * pi_i * (ctx.fdot(lm, [D[k][j] for k in range(g)]) - ctx.fdot(Ts, [A[k][j] for k in range(g)])
                      - ctx.fdot(sa, [A[g + k][j] for k in range(g)]) - ctx.fdot(sb, [A[k][j] for k in range(g)]))
          for j in r2]
-    c = mp["c0"] - pi_i * ctx.fdot(sa, Ts) - 2 * pi_i * ctx.fdot(sa, sb)
-    return H, h, c
+    return H, h, _char_constant(mp, shift)
+
+
+def _char_constant(mp: dict, shift: np.ndarray):
+    """The constant ``c = c0 - pi i sa.taur.sa - 2 pi i sa.sb`` of :func:`_char_form` (mpmath), with
+    ``(sa, sb) = shift``: all of ``K`` at the zero characteristic."""
+    ctx = mp["ctx"]
+    taur = mp["tau"]
+    g = len(taur)
+    pi_i = ctx.pi * 1j
+    sa, sb = [ctx.mpf(x) for x in shift[:g]], [ctx.mpf(x) for x in shift[g:]]
+    Ts = [ctx.fdot(taur[i], sa) for i in range(g)]
+    return mp["c0"] - pi_i * ctx.fdot(sa, Ts) - 2 * pi_i * ctx.fdot(sa, sb)
 
 
 def riemann_theta(z: ArrayLike, tau: ArrayLike, char: str | tuple[ArrayLike, ArrayLike] | None = None,

@@ -21,11 +21,15 @@ from thetasol.solutions.theta_rotation.node import lax_eigenvalues, local_branch
 from thetasol.solutions.theta_rotation.riemann import ThetaShifts
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
 
-__all__ = ["N_CIRCLE", "N_RAY", "CauchyMeans", "cauchy_means", "cauchy_means_at", "auxiliary_rows", "circle_points"]
+__all__ = ["N_CIRCLE", "N_RAY", "CauchyMeans", "cauchy_means", "cauchy_means_at", "auxiliary_rows", "auxiliary_points",
+           "auxiliary_nu", "circle_points", "circle_rows", "means_from_theta"]
 
 #: Points on the circles of the Cauchy means, and Gauss-Legendre nodes on their radii.
 N_CIRCLE = 32
 N_RAY = 16
+#: The nodes and weights, computed once (np.polynomial.legendre.leggauss costs ~0.25 ms a call, eight
+#: calls a set-up).
+_XG, _WG = np.polynomial.legendre.leggauss(N_RAY)
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,9 +56,8 @@ def circle_points(radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     on its radii and their weights."""
     phis = 2 * np.pi * np.arange(N_CIRCLE) / N_CIRCLE
     Ec = radius * np.exp(1j * phis)
-    xg, wg = np.polynomial.legendre.leggauss(N_RAY)
-    sg = 0.5 * (xg + 1)
-    return Ec, Ec[:, None] * sg[None, :], wg
+    sg = 0.5 * (_XG + 1)
+    return Ec, Ec[:, None] * sg[None, :], _WG.copy()
 
 
 def circle_data(sd: SpectralData, s_: int, radius: float,
@@ -84,10 +87,17 @@ def cauchy_means(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
 def cauchy_means_at(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
                     theta_d: tuple[np.ndarray, np.ndarray, np.ndarray], radii) -> list[CauchyMeans]:
     """:func:`cauchy_means` at each of ``radii``, with theta on all the circles in one evaluation."""
-    curve, th, U, Bc = sd.curve, sd.theta, sd.U, sd.Bc
+    circles = circle_rows(sd, dv, radii)
+    z = np.concatenate([c[2] for c in circles])[:, None, :] - ts.e[None, :, :]
+    return means_from_theta(circles, sd.theta.jet(z, order=1, separated=True), theta_d, sd.U)
+
+
+def circle_rows(sd: SpectralData, dv: EigenvectorDivisors, radii) -> list[tuple]:
+    """``(psi, dpsi, A)`` per radius and place ``P_s`` (``3 i + s``): eigenvector (components of ``B``),
+    its t-derivative and the Abel images on the circle, (N_CIRCLE, 3) twice and (N_CIRCLE, g)."""
+    curve, Bc = sd.curve, sd.Bc
     Jp, M, u, W0 = sd.frame.Jp, curve.M, curve.u, sd.frame.W0
-    ed_, vd_, dlog_d = theta_d
-    circles = []                                         # (psi, dpsi, A_loc) per radius and place
+    circles = []
     for radius in radii:
         Ec, Eq, _ = circle_points(radius)
         eig = (lax_eigenvalues(curve, Eq), lax_eigenvalues(curve, Ec))
@@ -100,10 +110,16 @@ def cauchy_means_at(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
             psi = v / (v @ dv.alpha)[:, None]
             dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * Ec[:, None, None] + W0[None], psi) @ Bc
             circles.append((psi @ Bc, dpsi, dv.AP0[s_][None, :] + local @ sd.Ainv.T))
-    A_all = np.concatenate([c[2] for c in circles])
-    eb_all, vb_all, gb_all = th.jet(A_all[:, None, :] - ts.e[None, :, :], order=1, separated=True)
+    return circles
+
+
+def means_from_theta(circles: list[tuple], jets: tuple, theta_d: tuple, U: np.ndarray) -> list[CauchyMeans]:
+    """The means of :func:`cauchy_means_at` from the circles (:func:`circle_rows`) and the separated
+    jets ``(e, v, gradient)`` of theta at ``A - e_k`` on all of them, (n, 3) and (n, 3, g)."""
+    ed_, vd_, dlog_d = theta_d
+    eb_all, vb_all, gb_all = jets
     out, pos = [], 0
-    for i in range(len(radii)):
+    for i in range(len(circles) // 3):
         X0 = np.zeros((3, 3), complex)
         rho = np.zeros((3, 3), complex)                  # rho_k(P_s) theta(d_k), [s, k]
         cst = np.zeros((3, 3), complex)
@@ -125,43 +141,28 @@ def auxiliary_rows(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
 
     Returns (nu (n, 3), relative component sizes |psi_k| / |psi| (n, 3)).
     """
-    curve, th, U, Bc = sd.curve, sd.theta, sd.U, sd.Bc
-    Jp, M, u, W0, alpha, e = sd.frame.Jp, curve.M, curve.u, sd.frame.W0, dv.alpha, ts.e
-    bp = np.asarray(curve.branch_points)
-    scale = float(np.abs(bp).max())
-    R = float(np.abs(bp)[np.abs(bp) > 1e-8 * scale].min())   # a branch point may sit at E = 0 (rank-one a)
-    trial = [0.35 * R * np.exp(1j * ang) for ang in (0.3, 1.1, 1.9, 2.7)]
-    # Far branch points (|E| ~ 1/(J_2 - J_1) for nearly symmetric bodies) are where L ~ J^2 E^2 and
-    # eigenvectors lose accuracy: use the core of the set only.
-    core = bp[np.abs(bp) <= 10.0 * np.median(np.abs(bp))]
-    for b in core:
-        sep = np.abs(bp - b)
-        sep = min(sep[sep > 0].min(), abs(b))
-        if sep <= 1e-8 * scale:
-            continue                        # a branch point at E = 0 (rank-one a): a singular point
-        trial += [b + 0.25 * sep * np.exp(1j * ang) for ang in (0.4, 2.5, 4.6)]
-    cands = {}
-    # every eigenvector of every trial point in one batched call (the same operations per point)
-    Et = np.array(trial)
-    Lt = lax_matrix(Jp, M, u, Et)
-    Wt = np.linalg.eigvals(Lt)
-    Vt = right_eigenvector(np.broadcast_to(Lt[:, None], (len(Et), 3, 3, 3)), Wt)
-    for E, ws, vs in zip(trial, Wt, Vt, strict=True):
-        for w, v in zip(ws, vs, strict=True):
-            v = v @ Bc
-            h = np.abs(v) / np.linalg.norm(v)
-            order = np.argsort(h)
-            pair = tuple(sorted(order[1:]))
-            if h[order[1]] > cands.get(pair, (0.0,))[0]:
-                cands[pair] = (h[order[1]], E, w)
-    pts = sorted(cands.values(), key=lambda c: -c[0])
-    E = np.array([c[1] for c in pts])
-    w = np.array([c[2] for c in pts])
-    A = sd.abel([(complex(a_), complex(b_)) for a_, b_ in zip(E, w, strict=True)])
+    rows = auxiliary_points(sd, dv)
+    jets = sd.theta.jet(rows[2][:, None, :] - ts.e[None, :, :], order=1, separated=True)
+    return auxiliary_nu(rows, jets, sd.U, dlog_d)
+
+
+def auxiliary_points(sd: SpectralData, dv: EigenvectorDivisors) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The points of :func:`auxiliary_rows` (:func:`~.divisors.auxiliary_places`, Abel images from stage
+    2): ``(psi, dpsi, A)``, eigenvector (components of ``B``), its t-derivative, (n, 3), and the Abel
+    images (n, g)."""
+    curve, Bc = sd.curve, sd.Bc
+    Jp, M, u, W0, alpha = sd.frame.Jp, curve.M, curve.u, sd.frame.W0, dv.alpha
+    E, w = dv.aux_places
     v = right_eigenvector(lax_matrix(Jp, M, u, E), w)
     psi = v / (v @ alpha)[:, None]
     dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * E[:, None, None] + W0[None], psi) @ Bc
-    psi = psi @ Bc
-    _, vb, gb = th.jet(A[:, None, :] - e[None, :, :], order=1, separated=True)
+    return psi @ Bc, dpsi, dv.A_aux
+
+
+def auxiliary_nu(rows: tuple, jets: tuple, U: np.ndarray, dlog_d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`auxiliary_rows` from the points of :func:`auxiliary_points` and the separated jets
+    ``(e, v, gradient)`` of theta at ``A - e_k`` there, (n, 3) and (n, 3, g)."""
+    psi, dpsi, _ = rows
+    _, vb, gb = jets
     nu = dpsi / psi - (gb @ U) / vb + dlog_d[None, :]
     return nu, np.abs(psi) / np.linalg.norm(psi, axis=1, keepdims=True)
