@@ -30,8 +30,8 @@ __all__ = []
 
 #: Bytes of phase products per block of times in :meth:`FlowTheta.__call__`, and the most times per
 #: block: the real matrix (2 x phases, 4 x shifts) is read once per block, so larger blocks pay off until
-#: the products leave the cache (dense evaluation of the near-unstable body, 1418 phases: 16.7 us per
-#: time with 0.5 MB blocks, 12.5 with 4 MB; generic body 3.6 and 3.4).
+#: the products leave the cache (dense evaluation of the near-unstable body, 1418 phases: 12.7 us per
+#: time with 0.5 MB blocks, 10.0 with 4 MB; generic body 2.9 and 2.65; caps of 256-1024 times alike).
 BLOCK_BYTES = 1 << 22
 BLOCK_CAP = 1024
 #: Up to this many products (times x phases) :meth:`FlowTheta.phases` gathers all factors at once
