@@ -380,9 +380,9 @@ class FlowTheta:
             vd = np.matmul(self.phases(phi, compiled).view(float), self.W).view(complex)
             return self.e, vd[:, :S], (vd[:, S:] if derivative else None)
         out = np.empty((n, 4 * S))
-        # the blocks' phase products (MBs) in one workspace: fresh arrays of that size would come from
-        # mmap, or not, as glibc's adaptive threshold stands after the set-up, and their page faults then
-        # doubled the cost per time (generic body 2.9 -> 5.0 us)
+        # the blocks' phase products (MBs) in one workspace: fresh arrays of that size come from mmap or
+        # from the heap as glibc's adaptive threshold stands after the set-up, and from mmap their page
+        # faults double the cost per time (generic body 5.0-5.2 us against 2.9)
         work = np.empty((2, blk, self.n_phases), complex)
         for a in range(0, n, blk):
             b = min(n, a + blk)
