@@ -243,8 +243,9 @@ class FlowTheta:
         for i in range(modes.shape[1] - 1, -1, -1):      # sign of the first non-zero index
             sign = np.where(modes[:, i] != 0, np.sign(modes[:, i]), sign)
         canon = modes * np.where(sign < 0, -1, 1)[:, None]
-        lo = canon.min(axis=0)
-        span = canon.max(axis=0) - lo + 1
+        # the box holds k = 0 in every coordinate: the tables are powers outwards from it (:meth:`tables`)
+        lo = np.minimum(canon.min(axis=0), 0)
+        span = np.maximum(canon.max(axis=0), 0) - lo + 1
         codes, inv = _dense_unique(np.ravel_multi_index(tuple((canon - lo).T), span), int(np.prod(span)))
         pm = lo + np.stack(np.unravel_index(codes, span), axis=-1)
         C = np.concatenate([D, Dd]).T                    # (K, 2S): coefficients of exp(2 pi i m.phi)
@@ -283,9 +284,8 @@ class FlowTheta:
         # the column of the table of phase i that mode p multiplies
         self._gather = (self._pm_rel + (ends - span)[None, :]).T.ravel()
         self._blk = int(min(BLOCK_CAP, max(16, BLOCK_BYTES // (16 * max(1, self.n_phases)))))
-        # per table: its slice and the column of the power nearest 0 (k = 0 when the range holds it)
-        k0 = np.clip(0, lo, lo + span - 1)
-        self._anchors = [(sl, int(sl.start + k0[i] - lo[i]), float(k0[i])) for i, sl in enumerate(self._k_slices)]
+        # per table: its slice and the column of k = 0
+        self._zero_cols = [(sl, int(sl.start - lo[i])) for i, sl in enumerate(self._k_slices)]
 
     def phases(self, phi: np.ndarray, compiled: bool = True, work: np.ndarray | None = None) -> np.ndarray:
         """``exp(2 pi i p.phi)`` (n, P) for the phases phi (n, r) reduced mod 1 (``compiled``: with the
@@ -338,18 +338,13 @@ class FlowTheta:
             return np.exp(TWO_PI_I * (phi.take(self._k_owner, axis=1) * self._k_all))
         base = np.exp(TWO_PI_I * phi)                                   # (n, r)
         tab = np.empty((n, self._k_all.size), complex)
-        for i, (sl, z, k0) in enumerate(self._anchors):
+        for i, (sl, z) in enumerate(self._zero_cols):
             col = base[:, i:i + 1]
-            tab[:, z] = 1.0 if k0 == 0 else np.exp(TWO_PI_I * (phi[:, i] * k0))
+            tab[:, z] = 1.0
             if sl.stop > z + 1:
                 np.cumprod(np.broadcast_to(col, (n, sl.stop - z - 1)), axis=1, out=tab[:, z + 1:sl.stop])
-                if k0 != 0:
-                    tab[:, z + 1:sl.stop] *= tab[:, z:z + 1]
             if z > sl.start:
-                neg = np.cumprod(np.broadcast_to(col.conj(), (n, z - sl.start)), axis=1)
-                if k0 != 0:
-                    neg *= tab[:, z:z + 1]
-                tab[:, sl.start:z] = neg[:, ::-1]
+                tab[:, sl.start:z] = np.cumprod(np.broadcast_to(col.conj(), (n, z - sl.start)), axis=1)[:, ::-1]
         return tab
 
     def turns(self, t: np.ndarray) -> np.ndarray:
@@ -400,20 +395,15 @@ def _phases_kernel(phi, lo, span, pm, out):  # pragma: no cover - compiled by nu
         for i in range(r):
             x = 2.0 * math.pi * phi[a, i]
             e = complex(math.cos(x), math.sin(x))
-            k0 = min(max(0, lo[i]), lo[i] + span[i] - 1)
-            z = k0 - lo[i]
-            if k0 == 0:
-                tab[i, z] = 1.0
-            else:
-                x = 2.0 * math.pi * (phi[a, i] * k0)
-                tab[i, z] = complex(math.cos(x), math.sin(x))
+            z = -lo[i]                                       # the column of k = 0 (the box holds it)
+            tab[i, z] = 1.0
             p = e
             for k in range(z + 1, span[i]):
-                tab[i, k] = p if k0 == 0 else p * tab[i, z]
+                tab[i, k] = p
                 p = p * e
             p = e.conjugate()
             for k in range(z - 1, -1, -1):
-                tab[i, k] = p if k0 == 0 else p * tab[i, z]
+                tab[i, k] = p
                 p = p * e.conjugate()
         for p in range(pm.shape[0]):
             z = tab[0, pm[p, 0]]
