@@ -12,7 +12,7 @@ import pytest
 
 from thetasol.curves import _poly
 from thetasol.theta import lattice
-from thetasol.theta.flow import _dense_unique, _sorted_unique_rows, ellipsoid_candidates, lower_factor
+from thetasol.theta.flow import _sorted_unique_rows, ellipsoid_candidates, lower_factor
 
 
 def _radius_by_quadrature(tol, rho, g, order, a):
@@ -126,7 +126,7 @@ def test_dense_unique_is_numpy_unique():
     rng = np.random.default_rng(5)
     for size, n in [(936, 38340), (7225, 500), (11, 3), (1, 4), (10**6, 50)]:
         codes = rng.integers(0, size, n)
-        for got, want in zip(_dense_unique(codes, size), np.unique(codes, return_inverse=True), strict=True):
+        for got, want in zip(lattice.dense_unique(codes, size), np.unique(codes, return_inverse=True), strict=True):
             assert got.dtype == want.dtype
             np.testing.assert_array_equal(got, want)
 

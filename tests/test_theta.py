@@ -10,10 +10,10 @@ import numpy as np
 import pytest
 
 from thetasol import RiemannTheta, riemann_theta, riemann_theta_separated, siegel_reduce
+from thetasol.theta import lattice
 from thetasol.theta._core import (
     _tail_polynomials,
     _tail_polynomials_loop,
-    _unique_rows,
     group_jets,
     jet_layout,
 )
@@ -293,10 +293,18 @@ def test_tail_polynomials_direct_entries_are_the_general_loop(r, o):
 
 @pytest.mark.parametrize("c", [1, 2, 3, 5])
 def test_unique_rows_is_numpy_unique(c):
+    """theta.lattice.unique_rows (the split engine's tails, the flow's modes) against np.unique, also in a
+    box larger than the rows' own and with no columns."""
     rng = np.random.default_rng(c)
+    t0 = np.zeros((4, 0), dtype=np.int64)
+    assert np.array_equal(lattice.unique_rows(t0)[0], np.unique(t0, axis=0))
+    t = rng.integers(-6, 5, size=(300, c))
+    rows, inv = lattice.unique_rows(t, np.full(c, -9), np.full(c, 20))
+    ref, ref_inv = np.unique(t, axis=0, return_inverse=True)
+    assert np.array_equal(rows, ref) and np.array_equal(inv, np.asarray(ref_inv).reshape(-1))
     for n in (1, 7, 500):
         t = rng.integers(-6, 5, size=(n, c))
-        rows, inv = _unique_rows(t)
+        rows, inv = lattice.unique_rows(t)
         ref, ref_inv = np.unique(t, axis=0, return_inverse=True)
         assert np.array_equal(rows, ref) and np.array_equal(inv, np.asarray(ref_inv).reshape(-1))
 

@@ -31,7 +31,7 @@ from functools import lru_cache
 import numpy as np
 
 from thetasol.core.dd import DD, dd_sum, two_prod
-from thetasol.theta.lattice import babai, radius_for, shortest_vector, union_set
+from thetasol.theta.lattice import babai, radius_for, shortest_vector, union_set, unique_rows
 
 TWO_PI_I = 2j * math.pi
 #: Largest |log| of a factor the split engine accepts (float64 overflows at ~709).
@@ -284,7 +284,7 @@ def _split_data(lset: dict) -> dict:
     """Factor the set as n = (n_1, k): tails k, the n_1 range, and Q[n_1, k] = exp(a_n)."""
     if lset["split"] is None:
         m = lset["m"]
-        tails, kidx = _unique_rows(m[:, 1:])
+        tails, kidx = unique_rows(m[:, 1:])
         lo, hi = int(m[:, 0].min()), int(m[:, 0].max())
         Qm = np.zeros((hi - lo + 1, len(tails)), dtype=complex)
         Qm[m[:, 0] - lo, kidx] = np.exp(lset["a"])
@@ -328,26 +328,6 @@ def _tail_factors(sp: dict, w: np.ndarray, s_T: np.ndarray) -> np.ndarray:
         klo, kidx = sp["tail_index"][jj]
         Wk *= _powers(w[:, jj], klo, int(kidx.max()) + 1)[:, kidx]
     return Wk
-
-
-def _unique_rows(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``np.unique(t, axis=0, return_inverse=True)`` for small integer rows (N, c): rows in
-    lexicographic order and the index of each row, through one mixed-radix integer key per row
-    (0.1 ms instead of 0.9 ms for N = 2105, c = 3)."""
-    if t.size == 0:  # g = 1 (no tail coordinates)
-        rows, inv = np.unique(t, axis=0, return_inverse=True)
-        return rows, np.asarray(inv).reshape(-1)
-    lo = t.min(axis=0)
-    radix = t.max(axis=0) - lo + 1
-    key = t[:, 0] - lo[0]
-    for j in range(1, t.shape[1]):
-        key = key * radix[j] + (t[:, j] - lo[j])
-    keys, inv = np.unique(key, return_inverse=True)
-    rows = np.empty((len(keys), t.shape[1]), dtype=t.dtype)
-    for j in range(t.shape[1] - 1, -1, -1):
-        keys, rows[:, j] = np.divmod(keys, radix[j])
-        rows[:, j] += lo[j]
-    return rows, np.asarray(inv).reshape(-1)
 
 
 def _powers(w: np.ndarray, lo: int, count: int) -> np.ndarray:

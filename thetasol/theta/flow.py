@@ -25,6 +25,7 @@ import numpy as np
 
 from thetasol.core.jit import Kernel
 from thetasol.core.turns import rate_turns, rate_turns_one, split_rate
+from thetasol.theta.lattice import unique_rows
 
 __all__ = []
 
@@ -114,18 +115,6 @@ def row_sums(P: np.ndarray) -> np.ndarray:
     return acc
 
 
-def _dense_unique(codes: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
-    """``np.unique(codes, return_inverse=True)`` for integers in ``0 .. size - 1``, by marking a table
-    instead of sorting (the generic and near_unstable_equilibrium bodies' 38 000 and 68 000 terms fall
-    into tables of 936 and 7225 codes: 0.10 and 0.16 ms instead of 1.3 and 2.4 ms for the sort)."""
-    if size > 4 * codes.size + 4096:
-        return np.unique(codes, return_inverse=True)
-    present = np.zeros(size, bool)
-    present[codes] = True
-    rank = np.cumsum(present) - 1
-    return np.flatnonzero(present), rank[codes]
-
-
 def _sorted_unique_rows(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``np.unique(a, axis=0, return_inverse=True)`` for rows already in lexicographic order (runs of
     equal rows, no sort)."""
@@ -211,11 +200,7 @@ class FlowTheta:
         # (np.unique over rows sorts structured records, ~0.1 s here: rows coded as C-order flat indices
         # in the box lo .. lo + span - 1 keep the same lexicographic order)
         K = np.concatenate(keys)
-        # column by column: numpy's integer min/max over axis 0 of (n, r) cost ~0.4 ms each here
-        self.lo = np.array([K[:, i].min() for i in range(r)], dtype=np.int64)
-        self.span = np.array([K[:, i].max() for i in range(r)], dtype=np.int64) - self.lo + 1
-        codes, inv = _dense_unique(np.ravel_multi_index(tuple((K - self.lo).T), self.span), int(np.prod(self.span)))
-        self.modes = self.lo + np.stack(np.unravel_index(codes, self.span), axis=-1)
+        self.modes, inv = unique_rows(K)
         # np.add.at on the flat array: ~0.1 ms for the 57 000 terms of near_unstable_equilibrium, ~1 ms
         # with the (shift, mode) index pair
         D = np.zeros(S * len(self.modes), complex)
@@ -246,8 +231,7 @@ class FlowTheta:
         # the box holds k = 0 in every coordinate: the tables are powers outwards from it (:meth:`tables`)
         lo = np.minimum(canon.min(axis=0), 0)
         span = np.maximum(canon.max(axis=0), 0) - lo + 1
-        codes, inv = _dense_unique(np.ravel_multi_index(tuple((canon - lo).T), span), int(np.prod(span)))
-        pm = lo + np.stack(np.unravel_index(codes, span), axis=-1)
+        pm, inv = unique_rows(canon, lo, span)
         C = np.concatenate([D, Dd]).T                    # (K, 2S): coefficients of exp(2 pi i m.phi)
         # each p has at most one mode of either sign, so the indices within a sign are distinct and the
         # buffered fancy additions give np.add.at's sums from zero (addition commutes)

@@ -248,6 +248,36 @@ def _replay(tau0: np.ndarray, steps: list, dps: int) -> Reduction:
     return red
 
 
+def dense_unique(codes: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(codes, return_inverse=True)`` for integers in ``0 .. size - 1``, by marking a table
+    instead of sorting (the generic and near_unstable_equilibrium bodies' 38 000 and 68 000 flow terms
+    fall into tables of 936 and 7225 codes: 0.10 and 0.16 ms instead of 1.3 and 2.4 ms for the sort)."""
+    if size > 4 * codes.size + 4096:
+        codes, inv = np.unique(codes, return_inverse=True)
+        return codes, np.asarray(inv).reshape(-1)
+    present = np.zeros(size, bool)
+    present[codes] = True
+    rank = np.cumsum(present) - 1
+    return np.flatnonzero(present), rank[codes]
+
+
+def unique_rows(a: np.ndarray, lo: np.ndarray | None = None,
+                span: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(a, axis=0, return_inverse=True)`` for integer rows (N, c): the distinct rows in
+    lexicographic order and the index of each row, through one mixed-radix code per row in the box
+    ``lo .. lo + span - 1`` (default: the rows' own box; a larger box gives the same result) and
+    :func:`dense_unique` (0.1 ms instead of 0.9 for 2105 rows of 3 integers)."""
+    if a.shape[0] == 0 or a.shape[1] == 0:
+        rows, inv = np.unique(a, axis=0, return_inverse=True)
+        return rows, np.asarray(inv).reshape(-1)
+    if lo is None:   # column by column: numpy's integer min/max over axis 0 of (N, c) cost ~0.4 ms here
+        lo = np.array([a[:, i].min() for i in range(a.shape[1])], dtype=np.int64)
+        span = np.array([a[:, i].max() for i in range(a.shape[1])], dtype=np.int64) - lo + 1
+    codes, inv = dense_unique(np.ravel_multi_index(tuple((a - lo).T), span), int(np.prod(span)))
+    rows = (lo + np.stack(np.unravel_index(codes, span), axis=-1)).astype(a.dtype, copy=False)
+    return rows, inv
+
+
 # ----------------------------------------------------------------------------------------
 # Error bounds (Deconinck et al. 2004, Thm 2, generalized to polynomial weights)
 # ----------------------------------------------------------------------------------------
