@@ -15,9 +15,11 @@ caller reduces it, or first takes integer combinations of several rates' turns.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-__all__ = ["TURNS_EXACT", "split_rate", "rate_turns", "rate_turns_one"]
+__all__ = ["TURNS_EXACT", "split_rate", "split_rate_exact", "rate_turns", "rate_turns_one"]
 
 #: Below this ``|t|`` the products of ``rint(t)`` with 22-bit pieces are exact (22 + 31 bits).
 TURNS_EXACT = 2.0 ** 31
@@ -25,13 +27,28 @@ TURNS_EXACT = 2.0 ** 31
 
 def split_rate(u: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``u = u1 + u2 + u3`` exactly for float rates, ``u1`` and ``u2`` with 22 significant bits, ``u3`` with
-    at most 9 (rates known beyond float64 split their extra digits the same way, with mpmath)."""
+    at most 9 (a rate known beyond float64: :func:`split_rate_exact`)."""
     def top22(x):
         e = np.frexp(x)[1]
         return np.ldexp(np.rint(np.ldexp(x, 21 - e)), e - 21)
     u1 = top22(u)
     u2 = top22(u - u1)
     return u1, u2, (u - u1) - u2
+
+
+def split_rate_exact(x) -> tuple[float, float, float]:
+    """:func:`split_rate` of one rate known beyond float64 (an mpmath number, or a float): ``c1`` and ``c2``
+    with 22 significant bits taken off its exact value in turn, ``c3`` the float of the rest."""
+    pieces = []
+    rest = x
+    for _ in range(2):
+        piece = 0.0
+        if rest != 0:
+            k = 21 - math.frexp(float(rest))[1]
+            piece = math.ldexp(round(math.ldexp(float(rest), k)), -k)
+            rest = rest - piece
+        pieces.append(piece)
+    return pieces[0], pieces[1], float(rest)
 
 
 def rate_turns(t: np.ndarray, c1: np.ndarray, c2: np.ndarray, c3: np.ndarray, c: np.ndarray) -> np.ndarray:

@@ -45,7 +45,7 @@ import numpy as np
 
 from thetasol.core.jit import Kernel
 from thetasol.core.so3 import NEWTON_SCHULZ_MAX, polar_near_orthogonal, polar_near_orthogonal_one
-from thetasol.core.turns import TURNS_EXACT, rate_turns, rate_turns_one
+from thetasol.core.turns import TURNS_EXACT, rate_turns, rate_turns_one, split_rate_exact
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.exponents import Exponents, PhaseRates
 from thetasol.solutions.theta_rotation.riemann import ThetaShifts
@@ -296,24 +296,16 @@ TWO_PI_I = 2j * math.pi
 
 
 def _turn_rates(phase: PhaseRates) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """The turn rates ``U / 2`` and ``gaps / 2 pi`` of ``phase`` (r + g,) as ``c1 + c2 + c3`` to ~1e-40
-    relative, ``c1`` and ``c2`` with 22 significant bits each (so that ``t1 c1`` and ``t1 c2`` are exact
-    for integers ``|t1| < 2^31``; the rounding of ``t1 c3`` is then ~``|t c| 2^-97``, where with two
-    pieces ``|t c| 2^-75`` made the first integrals drift by 5e-13 at ``t = 1e9`` on the fast-spin
-    bodies), and ``c`` their float64 values."""
+    """The turn rates ``U / 2`` and ``gaps / 2 pi`` of ``phase`` (r + g,) as ``c1 + c2 + c3`` to the
+    rounding of ``c3``, ~2^-97 relative (tests/test_one_call.py), ``c1`` and ``c2`` with 22 significant
+    bits each (:func:`thetasol.core.turns.split_rate_exact`), and ``c`` their float64 values.  Then
+    ``t1 c1`` and ``t1 c2`` are exact for integers ``|t1| < 2^31`` and the rounding of ``t1 c3`` is
+    ~``|t c| 2^-97``; two pieces would leave ``|t c| 2^-75``, a drift of the first integrals of 5e-13 at
+    ``t = 1e9`` on the fast-spin bodies."""
     with mpmath.workdps(50):
         rates = ([mpmath.mpf(float(u)) / 2 for u in phase.lattice]
                  + [mpmath.mpf(float(g)) / (2 * mpmath.pi) for g in phase.gaps])
-        out = np.zeros((4, len(rates)))
-        for idx, x in enumerate(rates):
-            out[3, idx] = float(x)
-            rest = x
-            for piece in range(2):
-                if rest != 0:
-                    k = 21 - math.frexp(float(rest))[1]
-                    out[piece, idx] = math.ldexp(round(math.ldexp(float(rest), k)), -k)
-                    rest -= mpmath.mpf(out[piece, idx])
-            out[2, idx] = float(rest)
+        out = np.array([(*split_rate_exact(x), float(x)) for x in rates]).reshape(-1, 4).T
     return out[0], out[1], out[2], out[3]
 
 
