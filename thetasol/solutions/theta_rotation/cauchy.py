@@ -6,8 +6,11 @@ fixes ``c_k(P)``.  At the places ``P_s`` over ``E = 0`` both are taken as means 
 around the place (``N_CIRCLE`` points; the Abel map there from the place along the radii by
 ``N_RAY``-point Gauss-Legendre): a component of the initial eigenvector that vanishes at ``P_s`` (a
 removable 0/0, data aligned with principal axes) costs no accuracy.  The means at two radii are
-compared in the diagnostics.  :func:`auxiliary_rows` adds exponents at points near the branch points,
-where eigenvectors mix, for the fit of stage 4b.
+compared in the diagnostics.  :func:`auxiliary_nu` adds exponents at points near the branch points,
+where eigenvectors mix, for the fit of stage 4b.  The points (:func:`circle_rows`,
+:func:`auxiliary_points`) and the means from theta's jets there (:func:`means_from_theta`,
+:func:`auxiliary_nu`) are separate steps: stage 4 evaluates theta on all the points at once
+(:func:`~.exponents._cauchy_data`).
 """
 from __future__ import annotations
 
@@ -18,11 +21,10 @@ import numpy as np
 from thetasol.mechanics.lax import lax_matrix, right_eigenvector
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.node import lax_eigenvalues, local_branch, node_branch
-from thetasol.solutions.theta_rotation.riemann import ThetaShifts
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
 
-__all__ = ["N_CIRCLE", "N_RAY", "CauchyMeans", "cauchy_means", "cauchy_means_at", "auxiliary_rows", "auxiliary_points",
-           "auxiliary_nu", "circle_points", "circle_rows", "means_from_theta"]
+__all__ = ["N_CIRCLE", "N_RAY", "CauchyMeans", "auxiliary_points", "auxiliary_nu", "circle_points", "circle_rows",
+           "means_from_theta"]
 
 #: Points on the circles of the Cauchy means, and Gauss-Legendre nodes on their radii.
 N_CIRCLE = 32
@@ -75,28 +77,11 @@ def circle_data(sd: SpectralData, s_: int, radius: float,
     return Ec, wc, local
 
 
-def cauchy_means(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
-                 theta_d: tuple[np.ndarray, np.ndarray, np.ndarray], radius: float) -> CauchyMeans:
-    """X0, rho and the exponents' constants at the places over E = 0 (module docstring).
-
-    ``theta_d = (ed, vd, dlog_d)``: theta at ``d_k`` (exponent, value) and its log-derivative along U.
-    """
-    return cauchy_means_at(sd, dv, ts, theta_d, (radius,))[0]
-
-
-def cauchy_means_at(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
-                    theta_d: tuple[np.ndarray, np.ndarray, np.ndarray], radii) -> list[CauchyMeans]:
-    """:func:`cauchy_means` at each of ``radii``, with theta on all the circles in one evaluation."""
-    circles = circle_rows(sd, dv, radii)
-    z = np.concatenate([c[2] for c in circles])[:, None, :] - ts.e[None, :, :]
-    return means_from_theta(circles, sd.theta.jet(z, order=1, separated=True), theta_d, sd.U)
-
-
 def circle_rows(sd: SpectralData, dv: EigenvectorDivisors, radii) -> list[tuple]:
     """``(psi, dpsi, A)`` per radius and place ``P_s`` (``3 i + s``): eigenvector (components of ``B``),
     its t-derivative and the Abel images on the circle, (N_CIRCLE, 3) twice and (N_CIRCLE, g)."""
-    curve, Bc = sd.curve, sd.Bc
-    Jp, M, u, W0 = sd.frame.Jp, curve.M, curve.u, sd.frame.W0
+    curve = sd.curve
+    Jp, M, u = sd.frame.Jp, curve.M, curve.u
     circles = []
     for radius in radii:
         Ec, Eq, _ = circle_points(radius)
@@ -107,15 +92,16 @@ def circle_rows(sd: SpectralData, dv: EigenvectorDivisors, radii) -> list[tuple]
                 v = node_branch(curve, sd.slopes[s_], Ec, eig[1])[1]
             else:
                 v = right_eigenvector(lax_matrix(Jp, M, u, Ec), wc)
-            psi = v / (v @ dv.alpha)[:, None]
-            dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * Ec[:, None, None] + W0[None], psi) @ Bc
-            circles.append((psi @ Bc, dpsi, dv.AP0[s_][None, :] + local @ sd.Ainv.T))
+            psi, dpsi = _normalized(sd, dv.alpha, Ec, v)
+            circles.append((psi, dpsi, dv.AP0[s_][None, :] + local @ sd.Ainv.T))
     return circles
 
 
 def means_from_theta(circles: list[tuple], jets: tuple, theta_d: tuple, U: np.ndarray) -> list[CauchyMeans]:
-    """The means of :func:`cauchy_means_at` from the circles (:func:`circle_rows`) and the separated
-    jets ``(e, v, gradient)`` of theta at ``A - e_k`` on all of them, (n, 3) and (n, 3, g)."""
+    """X0, rho and the exponents' constants at the places over E = 0 (module docstring), one
+    :class:`CauchyMeans` per radius, from the circles (:func:`circle_rows`) and the separated jets
+    ``(e, v, gradient)`` of theta at ``A - e_k`` on all of them, (n, 3) and (n, 3, g).
+    ``theta_d = (ed, vd, dlog_d)``: theta at ``d_k`` (exponent, value) and its log-derivative along U."""
     ed_, vd_, dlog_d = theta_d
     eb_all, vb_all, gb_all = jets
     out, pos = [], 0
@@ -135,33 +121,29 @@ def means_from_theta(circles: list[tuple], jets: tuple, theta_d: tuple, U: np.nd
     return out
 
 
-def auxiliary_rows(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
-                   dlog_d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Exponent constants nu(P, k) at points P where eigenvectors mix (near branch points).
-
-    Returns (nu (n, 3), relative component sizes |psi_k| / |psi| (n, 3)).
-    """
-    rows = auxiliary_points(sd, dv)
-    jets = sd.theta.jet(rows[2][:, None, :] - ts.e[None, :, :], order=1, separated=True)
-    return auxiliary_nu(rows, jets, sd.U, dlog_d)
-
-
 def auxiliary_points(sd: SpectralData, dv: EigenvectorDivisors) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The points of :func:`auxiliary_rows` (:func:`~.divisors.auxiliary_places`, Abel images from stage
+    """The points of :func:`auxiliary_nu` (:func:`~.divisors.auxiliary_places`, Abel images from stage
     2): ``(psi, dpsi, A)``, eigenvector (components of ``B``), its t-derivative, (n, 3), and the Abel
     images (n, g)."""
-    curve, Bc = sd.curve, sd.Bc
-    Jp, M, u, W0, alpha = sd.frame.Jp, curve.M, curve.u, sd.frame.W0, dv.alpha
+    curve = sd.curve
     E, w = dv.aux_places
-    v = right_eigenvector(lax_matrix(Jp, M, u, E), w)
+    Jp, M, u = sd.frame.Jp, curve.M, curve.u
+    return (*_normalized(sd, dv.alpha, E, right_eigenvector(lax_matrix(Jp, M, u, E), w)), dv.A_aux)
+
+
+def _normalized(sd: SpectralData, alpha: np.ndarray, E: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``psi = v / <alpha, v>`` and its t-derivative ``-(J E + W0) psi`` (4.11) at the points E, both in
+    the components of ``B``."""
     psi = v / (v @ alpha)[:, None]
-    dpsi = -np.einsum("nij,nj->ni", np.diag(Jp)[None] * E[:, None, None] + W0[None], psi) @ Bc
-    return psi @ Bc, dpsi, dv.A_aux
+    dpsi = -np.einsum("nij,nj->ni", np.diag(sd.frame.Jp)[None] * E[:, None, None] + sd.frame.W0[None], psi) @ sd.Bc
+    return psi @ sd.Bc, dpsi
 
 
 def auxiliary_nu(rows: tuple, jets: tuple, U: np.ndarray, dlog_d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`auxiliary_rows` from the points of :func:`auxiliary_points` and the separated jets
-    ``(e, v, gradient)`` of theta at ``A - e_k`` there, (n, 3) and (n, 3, g)."""
+    """Exponent constants nu(P, k) at points P where eigenvectors mix (near branch points), from the
+    points of :func:`auxiliary_points` and the separated jets ``(e, v, gradient)`` of theta at
+    ``A - e_k`` there, (n, 3) and (n, 3, g).  Returns (nu (n, 3), relative component sizes
+    |psi_k| / |psi| (n, 3))."""
     psi, dpsi, _ = rows
     _, vb, gb = jets
     nu = dpsi / psi - (gb @ U) / vb + dlog_d[None, :]

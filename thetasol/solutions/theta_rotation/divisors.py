@@ -178,7 +178,7 @@ def _component_zeros(sd: SpectralData, Ed: np.ndarray):
 def auxiliary_places(sd: SpectralData) -> tuple[np.ndarray, np.ndarray]:
     """``(E, w)`` (n,): points near the branch points where eigenvectors mix, one per pair of components
     (the largest second-largest component among trial points), for the auxiliary rows of stage 4
-    (:func:`~.cauchy.auxiliary_rows`).  Chosen here so that their Abel images come with the divisors'
+    (:func:`~.cauchy.auxiliary_nu`).  Chosen here so that their Abel images come with the divisors'
     in one Abel-map call."""
     curve, Bc = sd.curve, sd.Bc
     Jp, M, u = sd.frame.Jp, curve.M, curve.u
