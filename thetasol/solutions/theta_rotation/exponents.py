@@ -235,11 +235,11 @@ def exact_exponents(curve: SpectralCurve, P0: Sequence[Place], slopes: Sequence[
 
     Why exact values: the circle means at a node's branches are biased by up to 6e-12 (symmetric body,
     relative axial spin 2e-4; the same at two radii) and fitted rates are off by up to 6e-13 (4.8e-13 on
-    the fast-spin reference), an error that makes the attitude drift linearly.  Rounded to floats, the exact values still satisfy
-the form and the relation with ``U`` only to ~1e-16 (``nu_sk - nu_s0 - nu_0k + nu_00``: 1.1e-16 on
-symmetric_oblate), which made its first integrals drift by 1.9e-11 at ``t = 1e6``: hence the integers
-and rates, from which the evaluator builds the phases (4.9e-15 there).  Returns nu (3, 3)
-    and the same exponents as :class:`PhaseRates` (``nu_sk = pi n_sk.U + (dF_s - dG_k) / 2`` exactly,
+    the fast-spin reference), an error that makes the attitude drift linearly.  Rounded to floats, the
+    exact values still satisfy the form and the relation with ``U`` only to ~1e-16 (``nu_sk - nu_s0 -
+    nu_0k + nu_00``: 1.1e-16 on symmetric_oblate), which as phases ``nu t`` would make the first integrals
+    drift by 1.9e-11 at ``t = 1e6``: hence the integers and rates, from which the evaluator builds the
+    phases (4.9e-15 there, tests/test_one_call.py).  Returns nu (3, 3) and the same exponents as :class:`PhaseRates` (``nu_sk = pi n_sk.U + (dF_s - dG_k) / 2`` exactly,
     with the integers n of the snapped sums), or None where a relation points at no single n or a node
     gap is unknown (the fit is then kept).
     """
