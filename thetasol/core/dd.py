@@ -31,21 +31,23 @@ def split(a: np.ndarray | float) -> tuple[np.ndarray, np.ndarray]:
     return hi, a - hi
 
 
-def two_prod(a: np.ndarray | float, b: np.ndarray | float, checked: bool = True) -> tuple[np.ndarray, np.ndarray]:
+def two_prod(a: np.ndarray | float, b: np.ndarray | float, checked: bool = True,
+             b_split: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``a*b = p + e`` exactly, for any finite a, b whose product does not overflow.
 
     Factors beyond 1e150 are first rebalanced by a power of two (``a 2^-s``, ``b 2^s``: the product
     is unchanged) so that Veltkamp's split cannot overflow (the elliptic argument reduction meets them).
     ``checked=False`` skips that test, for callers that have bounded both factors by 1e150 (the same
-    result then, without two reductions per call).
+    result then, without two reductions per call).  ``b_split``: ``split(b)`` already computed, for a
+    factor that enters many products (unchecked then).
     """
     p = a * b
     # (the method, not np.max: the test runs on every call, mostly on arrays of a few elements)
-    if checked and (np.abs(a).max(initial=0.0) > 1e150 or np.abs(b).max(initial=0.0) > 1e150):
+    if b_split is None and checked and (np.abs(a).max(initial=0.0) > 1e150 or np.abs(b).max(initial=0.0) > 1e150):
         sh = (np.frexp(a)[1] - np.frexp(b)[1]) // 2
         a, b = np.ldexp(a, -sh), np.ldexp(b, sh)
     ah, al = split(a)
-    bh, bl = split(b)
+    bh, bl = split(b) if b_split is None else b_split
     return p, ((ah * bh - p) + ah * bl + al * bh) + al * bl
 
 
@@ -149,9 +151,9 @@ def dd_add(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | floa
 
 
 def dd_mul(ah: np.ndarray | float, al: np.ndarray | float, bh: np.ndarray | float,
-           bl: np.ndarray | float, checked: bool = True) -> tuple[np.ndarray, np.ndarray]:
-    """Double-double product of ``ah + al`` and ``bh + bl`` (``checked``: see :func:`two_prod`)."""
-    p, e = two_prod(ah, bh, checked)
+           bl: np.ndarray | float, checked: bool = True, bh_split: tuple | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Double-double product of ``ah + al`` and ``bh + bl`` (``checked``, ``bh_split``: see :func:`two_prod`)."""
+    p, e = two_prod(ah, bh, checked, bh_split)
     return quick_two_sum(p, e + (ah * bl + al * bh))
 
 

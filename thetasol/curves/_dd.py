@@ -36,7 +36,6 @@ from thetasol.core.dd import (
     dd_mul,
     dd_split_mp,
     dd_sum,
-    quick_two_sum,
     split,
 )
 from thetasol.curves._mp import gauss_legendre_mp
@@ -165,13 +164,7 @@ def _horner(C, z, deriv=False):
 def _horner_step(H, L, zf, zs, AH, AL, checked):
     """(H + L) z + (AH + AL) for stacked complex double-doubles (s, 2, ...) (see :func:`_horner`)."""
     ah, al = H.swapaxes(0, 1)[:, :, None], L.swapaxes(0, 1)[:, :, None]    # [c, s, 1]
-    if checked:
-        ph, pl = dd_mul(ah, al, zf[0], zf[1], True)
-    else:   # dd_mul with z's split computed once
-        p = ah * zf[0]
-        a1, a2 = split(ah)
-        e = ((a1 * zs[0] - p) + a1 * zs[1] + a2 * zs[0]) + a2 * zs[1]
-        ph, pl = quick_two_sum(p, e + (ah * zf[1] + al * zf[0]))
+    ph, pl = dd_mul(ah, al, zf[0], zf[1], checked, zs)       # (zs: z's split, once per call, or None)
     # [c = Re, Im] products summed: [Re Re z + Im (-Im z), Re Im z + Im Re z] = [Re, Im] of the product
     sh, sl = dd_add(ph[0], pl[0], ph[1], pl[1])
     return dd_add(sh, sl, AH, AL)
