@@ -99,16 +99,20 @@ def test_several_python_threads(two_threads):
 
 
 def test_scipy_blas_found_once_loaded():
-    """The theta-function set-up loads no scipy.linalg (its import costs ~0.1 s at a process's first call);
-    a scipy BLAS loaded afterwards is limited from the next call on."""
+    """The theta-function set-ups of the 13 reference bodies load no scipy module (scipy.linalg costs ~0.1 s
+    at a process's first call, scipy.integrate ~0.4 s); a scipy BLAS loaded afterwards is limited from
+    the next call on."""
+    import pathlib
     import subprocess
     import sys
+    refs = pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json"
     code = (
-        "import sys, numpy as np, thetasol\n"
+        "import json, sys, numpy as np, thetasol\n"
         "from thetasol.core import threads\n"
-        "thetasol.solve_rotation(np.diag([2.0, 3.0, 4.5]), np.diag([0.3, -0.2, 0.5]), np.eye(3),"
-        " np.array([0.4, 1.1, -0.7]))\n"
-        "assert 'scipy.linalg' not in sys.modules, 'scipy.linalg loaded by the set-up'\n"
+        f"for d in json.load(open({str(refs)!r})).values():\n"
+        "    thetasol.solve_rotation(np.diag(d['J']), np.array(d['a']), np.array(d['Q0']), np.array(d['omega0']))\n"
+        "loaded = sorted(m for m in sys.modules if m.split('.')[0] == 'scipy')\n"
+        "assert not loaded, f'scipy loaded by the set-up: {loaded[:5]}'\n"
         "n0 = len(threads._blas_controllers())\n"
         "import scipy.linalg\n"
         "n1 = len(threads._blas_controllers())\n"
