@@ -102,6 +102,24 @@ def test_dd_root_leaving_its_sheet_is_refused(critical_call):
                      numerators_to_cdd(exact))
 
 
+def test_second_differential_reuses_the_roots_bit_for_bit():
+    """The curve engine keeps the numerator-free double-double stage of its period sums: the periods of
+    further differentials after the holomorphic ones equal, bit for bit, those of a fresh curve that
+    computes them first."""
+    from thetasol.curves.spectral import spectral_curve
+
+    r = REFS["symmetric_oblate"]
+    sol = solve_rotation(np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"]))
+    data = (np.diag(r["J"]), sol.m(0.0), sol.u(0.0))
+    first = spectral_curve(*data)
+    x, y = first.x, first.y
+    first.period_matrix()
+    again = first.period_matrix(differentials=[x ** 3, x * y])
+    fresh = spectral_curve(*data).period_matrix(differentials=[x ** 3, x * y])
+    assert first._edge_tracks._dd_roots, "no double-double stage kept: the test no longer exercises the reuse"
+    assert np.array_equal(again, fresh)
+
+
 def test_local_samples_fall_back_to_mpmath_only_where_double_double_loses_digits():
     """y^2 = (x - 1)^2 + 1e-26 sampled at |x - 1| = 3e-13: two sheets 6e-13 apart under O(1)
     coefficients, so even the compensated residual's second-order error (~eps^2 / |y|) is 4e-8 of y.

@@ -328,6 +328,39 @@ def _interval_sums(term, pr: _Pairs, crit, rounded):
     return [tot[gstart[c]:gstart[c + 1]] for c in range(len(crit))]
 
 
+@dataclass(frozen=True)
+class IntervalRoots:
+    """What :func:`intervals_dd` computes before any numerator: the nodes ``X`` (complex double-double),
+    the (node, track) pairs, the polished roots ``y`` and ``w dx/dtau / f_y`` per pair.  The curve engine
+    keeps it per set of intervals, so further differentials over the same cycles (the third-kind periods
+    of the theta-function rotation) pay only for their numerators (~5 ms a set on its nodal curves)."""
+
+    X: tuple
+    pairs: _Pairs
+    y: tuple
+    fac: tuple
+
+
+def interval_roots_dd(pieces, crit, seeds, curve_cdd) -> IntervalRoots:
+    """The numerator-free stage of :func:`intervals_dd` (same parameters)."""
+    X, wdx = _nodes_dd(pieces, crit)                                   # weight * dx/dtau per node
+    A = _horner(curve_cdd, tuple(v[:, None] for v in X))              # (K, n + 1): a_j(x) at every node
+    pr = _pairs(crit, seeds)
+    pn = pr.node
+    y, fy = _newton_dd(tuple(v[pn] for v in A), pr.seed)
+    fac = cdd_div(tuple(v[pn] for v in wdx), fy)                      # w dx/dtau / f_y per pair
+    return IntervalRoots(X=X, pairs=pr, y=y, fac=fac)
+
+
+def interval_sums_dd(roots: IntervalRoots, crit, numer_cdd, rounded=True):
+    """The sums of :func:`intervals_dd` from its numerator-free stage ``roots`` (same ``crit``)."""
+    B = _horner(numer_cdd, tuple(v[:, None, None] for v in roots.X))  # (K, ndiff, J): b_dj(x) at every node
+    Bp = tuple(v[roots.pairs.node] for v in B)                         # (P, ndiff, J)
+    g = _horner(Bp, tuple(v[:, None] for v in roots.y))                # (P, ndiff)
+    term = cdd_mul(g, tuple(v[:, None] for v in roots.fac))
+    return _interval_sums(term, roots.pairs, crit, rounded)
+
+
 def intervals_dd(pieces, crit, seeds, curve_cdd, numer_cdd, rounded=True):
     """Double-double Gauss-Legendre sums over critical intervals, for every track.
 
@@ -346,15 +379,4 @@ def intervals_dd(pieces, crit, seeds, curve_cdd, numer_cdd, rounded=True):
     """
     if not crit:
         return []
-    X, wdx = _nodes_dd(pieces, crit)                                   # weight * dx/dtau per node
-    # coefficients a_j(x) of f and b_dj(x) of the numerators at every node
-    A = _horner(curve_cdd, tuple(v[:, None] for v in X))              # (K, n + 1)
-    B = _horner(numer_cdd, tuple(v[:, None, None] for v in X))        # (K, ndiff, J)
-    pr = _pairs(crit, seeds)
-    pn = pr.node
-    y, fy = _newton_dd(tuple(v[pn] for v in A), pr.seed)
-    fac = cdd_div(tuple(v[pn] for v in wdx), fy)                      # w dx/dtau / f_y per pair
-    Bp = tuple(v[pn] for v in B)                                       # (P, ndiff, J)
-    g = _horner(Bp, tuple(v[:, None] for v in y))                      # (P, ndiff)
-    term = cdd_mul(g, tuple(v[:, None] for v in fac))
-    return _interval_sums(term, pr, crit, rounded)
+    return interval_sums_dd(interval_roots_dd(pieces, crit, seeds, curve_cdd), crit, numer_cdd, rounded)

@@ -578,6 +578,8 @@ class Tracked:
         self.tp = tp
         self.choice = choice
         self.rel = None
+        # the numerator-free double-double stage per set of critical intervals (keys: their (piece, node))
+        self._dd_roots = {}
 
     def values(self, p):
         """(x nodes, y values (m, L)) of the tracks of piece p."""
@@ -666,13 +668,18 @@ class Tracked:
 
     def _add_dd(self, out, exact, crit):
         """Add the double-double sums of the critical intervals (:mod:`thetasol.curves._dd`)."""
-        from thetasol.curves._dd import curve_to_cdd, intervals_dd, numerators_to_cdd
+        from thetasol.curves._dd import curve_to_cdd, interval_roots_dd, interval_sums_dd, numerators_to_cdd
         circ = [c for c in crit if self.pieces[c[0]].kind not in ("line", "point", "inf")]
         if circ:  # no double-double parametrization (never planned for quadrature so far)
             out = self._add_mp(out, exact, circ)
             crit = [c for c in crit if c not in circ]
-        parts = intervals_dd(self.pieces, crit, self.interval_seeds(crit), curve_to_cdd(self.tracker.poly),
-                             numerators_to_cdd(exact))
+        if not crit:
+            return out
+        key = tuple((p, k) for p, k, _ in crit)
+        if key not in self._dd_roots:
+            self._dd_roots[key] = interval_roots_dd(self.pieces, crit, self.interval_seeds(crit),
+                                                    curve_to_cdd(self.tracker.poly))
+        parts = interval_sums_dd(self._dd_roots[key], crit, numerators_to_cdd(exact))
         for (p, _, _), part in zip(crit, parts):
             out[p] = out[p] + part
         return out
