@@ -296,7 +296,19 @@ class PlaneCurve:
 
     # ------------------------------------------------------------------ differentials
     def _numerators(self, exprs):
-        return parse_numerators(exprs, self.x, self.y)
+        """:func:`parse_numerators`, kept per tuple of numerators (read-only: callers share it; sympy's
+        parsing costs ~0.3 ms a numerator, and a set-up asks for the same ones many times)."""
+        exprs = tuple(exprs)
+        key = ("parsed", exprs)
+        try:
+            P = self._cache.get(key)
+        except TypeError:                                    # an unhashable numerator: parse it each time
+            return parse_numerators(exprs, self.x, self.y)
+        if P is None:
+            P = parse_numerators(exprs, self.x, self.y)
+            P.flags.writeable = False
+            self._cache[key] = P
+        return P
 
     def polynomial(self) -> sympy.Expr:
         """The curve's polynomial f(x, y) as an exact sympy expression (rational coefficients)."""
@@ -318,10 +330,7 @@ class PlaneCurve:
             Integrands with respect to ``x``: a quadrature rule in ``x`` applied to them integrates the
             differentials along a path on the sheet the ``y`` values follow.
         """
-        key = ("numer", tuple(str(g) for g in numerators))
-        if key not in self._cache:
-            self._cache[key] = np.asarray(self._numerators(numerators))
-        P = self._cache[key]
+        P = np.asarray(self._numerators(numerators))
         x = np.asarray(x, complex)
         y = np.asarray(y, complex)
         col = (slice(None),) + (None,) * x.ndim
