@@ -110,11 +110,15 @@ def test_polar_near_orthogonal_one_is_the_batched_step():
 
 
 def test_times_checks():
-    """A float64 array of times passes as it is; NaN and inf still raise, in any input form."""
+    """A float64 array of times passes as it is, a Python float as a 0-d array; NaN and inf still raise, in
+    any input form."""
     t = np.array([0.0, 1e6])
     assert V.times(t) is t
     assert V.times([1, 2]).dtype == np.float64
-    for bad in (np.array([1.0, np.nan]), np.array([[np.inf]]), [0.0, float("-inf")], np.float64(np.nan)):
+    one = V.times(1e6)
+    assert type(one) is np.ndarray and one.shape == () and one.dtype == np.float64 and one == 1e6
+    for bad in (np.array([1.0, np.nan]), np.array([[np.inf]]), [0.0, float("-inf")], np.float64(np.nan),
+                float("nan"), float("inf")):
         with pytest.raises(ValueError, match="NaN or inf"):
             V.times(bad)
 

@@ -5,6 +5,7 @@ says what is wrong; none of them silently repairs data beyond round-off.
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -105,9 +106,12 @@ def vector3(v: ArrayLike, name: str) -> np.ndarray:
 def times(t: ArrayLike, name: str = "t") -> np.ndarray:
     """Finite real times of any shape.
 
-    A float64 array goes through as it is, checked by two ufunc calls: a third of
-    :func:`finite_array`'s fixed cost on a single time (its conversion and ``np.all`` wrapper).
+    A float64 array goes through as it is, checked by two ufunc calls, and a Python float is checked
+    as a float: a third of :func:`finite_array`'s fixed cost on a single time (its conversion and
+    ``np.all`` wrapper).
     """
     if type(t) is np.ndarray and t.dtype == np.float64 and np.logical_and.reduce(np.isfinite(t), axis=None):
         return t
+    if type(t) is float and math.isfinite(t):
+        return np.array(t)
     return finite_array(t, name)
