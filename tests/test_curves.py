@@ -556,3 +556,62 @@ def test_sheets_turning_together_are_matched_without_refinement(monkeypatch):
     for p, q in zip(fast, plain):
         assert np.array_equal(p.perm, q.perm)
         assert np.array_equal(p.ys, q.ys)
+
+
+_CRIT_CURVES = [
+    "y**2 - x**5 + x", "y**3 - x", "y**3 - x**4 - 1", "(y - x)**2*(y + 1) + x**7 - 3",
+    "y**2 - (x**2 - 1)**2*(x - 3)", "y**3 + x*y + x**2 - 1/3", "y**2 - x**6 - 0.1*x**3 + 2",
+    "(y**2 - x)*(y - 1) + x**3*(y**2 - x)", "-3/2*y**3 + (x**2 - 1/7)*y - (x - 2)**2*(x + 1/3)",
+    "(x - 1)*(y**2 - x)", "(x**2 + 1)*y**3 + (x**2 + 1)*(x - 5)",
+]
+
+
+@pytest.mark.parametrize("f", _CRIT_CURVES)
+def test_exact_critical_polynomial_matches_sympy(f):
+    """The integer-arithmetic discriminant, its square-free part and the content test (real curves of
+    degree <= 3 in y) against sympy's discriminant, sqf_part and gcd, exactly: nodes and cusps (repeated
+    factors), non-monic discriminants, a reducible curve (common factor x - 1) and one whose coefficients
+    share x^2 + 1."""
+    from fractions import Fraction
+
+    from thetasol.curves._poly import CurvePoly, _poly_to_fracs
+
+    x, y = sp.symbols("x y")
+    P = CurvePoly(sp.expand(sp.sympify(f, rational=True)), x, y)
+    assert P.is_real and P.n <= 3
+    g = [p for p in P.coeffs_in_y() if not p.is_zero]
+    common = g[0]
+    for p in g[1:]:
+        common = common.gcd(p)
+    assert P.x_content_is_constant() == (common.degree() <= 0)
+    sym = P._critical_polynomial_sympy()
+    assert P.critical_polynomial() == _poly_to_fracs(sym)
+    disc = sp.Poly(sp.discriminant(P.sympy_poly().as_expr(), y) * P.coeffs_in_y()[P.n].as_expr(), x)
+    assert sym.LC() == disc.LC() and sp.rem(disc, sym).is_zero
+    assert all(isinstance(c, Fraction) for pair in P.critical_polynomial() for c in pair)
+
+
+def test_rotation_does_not_depend_on_sympy_ground_types():
+    """sympy computes with python-flint's types when that package is installed and with its own
+    otherwise; the theta-function rotation gives the same floats either way (the bodies below differed by
+    1e-14 at t <= 1000 and 4e-10 at t = 1e6 when the critical values took sympy's normalization)."""
+    pytest.importorskip("flint")
+    import subprocess
+    import sys
+
+    code = ("import json, sys, numpy as np, thetasol; "
+            "from sympy.external.gmpy import GROUND_TYPES; "
+            "d = json.load(open(sys.argv[1])); out = [GROUND_TYPES]; "
+            "t = np.array([0.7, 997.0, 4002.0, 1e6]); "
+            "[out.extend(np.concatenate([a.ravel() for a in thetasol.solve_rotation(np.diag(b['J']), "
+            "np.array(b['a']), np.array(b['Q0']), np.array(b['omega0']))(t)]).tolist()) "
+            "for b in (d['slow_spin'], d['rank_one_plus_isotropic'])]; print(json.dumps(out))")
+    refs = os.path.join(os.path.dirname(__file__), "data", "rotation", "refs.json")
+    res = {}
+    for kind in ("python", "flint"):
+        env = dict(os.environ, SYMPY_GROUND_TYPES=kind)
+        run = subprocess.run([sys.executable, "-c", code, refs], env=env, capture_output=True, text=True,
+                             timeout=300, check=True)
+        res[kind] = json.loads(run.stdout.strip().splitlines()[-1])
+    assert res["python"][0] == "python" and res["flint"][0] == "flint"
+    assert res["python"][1:] == res["flint"][1:]

@@ -27,6 +27,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.curves._homology import LiftedGraph, symplectic_basis
+from thetasol.curves._numerators import cached_numerators
 from thetasol.curves._paths import CellGraph
 from thetasol.curves._places import (
     adjoint_subspace,
@@ -43,7 +44,7 @@ from thetasol.curves._places import (
     series_eval,
     series_integral,
 )
-from thetasol.curves._poly import CurvePoly, parse_numerators, polynomial_roots, root_corrections
+from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections
 from thetasol.curves._quad import Piece, Tracker, shaped_integrals
 
 if TYPE_CHECKING:
@@ -171,14 +172,14 @@ class PlaneCurve:
     ``omega_i`` over ``a_j``, the basis symplectic with ``a_i . b_j = delta_ij``; ``tau = A^-1 B``.
     """
 
-    def __init__(self, f, x, y, *, _extra_sites=None, _tol=1e-15):
-        self._poly = CurvePoly(f, x, y)
+    def __init__(self, f, x, y, *, _extra_sites=None, _tol=1e-15, _poly=None):
+        # _poly: the curve already as a CurvePoly (a subclass with exact coefficients skips sympy's parsing)
+        self._poly = CurvePoly(f, x, y) if _poly is None else _poly
         self.x, self.y = x, y
         self.n = self._poly.n
         if not self._poly.x_content_is_constant():
             raise ValueError("f is reducible: a polynomial in x alone divides it")
-        F, disc_factors, disc = self._poly.critical_polynomial()
-        self._disc_factors = disc_factors
+        F = self._poly.critical_polynomial()
         self._sites = polynomial_roots(F)
         self._sites_lo = root_corrections(F, self._sites)  # exact critical value = _sites + _sites_lo
         self._graph = CellGraph(self._sites, _extra_sites)
@@ -296,19 +297,7 @@ class PlaneCurve:
 
     # ------------------------------------------------------------------ differentials
     def _numerators(self, exprs):
-        """:func:`parse_numerators`, kept per tuple of numerators (read-only: callers share it; sympy's
-        parsing costs ~0.3 ms a numerator, and a set-up asks for the same ones many times)."""
-        exprs = tuple(exprs)
-        key = ("parsed", exprs)
-        try:
-            P = self._cache.get(key)
-        except TypeError:                                    # an unhashable numerator: parse it each time
-            return parse_numerators(exprs, self.x, self.y)
-        if P is None:
-            P = parse_numerators(exprs, self.x, self.y)
-            P.flags.writeable = False
-            self._cache[key] = P
-        return P
+        return cached_numerators(self._cache, exprs, self.x, self.y)
 
     def polynomial(self) -> sympy.Expr:
         """The curve's polynomial f(x, y) as an exact sympy expression (rational coefficients)."""

@@ -35,6 +35,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core.validate import finite_array, second_moments
+from thetasol.curves._poly import CurvePoly
 from thetasol.curves.plane_curve import Place, PlaneCurve
 
 __all__ = ["spectral_curve", "SpectralCurve", "farthest_branch_point"]
@@ -297,8 +298,6 @@ class SpectralCurve(PlaneCurve):
                     term = cf * comb(ll, m) * (-shift) ** (ll - m)
                     coef[(kk, m)] = coef.get((kk, m), Fraction(0)) + term
         E, w = sp.symbols("E w")
-        expr = sum(sp.Rational(v.numerator, v.denominator) * E**kk * w**m
-                   for (kk, m), v in coef.items() if v != 0)
         self.J2 = evJ**2
         self.J = J
         self.M = M
@@ -308,7 +307,7 @@ class SpectralCurve(PlaneCurve):
         self.degeneracy = degeneracy
         self.coefficients = C
         try:
-            super().__init__(expr, E, w)
+            super().__init__(None, E, w, _poly=CurvePoly.from_exact(coef, E, w))
         except ValueError as exc:
             if "reducible" in str(exc):
                 raise ValueError(f"the spectral curve of these data is reducible ({exc}); for example "
