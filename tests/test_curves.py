@@ -615,3 +615,33 @@ def test_rotation_does_not_depend_on_sympy_ground_types():
         res[kind] = json.loads(run.stdout.strip().splitlines()[-1])
     assert res["python"][0] == "python" and res["flint"][0] == "flint"
     assert res["python"][1:] == res["flint"][1:]
+
+
+def test_saturated_kernel_against_sympy():
+    """The adapted basis's integer linear algebra (fraction-free elimination) against sympy's nullspace
+    and inverse on 200 random integer matrices of every rank up to 16 x 8: the same kernel basis (the
+    reduced echelon form is unique), saturated (gcd of the maximal minors 1), and the exact inverse of a
+    unimodular matrix."""
+    import math
+    from itertools import combinations
+
+    from thetasol.curves.adapted_basis import _inverse_unimodular, saturated_kernel
+
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        m, n = int(rng.integers(1, 17)), int(rng.integers(1, 9))
+        rank = int(rng.integers(0, min(m, n) + 1))
+        M = rng.integers(-3, 4, (m, rank)) @ rng.integers(-3, 4, (rank, n))
+        K = saturated_kernel(M)
+        ns = sp.Matrix(M.astype(object).tolist()).nullspace()
+        assert K.shape == (n, len(ns)) and not np.any(M @ K)
+        if len(ns):
+            assert sp.Matrix(K.tolist()).rank() == len(ns)
+            minors = [int(sp.Matrix(K[list(rows)].tolist()).det()) for rows in combinations(range(n), len(ns))]
+            assert math.gcd(*minors) == 1
+    for _ in range(50):
+        U = sp.eye(6)
+        for _ in range(12):
+            i, j = rng.choice(6, 2, replace=False)
+            U[int(i), :] += int(rng.integers(-2, 3)) * U[int(j), :]
+        assert sp.Matrix(_inverse_unimodular([[int(x) for x in U.row(i)] for i in range(6)])) == U.inv()

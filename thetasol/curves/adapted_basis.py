@@ -17,7 +17,8 @@ Integer linear algebra on matrices of size 2g <= 8 with Python integers (exact).
 """
 from __future__ import annotations
 
-from math import gcd
+from fractions import Fraction
+from math import gcd, lcm
 
 import numpy as np
 
@@ -69,21 +70,67 @@ def _hnf_transform(B: list[list[int]]):
     return U, A
 
 
+def _echelon(A: list[list[int]]) -> tuple[list[list[int]], list[int]]:
+    """Fraction-free Gauss-Jordan on integer rows: rows whose division by their pivot (``pivots[i]`` the
+    column of row i's) is the reduced row echelon form over Q, and the pivot columns."""
+    A = [list(r) for r in A]
+    m, n = len(A), len(A[0]) if A else 0
+    pivots, row = [], 0
+    for col in range(n):
+        piv = next((i for i in range(row, m) if A[i][col] != 0), None)
+        if piv is None:
+            continue
+        A[row], A[piv] = A[piv], A[row]
+        p = A[row][col]
+        for i in range(m):
+            a = A[i][col]
+            if i != row and a != 0:
+                r = [x * p - y * a for x, y in zip(A[i], A[row], strict=True)]
+                d = 0
+                for x in r:
+                    d = gcd(d, x)
+                A[i] = [x // d for x in r] if d > 1 else r
+        pivots.append(col)
+        row += 1
+        if row == m:
+            break
+    return A, pivots
+
+
 def _inverse_unimodular(U: list[list[int]]) -> list[list[int]]:
-    import sympy as sp
-    Ui = sp.Matrix(U).inv()
-    return [[int(x) for x in Ui.row(i)] for i in range(Ui.rows)]
+    n = len(U)
+    R, piv = _echelon([list(row) + [int(i == j) for j in range(n)] for i, row in enumerate(U)])
+    out = []
+    for i in range(n):
+        p = R[i][piv[i]]
+        if any(x % p for x in R[i][n:]):
+            raise ValueError("the matrix is not unimodular (internal error)")
+        out.append([x // p for x in R[i][n:]])
+    return out
+
+
+def _nullspace(M: list[list[int]]) -> list[list[Fraction]]:
+    """A basis of the rational kernel of M: one vector per free column (1 there), as sympy's nullspace."""
+    n = len(M[0])
+    R, pivots = _echelon(M)
+    out = []
+    for free in (c for c in range(n) if c not in pivots):
+        v = [Fraction(0)] * n
+        v[free] = Fraction(1)
+        for i, pc in enumerate(pivots):
+            v[pc] = Fraction(-R[i][free], R[i][pc])
+        out.append(v)
+    return out
 
 
 def saturated_kernel(M: np.ndarray) -> np.ndarray:
     """Z-basis (columns) of {x in Z^n : M x = 0} for an integer matrix M."""
-    import sympy as sp
-    ns = sp.Matrix(M.astype(object).tolist()).nullspace()
+    ns = _nullspace(M.astype(np.int64).tolist())
     if not ns:
         return np.zeros((M.shape[1], 0), dtype=np.int64)
     cols = []
     for v in ns:
-        den = sp.ilcm(*[sp.fraction(x)[1] for x in v])
+        den = lcm(*[x.denominator for x in v])
         cols.append([int(x * den) for x in v])
     B = [list(r) for r in zip(*cols)]                 # n x r
     U, _ = _hnf_transform(B)
