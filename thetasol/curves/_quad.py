@@ -410,7 +410,7 @@ class Tracker:
         return j
 
     # -------------------------------------------------------------- main entry
-    def track(self, pieces):
+    def track(self, pieces, precise: bool = True):
         """Continue every piece's starting values; returns a :class:`Tracked` (integrate later).
 
         Matching runs node to node, vectorized over all tracks; steps that fail the safety tests are
@@ -420,7 +420,7 @@ class Tracker:
         nodes = Nodes(pieces, self.sites, self.tol)
         if not pieces:
             return Tracked(self, pieces, nodes, None, None, None, [], np.zeros(0, int), np.zeros((0, 0), int))
-        R, A, fy, Dt, sep, tc = self._eval_nodes(nodes.x, nodes.dx, ddx=nodes.ddx)
+        R, A, fy, Dt, sep, tc = self._eval_nodes(nodes.x, nodes.dx, precise, ddx=nodes.ddx)
         rel = self._last_rel
         D2 = self._last_D2
         off = nodes.offsets

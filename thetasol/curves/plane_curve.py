@@ -197,7 +197,7 @@ class PlaneCurve:
         order = np.lexsort((R.imag, R.real), axis=1) if R.shape[1] > 1 else np.zeros(R.shape, int)
         self._vroots = np.take_along_axis(R, order, axis=1)
         pieces = [Piece("line", G.V[a], G.V[b], self._vroots[a]) for a, b in G.edges]
-        tr = self._tracker.track(pieces)
+        tr = self._tracker.track(pieces, precise=False)   # (their sums are all redone in double-double)
         self._edge_tracks = tr
         n = self.n
         perms = np.zeros((len(G.edges), n), dtype=int)
