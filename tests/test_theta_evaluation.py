@@ -24,15 +24,32 @@ def sol(request):
     return _solve(request.param)
 
 
-def test_real_form_of_the_flow_against_the_complex_series(sol):
+@pytest.mark.parametrize("many", [False, True])
+def test_real_form_of_the_flow_against_the_complex_series(sol, many):
     """FlowTheta sums cos/sin of the modes up to sign; the complex series over every mode m with the
-    coefficients D(m), D(m) 2 pi i m.u gives the same values (measured <= 1.2e-15 of the sum of |D|)."""
+    coefficients D(m), D(m) 2 pi i m.u gives the same values (measured <= 1.2e-15 of the sum of |D|), for
+    a few times and for 300 (the phases then formed as rows, FlowTheta.phase_rows, where the modes are
+    few enough: the generic and symmetric bodies)."""
+    from thetasol.theta.flow import ROWS_MIN
+
     flow = sol.evaluator.flow
-    _, v, dv = flow(TIMES)
-    X = np.exp(2j * np.pi * flow.turns(TIMES) @ flow.modes.T)
+    t = np.concatenate([TIMES, np.linspace(-7.0, 3e3, 300)]) if many else TIMES
+    assert (len(t) >= ROWS_MIN) == many
+    _, v, dv = flow(t)
+    X = np.exp(2j * np.pi * flow.turns(t) @ flow.modes.T)
     scale = np.abs(flow.D).sum(axis=1).max()
     assert np.abs(v - X @ flow.D.T).max() <= 1e-14 * scale
     assert np.abs(dv - X @ flow.Dd.T).max() <= 1e-14 * np.abs(flow.Dd).sum(axis=1).max()
+
+
+def test_phase_rows_are_the_phases(sol):
+    """FlowTheta.phase_rows (contiguous products along the times) against FlowTheta.phases (gathers per
+    time): the same products of the same table entries, to the rounding of the powers (<= 4 ulp)."""
+    flow = sol.evaluator.flow
+    phi = flow.turns(np.linspace(-7.0, 3e3, 150))
+    rows, cols = flow.phase_rows(phi), flow.phases(phi, compiled=False)
+    assert rows.shape == (flow.n_phases, len(phi))
+    assert np.abs(rows.T - cols).max() <= 4 * np.finfo(float).eps * np.abs(flow.table_columns()[1]).max()
 
 
 def test_flow_turns_against_mpmath(sol):
