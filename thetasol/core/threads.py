@@ -4,7 +4,7 @@ The library's linear algebra is on 3x3 .. 8x8 matrices and stacks of them, far b
 which a multi-threaded BLAS gains; with the BLAS's default threads (one per core) its calls pay the
 threads' wake-up and synchronisation instead.  Measured on the 13 reference bodies on 2 cores, both
 settings in one run (benchmarks/bench_blas_threads.py, docs/bench_theta_rotation.md): on the quiet
-machine dense evaluation with the default threads costs 0.81-0.99x the limited cost in wall time (its
+machine dense evaluation with the default threads costs 0.77-1.02x the limited cost in wall time (its
 largest products use the second core, at more CPU time), and under other jobs' load it has cost 11x on one
 body (a BLAS thread waiting for a busy core); the guard's set and restore cost 2.3 us per call when the
 BLAS is on 2 threads (one far time: 37-41 us with the guard, 35-36 without, generic body).
