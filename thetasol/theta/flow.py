@@ -422,8 +422,10 @@ class FlowTheta:
                  compiled: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv.
 
-        The times go in blocks of :data:`BLOCK_BYTES` of phase products; the derivative is computed
-        in the same product whether asked or not (its columns cost a quarter of the product).
+        Many times (:data:`ROWS_MIN`, up to :data:`ROWS_MAX_PHASES` phases, numpy path) go through
+        :meth:`phase_rows` in blocks of up to 1024 times; otherwise the phases are gathered per time, in
+        blocks of :data:`BLOCK_BYTES` of phase products.  The derivative is computed in the same product
+        whether asked or not (its columns cost a quarter of the product).
         """
         t = np.asarray(t, float)
         phi = self.turns(t)
