@@ -9,17 +9,11 @@ same intervals), and the nodes of all intervals are placed in one vectorized ste
 """
 from __future__ import annotations
 
-from functools import cache
-
 import numpy as np
 
+from thetasol.core.panels import gauss_legendre
+
 RHO_TARGET = 2.5
-
-
-@cache
-def gauss_legendre(N: int):
-    t, w = np.polynomial.legendre.leggauss(N)
-    return t, w
 
 
 def n_nodes(rho: float, tol: float) -> int:

@@ -60,7 +60,7 @@ from functools import lru_cache
 import numpy as np
 from numpy.typing import ArrayLike
 
-from thetasol.curves._nodes import gauss_legendre
+from thetasol.core.panels import gauss_legendre
 from thetasol.theta.lattice import lll_gram
 from thetasol.theta.riemann import RiemannTheta
 

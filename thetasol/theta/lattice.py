@@ -10,9 +10,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cache
 
 import numpy as np
+
+from thetasol.core.panels import gauss_legendre
 
 __all__: list[str] = []
 
@@ -317,14 +318,9 @@ def _weight_turn(order: int, a: float) -> float:
     return (-2 * math.pi + math.sqrt(4 * math.pi ** 2 + 8 * math.pi * a * a * order)) / (4 * math.pi * a)
 
 
-@cache
-def _gauss_legendre_20() -> tuple[np.ndarray, np.ndarray]:
-    return np.polynomial.legendre.leggauss(20)
-
-
 def _panels(lo: float, hi: float, n: int = 32) -> tuple[np.ndarray, np.ndarray]:
     """Nodes and weights of n Gauss-Legendre panels of 20 nodes on [lo, hi]."""
-    t, w = _gauss_legendre_20()
+    t, w = gauss_legendre(20)
     h = (hi - lo) / n
     mid = lo + h * (np.arange(n) + 0.5)
     return (mid[:, None] + 0.5 * h * t[None, :]).ravel(), np.tile(0.5 * h * w, n)

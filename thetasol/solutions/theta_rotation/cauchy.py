@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from thetasol.core.panels import gauss_legendre
 from thetasol.mechanics.lax import lax_matrix, right_eigenvector
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.node import lax_eigenvalues, local_branch, node_branch
@@ -29,9 +30,6 @@ __all__ = ["N_CIRCLE", "N_RAY", "CauchyMeans", "auxiliary_points", "auxiliary_nu
 #: Points on the circles of the Cauchy means, and Gauss-Legendre nodes on their radii.
 N_CIRCLE = 32
 N_RAY = 16
-#: The nodes and weights, computed once (np.polynomial.legendre.leggauss costs ~0.25 ms a call, eight
-#: calls a set-up).
-_XG, _WG = np.polynomial.legendre.leggauss(N_RAY)
 
 
 @dataclass(frozen=True, eq=False)
@@ -58,8 +56,8 @@ def circle_points(radius: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     on its radii and their weights."""
     phis = 2 * np.pi * np.arange(N_CIRCLE) / N_CIRCLE
     Ec = radius * np.exp(1j * phis)
-    sg = 0.5 * (_XG + 1)
-    return Ec, Ec[:, None] * sg[None, :], _WG.copy()
+    xg, wg = gauss_legendre(N_RAY)
+    return Ec, Ec[:, None] * (0.5 * (xg + 1))[None, :], wg.copy()
 
 
 def circle_data(sd: SpectralData, s_: int, radius: float,
