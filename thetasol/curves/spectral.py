@@ -36,6 +36,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core.validate import finite_array, second_moments
 from thetasol.curves._poly import CurvePoly
+from thetasol.curves._qpoly import discriminant_in_y
 from thetasol.curves.plane_curve import Place, PlaneCurve
 
 __all__ = ["spectral_curve", "SpectralCurve", "farthest_branch_point"]
@@ -111,8 +112,9 @@ def farthest_branch_point(J: ArrayLike, M: ArrayLike, u: ArrayLike) -> float:
     """max ``|E|`` over the finite branch points of (4.12) for exactly these ``J, M, u``, without the curve.
 
     The roots of the discriminant in ``w`` of the cubic ``f = a w^3 + b w^2 + c w + d`` (``a = -1``, so
-    the branch points are its roots), ``b^2 c^2 - 4 a c^3 - 4 b^3 d - 27 a^2 d^2 + 18 a b c d``, formed
-    from the exact rational coefficients (:func:`_exact_coefficients`) and rounded once: ~1 ms, where
+    the branch points are its roots), ``b^2 c^2 - 4 a c^3 - 4 b^3 d - 27 a^2 d^2 + 18 a b c d``
+    (:func:`thetasol.curves._qpoly.discriminant_in_y`), formed from the exact rational coefficients
+    (:func:`_exact_coefficients`) and rounded once: ~1 ms, where
     building the Riemann surface of a curve with branch points far out (a nearly spherical symmetric
     body with a small axial spin) takes seconds to minutes.  A multiple root (a symmetric body's node)
     comes out of ``np.roots`` with ~sqrt(eps) relative error, a simple one with ~eps (2.1e-15 measured,
@@ -134,33 +136,9 @@ def farthest_branch_point(J: ArrayLike, M: ArrayLike, u: ArrayLike) -> float:
         The largest modulus of the critical values (0.0 when there are none).
     """
     C = _exact_coefficients(J, M, u)
-    a, b, c, d = ([C[k][l] for k in range(len(C))] for l in (3, 2, 1, 0))   # polynomials in E
-    disc = _padd(_padd(_pmul(b, b, c, c), _pmul(a, c, c, c), -4), _pmul(b, b, b, d), -4)
-    disc = _padd(_padd(disc, _pmul(a, a, d, d), -27), _pmul(a, b, c, d), 18)
-    while disc and disc[-1] == 0:
-        disc.pop()
+    disc = discriminant_in_y([[C[k][l] for k in range(len(C))] for l in range(4)])   # w^l's polynomial in E
     cf = np.array([float(x) for x in reversed(disc)])
     return float(np.abs(np.roots(cf)).max()) if len(cf) > 1 else 0.0
-
-
-def _pmul(*ps: list) -> list:
-    """Product of polynomials (coefficient lists, lowest degree first) with exact coefficients."""
-    out = [Fraction(1)]
-    for p in ps:
-        prod = [Fraction(0)] * (len(out) + len(p) - 1)
-        for i, x in enumerate(out):
-            if x:
-                for j, y in enumerate(p):
-                    if y:
-                        prod[i + j] += x * y
-        out = prod
-    return out
-
-
-def _padd(p: list, q: list, k: int = 1) -> list:
-    """``p + k q`` for coefficient lists (lowest degree first)."""
-    n = max(len(p), len(q))
-    return [(p[i] if i < len(p) else 0) + k * (q[i] if i < len(q) else 0) for i in range(n)]
 
 
 def spectral_curve(J: ArrayLike, M: ArrayLike, u: ArrayLike, *, tol: float = 1e-9) -> SpectralCurve:
