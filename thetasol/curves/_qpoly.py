@@ -117,8 +117,11 @@ def _prem(a: list, b: list) -> list:
 
 
 def gcd_primitive(a: list, b: list) -> list:
-    """A gcd over Q of two non-zero integer lists, primitive (primitive pseudo-remainder sequence)."""
+    """A gcd over Q of two non-zero integer lists, primitive (primitive pseudo-remainder sequence), or
+    ``[1]`` at once where their gcd modulo ``_P`` is constant (the usual case: coprime)."""
     a, b = _primitive(_trim(a)), _primitive(_trim(b))
+    if len(a) == 1 or len(b) == 1 or (a[-1] % _P and b[-1] % _P and _mod_gcd_degree(a, b) == 0):
+        return [1]
     if len(a) < len(b):
         a, b = b, a
     while b != [0]:
@@ -146,11 +149,9 @@ def has_common_factor(polys: list) -> bool:
     polys = [_trim(p) for p in polys if any(p)]
     g = polys[0]
     for p in polys[1:]:
-        if len(g) == 1 or len(p) == 1:
-            return False
-        if g[-1] % _P and p[-1] % _P and _mod_gcd_degree(g, p) == 0:
-            return False
         g = gcd_primitive(g, p)
+        if len(g) == 1:
+            return False
     return len(g) > 1
 
 
@@ -158,11 +159,7 @@ def square_free_part(a: list, lead: Fraction) -> list[Fraction]:
     """The square-free part over Q of the non-constant integer list ``a`` with leading coefficient ``lead``
     (ascending Fractions)."""
     a = _trim(a)
-    da = _derivative(a)
-    if a[-1] % _P and da[-1] % _P and _mod_gcd_degree(a, da) == 0:
-        q = [Fraction(x) for x in a]
-    else:
-        g = gcd_primitive(a, da)
-        q = _exact_quotient(a, g) if len(g) > 1 else [Fraction(x) for x in a]
+    g = gcd_primitive(a, _derivative(a))
+    q = _exact_quotient(a, g) if len(g) > 1 else [Fraction(x) for x in a]
     scale = lead / q[-1]
     return [c * scale for c in q]
