@@ -41,9 +41,10 @@ BLOCK_CAP = 1024
 #: generic body (288 phases), 4.2 against 4.6 on symmetric_oblate (46); four times on the generic body
 #: and one on near_unstable_equilibrium (1418) break even.
 FEW_PRODUCTS = 512
-#: From this many times on, :meth:`FlowTheta.tables` forms its powers column by column (one numpy call
-#: per column) instead of by cumprod along short rows: the same products, 2x faster on blocks of 1024
-#: times (generic body 0.11 against 0.23 us per time), slower below ~100 times.
+#: From this many times on, :meth:`FlowTheta.tables` forms its powers along the times
+#: (:meth:`FlowTheta.table_rows`, one numpy call per power) instead of by cumprod along short rows: the
+#: same products, 2x faster on blocks of 1024 times (generic body 0.11 against 0.23 us per time), slower
+#: below ~100 times.
 COLUMN_POWERS = 128
 #: From this many times on, and for up to :data:`ROWS_MAX_PHASES` phases, :meth:`FlowTheta.__call__`
 #: forms the phases as rows, one per phase along the times (:meth:`FlowTheta.phase_rows`), and the matrix
@@ -333,23 +334,17 @@ class FlowTheta:
         n = phi.shape[0]
         if n == 1:        # one exp call on the entries: fewer numpy calls than the products of one row
             return np.exp(TWO_PI_I * (phi.take(self._k_owner, axis=1) * self._k_all))
+        if n >= COLUMN_POWERS:     # the same products along the times (cumprod's short rows: ~7 ns an entry)
+            return self.table_rows(phi).T
         base = np.exp(TWO_PI_I * phi)                                   # (n, r)
         tab = np.empty((n, self._k_all.size), complex)
         for i, (sl, z) in enumerate(self._zero_cols):
             tab[:, z] = 1.0
-            if n < COLUMN_POWERS:
-                col = base[:, i:i + 1]
-                if sl.stop > z + 1:
-                    np.cumprod(np.broadcast_to(col, (n, sl.stop - z - 1)), axis=1, out=tab[:, z + 1:sl.stop])
-                if z > sl.start:
-                    tab[:, sl.start:z] = np.cumprod(np.broadcast_to(col.conj(), (n, z - sl.start)), axis=1)[:, ::-1]
-                continue
-            # many times: the same products column by column (cumprod's short rows cost ~7 ns an entry)
-            for step, stop, e in ((1, sl.stop, base[:, i]), (-1, sl.start - 1, base[:, i].conj())):
-                if stop != z + step:
-                    tab[:, z + step] = e
-                for k in range(z + 2 * step, stop, step):
-                    np.multiply(tab[:, k - step], e, out=tab[:, k])
+            col = base[:, i:i + 1]
+            if sl.stop > z + 1:
+                np.cumprod(np.broadcast_to(col, (n, sl.stop - z - 1)), axis=1, out=tab[:, z + 1:sl.stop])
+            if z > sl.start:
+                tab[:, sl.start:z] = np.cumprod(np.broadcast_to(col.conj(), (n, z - sl.start)), axis=1)[:, ::-1]
         return tab
 
     def turns(self, t: np.ndarray) -> np.ndarray:
