@@ -84,8 +84,7 @@ def velocity_at_infinity(curve: SpectralCurve, nums: Sequence[sp.Expr]) -> np.nd
     relative spin 4e-4 (measured against a 40-digit contour integral), a rate error of U.
     """
     E, w = curve.x, curve.y
-    C = curve.coefficients                              # R = sum C[k, l] E^k (w - shift)^l, exact floats
-    lc = float(C[0, -1]) if not np.any(C[1:, -1]) else float(sp.Poly(curve.polynomial(), w).LC())
+    lc = float(curve.coefficients[0, -1])               # the w^3 term of det(L(E) - w): -1, for every E
     x = np.asarray(curve.J2, float)                     # exact J_j^2 (snapped), not read off the places
     # the weight-2 part of each numerator: its E^2 and w coefficients (complex: on a symmetric body's
     # normalization the differentials come from the adjoint conditions)
