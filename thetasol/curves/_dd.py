@@ -117,9 +117,10 @@ def _horner(C, z, deriv=False):
     factors [[Re z, Im z], [-Im z, Re z]] and two sums: the elementwise operations of
     :func:`thetasol.core.dd.cdd_mul` and ``cdd_add`` (the same bits), with z split once per call and
     each partial sum once per step (``cdd_mul`` splits every part once per product it enters): fewer
-    passes over the arrays, and a quarter of the numpy calls.  Calls of a set-up replayed (best of 20): 264 pairs of a cubic with its
-    derivative 0.34 -> 0.20 ms, 964 nodes of the degree-6 coefficients 2.2 -> 1.6 ms; a single step
-    on 2892 x 8 points 1.0 -> 1.3 ms (the stacking does not pay for one step).
+    passes over the arrays, and a quarter of the numpy calls.  Calls of a set-up replayed (best of 20),
+    stacked against one cdd product per step: 264 pairs of a cubic with its derivative 0.20 against
+    0.34 ms, 964 nodes of the degree-6 coefficients 1.6 against 2.2 ms; a single step on 2892 x 8
+    points 1.3 against 1.0 ms (the stacking does not pay for one step).
     """
     n = C[0].shape[-1] - 1
     # Every factor of the products (partial sums of the value and the derivative, parts of z) is

@@ -156,7 +156,7 @@ def _quadratic_form(m: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """``row_sums((m @ tau) * m)`` for real points m (n, g): the same products from two real matrix
     products (the complex product of real m has the real products as its parts, and the complex
     multiplication by real m gives ``Re * m`` and ``Im * m``), summed in the order of the complex sum,
-    without converting m to complex twice (1.2 -> 0.6 ms for near_unstable_equilibrium's 57 000 terms)."""
+    without converting m to complex twice (0.6 against 1.2 ms for near_unstable_equilibrium's 57 000 terms)."""
     P = np.empty(m.shape, complex)
     P.real = (m @ tau.real) * m
     P.imag = (m @ tau.imag) * m

@@ -239,9 +239,10 @@ def exact_exponents(curve: SpectralCurve, P0: Sequence[Place], slopes: Sequence[
     exact values still satisfy the form and the relation with ``U`` only to ~1e-16 (``nu_sk - nu_s0 -
     nu_0k + nu_00``: 1.1e-16 on symmetric_oblate), which as phases ``nu t`` would make the first integrals
     drift by 1.9e-11 at ``t = 1e6``: hence the integers and rates, from which the evaluator builds the
-    phases (4.9e-15 there, tests/test_one_call.py).  Returns nu (3, 3) and the same exponents as :class:`PhaseRates` (``nu_sk = pi n_sk.U + (dF_s - dG_k) / 2`` exactly,
-    with the integers n of the snapped sums), or None where a relation points at no single n or a node
-    gap is unknown (the fit is then kept).
+    phases (4.9e-15 there, tests/test_one_call.py).  Returns nu (3, 3) and the same exponents as
+    :class:`PhaseRates` (``nu_sk = pi n_sk.U + (dF_s - dG_k) / 2`` exactly, with the integers n of the
+    snapped sums), or None where a relation points at no single n or a node gap is unknown (the fit is
+    then kept).
     """
     swap0 = [s_ for s_, slope in enumerate(slopes) if slope is not None]
     if curve.symmetric_body and gap is None:
