@@ -415,7 +415,7 @@ def flow_evaluator(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
                    ex: Exponents) -> tuple[FlowEvaluator, float]:
     """Stage 5: the evaluator, and the size of the shift correction (module docstring)."""
     b, shift_correction = corrected_shifts(sd, dv, ts, ex)
-    flow = FlowTheta(sd.tau, sd.U[:sd.rdim], np.concatenate([b, ts.d[:1]]))   # the three d_k are equal
+    flow = FlowTheta(sd.tau, sd.U[:sd.rdim], np.concatenate([b, ts.d[None, :]]))
     eb = flow.e[:9].reshape(3, 3)
     amp = ex.means.rho * np.exp(eb - flow.e[9:][None, :])             # rho theta(d) exp(e_b - e_d)
     fr = sd.frame

@@ -314,11 +314,11 @@ def _cauchy_data(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts) -> 
     circles = circle_rows(sd, dv, (dv.radius, 0.5 * dv.radius))
     rows = auxiliary_points(sd, dv)
     A = np.concatenate([c[2] for c in circles] + [rows[2]])
-    n_d, g = len(ts.d), ts.d.shape[1]
-    z = np.concatenate([ts.d, (A[:, None, :] - ts.e[None, :, :]).reshape(-1, g)])
+    g = ts.d.shape[0]
+    z = np.concatenate([ts.d[None, :], (A[:, None, :] - ts.e[None, :, :]).reshape(-1, g)])
     e_, v_, g_ = sd.theta.jet(z, order=1, separated=True)
-    theta_d = (e_[:n_d], v_[:n_d], (g_[:n_d] @ sd.U) / v_[:n_d])
-    jets = [x[n_d:].reshape((len(A), 3) + x.shape[1:]) for x in (e_, v_, g_)]
+    theta_d = tuple(np.repeat(x, 3) for x in (e_[:1], v_[:1], (g_[:1] @ sd.U) / v_[:1]))   # every k alike
+    jets = [x[1:].reshape((len(A), 3) + x.shape[1:]) for x in (e_, v_, g_)]
     nc = len(A) - len(rows[2])
     means, meansb = means_from_theta(circles, [x[:nc] for x in jets], theta_d, sd.U)
     aux = auxiliary_nu(rows, [x[nc:] for x in jets], sd.U, theta_d[2])

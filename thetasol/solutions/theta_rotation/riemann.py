@@ -53,9 +53,9 @@ class ThetaShifts:
         Degree of the canonical divisor used (``2g - 2``).
     e : ndarray, shape (3, g)
         ``e_k`` reduced modulo the lattice: the numerators are ``theta(A(P) + t U - e_k)``.
-    d : ndarray, shape (3, g)
-        ``d_k = A(inf_k) - e_k`` reduced: the denominators are ``theta(d_k + t U)``.  The three rows
-        are equal (``d_k = sum_s A(P_s) - A(D0) - K`` for every k, module docstring).
+    d : ndarray, shape (g,)
+        ``d_k = A(inf_k) - e_k`` reduced, the same for every k (``sum_s A(P_s) - A(D0) - K``, module
+        docstring): the denominators are ``theta(d + t U)``.
     """
 
     K: np.ndarray
@@ -195,5 +195,5 @@ def theta_shifts(sd: SpectralData, dv: EigenvectorDivisors) -> ThetaShifts:
             e[k] = reduce_lattice(dv.AZ[k] + K, tau)
         else:
             e[k] = reduce_lattice(dv.AD0 - dv.AP0.sum(axis=0) + sd.abel([sd.Pinf[k]])[0] + K, tau)
-    d = np.repeat(reduce_lattice(dv.AP0.sum(axis=0) - dv.AD0 - K, tau)[None, :], 3, axis=0)
+    d = reduce_lattice(dv.AP0.sum(axis=0) - dv.AD0 - K, tau)
     return ThetaShifts(K=K, canonical_degree=int(sum(canon.values())), e=e, d=d)
