@@ -9,7 +9,7 @@ import numpy as np
 
 from thetasol.solutions.base import ClosedFormUnavailable
 
-__all__ = ["SNAP_TOL", "sorted_principal_frame", "symmetry_axis"]
+__all__ = ["SNAP_TOL", "sorted_principal_frame", "symmetric_without_spin", "symmetry_axis"]
 
 
 #: Relative size below which a near-degeneracy of the data is snapped to an exact one: 8 ulps, the
@@ -36,3 +36,24 @@ def symmetry_axis(Jp: np.ndarray):
         raise ClosedFormUnavailable(f"nearly spherical body (principal second moments {Jp} equal to "
                                     f"{SNAP_TOL:g}): use thetasol.integrate_rotation")
     return 2 if Jp[1] - Jp[0] <= SNAP_TOL * Jp[-1] else 0
+
+
+def symmetric_without_spin(J: np.ndarray, a: np.ndarray, omega0: np.ndarray):
+    """``(Jp, P, axis)`` when the body is symmetric, ``a`` is not isotropic and ``omega0`` has no axial
+    part (relative to ``|omega0| + sqrt|a|``, within :data:`SNAP_TOL`): Neumann's case of
+    :func:`thetasol.solve_rotation`; else None.  Here, apart from the Neumann model, so that the
+    dispatcher imports that model's ~30 ms of modules only for the bodies it solves."""
+    Jp, P = sorted_principal_frame(J)
+    if Jp[-1] - Jp[0] <= SNAP_TOL * Jp[-1]:
+        return None                                    # spherical: no torque
+    axis = symmetry_axis(Jp)
+    if axis is None:
+        return None
+    ev = np.linalg.eigvalsh(a)
+    if ev[-1] - ev[0] <= SNAP_TOL * np.abs(ev).max():
+        return None                                    # isotropic a: no torque
+    w0p = P.T @ omega0
+    scale = np.linalg.norm(w0p) + np.sqrt(np.abs(ev).max())
+    if abs(w0p[axis]) > SNAP_TOL * scale:
+        return None
+    return Jp, P, axis

@@ -31,9 +31,7 @@ import numpy as np
 from thetasol.core.periodic import eval_series, integrated, powers, refined_fft, sum_series
 from thetasol.mechanics.equations import invariants as _invariants
 from thetasol.solutions._symmetry import (
-    SNAP_TOL,
-    sorted_principal_frame as _principal_frame,
-    symmetry_axis as _symmetry_axis,
+    symmetric_without_spin,
 )
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.neumann import (
@@ -317,25 +315,6 @@ def _attitude_motion(model, x0: np.ndarray, e10: np.ndarray):
 
 # -- set-up ----------------------------------------------------------------------------------------
 
-def _symmetric_no_spin(J: np.ndarray, a: np.ndarray, omega0: np.ndarray):
-    """(Jp, P, axis) when the body is symmetric, a is not isotropic and omega0 has no axial part
-    (relative to |omega0| + sqrt|a|, within theta_rotation's SNAP_TOL); else None."""
-    Jp, P = _principal_frame(J)
-    if Jp[-1] - Jp[0] <= SNAP_TOL * Jp[-1]:
-        return None                                    # spherical: no torque
-    axis = _symmetry_axis(Jp)
-    if axis is None:
-        return None
-    ev = np.linalg.eigvalsh(a)
-    if ev[-1] - ev[0] <= 8 * _EPS * np.abs(ev).max():
-        return None                                    # isotropic a: no torque
-    w0p = P.T @ omega0
-    scale = np.linalg.norm(w0p) + np.sqrt(np.abs(ev).max())
-    if abs(w0p[axis]) > SNAP_TOL * scale:
-        return None
-    return Jp, P, axis
-
-
 @dataclass(frozen=True)
 class _Reduced:
     """The body reduced to its axis: principal frame P, axes (a1, a2, ax), the eigen-decomposition
@@ -375,7 +354,7 @@ def _reduce(Jp, P, ax, a, Q0, omega0) -> _Reduced:
 def solve_neumann_rotation(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray,
                            dps: int | None = None) -> NeumannRotation | None:
     """The Neumann branch of :func:`thetasol.solve_rotation` (None when it does not apply)."""
-    found = _symmetric_no_spin(J, a, omega0)
+    found = symmetric_without_spin(J, a, omega0)
     if found is None:
         return None
     if dps is not None:

@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.threads import single_blas_thread
 from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
-from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame, symmetry_axis
+from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame, symmetric_without_spin, symmetry_axis
 from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 
 __all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]
@@ -70,8 +70,8 @@ def _pendulum_branch(J, a, Q0, omega0, dps):
 
 def _neumann_branch(J, a, Q0, omega0, dps):
     # symmetric body without axial spin: the axis moves as in Neumann's problem (tacnode of (4.12));
-    # a body with three distinct moments does not import its ~30 ms of modules
-    if symmetry_axis(sorted_principal_frame(J)[0]) is None:
+    # other bodies do not import its ~30 ms of modules
+    if symmetric_without_spin(J, a, omega0) is None:
         return None
     from thetasol.solutions.neumann_rotation import solve_neumann_rotation
 
