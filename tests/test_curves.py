@@ -13,6 +13,7 @@ import mpmath
 import numpy as np
 import pytest
 import sympy as sp
+from hypothesis import given, settings, strategies as st
 
 from thetasol.curves.plane_curve import PlaneCurve
 
@@ -102,6 +103,32 @@ def test_holomorphic_differentials(name, expected):
         return Q.reshape(P.shape[0], -1)
     M = np.vstack([pad(P1), pad(P2)])
     assert np.linalg.matrix_rank(M, tol=1e-9) == C.genus
+
+
+_MONOMIALS = [x ** i * y ** j for i in range(4) for j in range(3)]
+_COEFFS = st.one_of(
+    st.fractions(max_denominator=50).filter(bool).map(lambda q: sp.Rational(q.numerator, q.denominator)),
+    st.floats(-10, 10, allow_nan=False).filter(bool).map(sp.Float),
+    st.integers(1, 9).map(lambda k: sp.I * sp.Rational(k, 7)))
+
+
+@given(st.lists(st.tuples(st.sampled_from(range(len(_MONOMIALS))), _COEFFS, st.booleans()),
+                min_size=1, max_size=8, unique_by=lambda e: e[0]))
+@settings(max_examples=200, deadline=None)
+def test_expanded_sum_is_sympys_expanded_add(entries):
+    """The numerators of the holomorphic differentials are built without evaluating an Add (whose first
+    evaluation imports sympy.tensor.tensor); they must be the very expressions sympy's Add and expand
+    give: equal, with the same hash and the same argument order (the curve's caches key on them)."""
+    from thetasol.curves._places import expanded_sum
+
+    terms = []
+    for k, c, imaginary_too in entries:
+        terms.append(c * _MONOMIALS[k])
+        if imaginary_too:
+            terms.append(sp.I * c * _MONOMIALS[k])
+    got, want = expanded_sum(terms), sp.expand(sp.Add(*terms))
+    assert sp.srepr(got) == sp.srepr(want)
+    assert got == want and hash(got) == hash(want)
 
 
 # ---------------------------------------------------------------------- Abel map, Riemann constant

@@ -437,27 +437,41 @@ def _nice_basis(N, candidates, x, y):
             if rr != piv_row:
                 B[rr] -= B[rr, col] * B[piv_row]
         piv_row += 1
-    out = []
     from fractions import Fraction
+    out = []
     for row in B:
-        expr = 0
+        terms = []
         for c, cand in zip(row, candidates):
             if abs(c) < 1e-10:
                 continue
-            re, im = c.real, c.imag
-            parts = []
-            for v in (re, im):
+            for v, unit in ((c.real, sp.Integer(1)), (c.imag, sp.I)):
                 if abs(v) < 1e-10:
-                    parts.append(sp.Integer(0))
                     continue
                 fr = Fraction(v).limit_denominator(10000)
                 if abs(float(fr) - v) < 1e-11 * max(1.0, abs(v)):
-                    parts.append(sp.Rational(fr.numerator, fr.denominator))
+                    coef = sp.Rational(fr.numerator, fr.denominator)
                 else:
-                    parts.append(sp.Float(v))
-            expr += (parts[0] + sp.I * parts[1]) * sp.sympify(cand)
-        out.append(sp.expand(expr))
+                    coef = sp.Float(v)
+                terms.append(unit * coef * sp.sympify(cand))
+        out.append(expanded_sum(terms))
     return out
+
+
+def expanded_sum(terms):
+    """``sympy.expand(sympy.Add(*terms))`` for terms that are numbers times distinct monomials (distinct
+    products of powers of symbols and ``I``): the same expression, built in Add's canonical order
+    (the number first, the rest by ``Basic.compare``) without evaluating an Add, whose first
+    evaluation in a process imports ``sympy.tensor.tensor`` (25-35 ms of the set-up of the first
+    nodal or symmetric body; tests/test_curves.py checks the identity)."""
+    import functools
+
+    import sympy as sp
+    numbers = [t for t in terms if t.is_Number]
+    rest = sorted((t for t in terms if not t.is_Number), key=functools.cmp_to_key(sp.Basic.compare))
+    args = ([sum(numbers[1:], numbers[0])] if numbers else []) + rest
+    if not args:
+        return sp.Integer(0)
+    return args[0] if len(args) == 1 else sp.Add(*args, evaluate=False)
 
 
 def regular_samples(curve, x0, y0, M=M_SITE):
