@@ -8,6 +8,7 @@ T in Sp(2g, Z) (or GL(2g, Z) where the reference's cycles are not symplectic).
 import glob
 import json
 import os
+from fractions import Fraction
 
 import mpmath
 import numpy as np
@@ -119,7 +120,7 @@ def test_expanded_sum_is_sympys_expanded_add(entries):
     """The numerators of the holomorphic differentials are built without evaluating an Add (whose first
     evaluation imports sympy.tensor.tensor); they must be the very expressions sympy's Add and expand
     give: equal, with the same hash and the same argument order (the curve's caches key on them)."""
-    from thetasol.curves._places import expanded_sum
+    from thetasol.curves._numerators import expanded_sum
 
     terms = []
     for k, c, imaginary_too in entries:
@@ -129,6 +130,66 @@ def test_expanded_sum_is_sympys_expanded_add(entries):
     got, want = expanded_sum(terms), sp.expand(sp.Add(*terms))
     assert sp.srepr(got) == sp.srepr(want)
     assert got == want and hash(got) == hash(want)
+
+
+_PARTS = st.one_of(st.just(0), st.fractions(max_denominator=50),
+                   st.floats(-10, 10, allow_nan=False).filter(lambda v: v != 0 and float(Fraction(v)) == v))
+
+
+@given(st.lists(st.tuples(st.integers(0, 4), st.integers(0, 3), _PARTS, _PARTS), min_size=1, max_size=6,
+                unique_by=lambda e: e[:2]))
+@settings(max_examples=200, deadline=None)
+def test_numerator_parses_as_its_sympy_form(entries):
+    """A Numerator (exact coefficients, parsed without sympy) gives the curve engine the exact form and
+    coefficient array that its sympy expression gives, and to_sympy is that expression.  The array holds
+    each part correctly rounded; sympy's complex() of an imaginary rational can be 1 ulp off it (77/23 i).
+    A numerator with a float coefficient is parsed by sympy over the floats, which rounds its rational
+    coefficients too (to within an ulp); the Numerator keeps them exact."""
+    from thetasol.curves._numerators import parse_numerators
+    from thetasol.curves.plane_curve import Numerator
+
+    def sym(v):
+        return sp.Float(v) if isinstance(v, float) else sp.Rational(Fraction(v).numerator, Fraction(v).denominator)
+
+    terms = [(i, j, re if isinstance(re, float) else Fraction(re), im if isinstance(im, float) else Fraction(im))
+             for i, j, re, im in entries]
+    g = Numerator.from_terms(terms)
+    expr = sp.expand(sp.Add(*[sym(re) * x ** i * y ** j + sp.I * sym(im) * x ** i * y ** j
+                              for i, j, re, im in terms]))
+    assert sp.srepr(g.to_sympy(x, y)) == sp.srepr(expr)
+    if expr == 0:
+        return
+    got, want = parse_numerators([g], lambda: (x, y)), parse_numerators([expr], lambda: (x, y))
+    assert got.shape == want.shape
+    rounded = np.zeros(got.shape, complex)
+    for i, j, re, im in g.terms:
+        rounded[0, i, j] = complex(float(re), float(im))
+    assert np.array_equal(got.view(np.ndarray), rounded)
+    assert np.all(np.abs(got - want) <= np.spacing(np.abs(rounded)) * 1.0001)
+    assert got.exact == [{(i, j): (Fraction(re), Fraction(im)) for i, j, re, im in g.terms}]
+    if any(isinstance(v, float) for _, _, re, im in g.terms for v in (re, im)):
+        for i, j, re, im in g.terms:            # sympy's floats, within an ulp of the exact parts
+            assert all(abs(a - Fraction(b)) <= abs(Fraction(b)) * Fraction(1, 2 ** 52)
+                       for a, b in zip(want.exact[0][(i, j)], (re, im)))
+    else:
+        assert want.exact == got.exact
+    assert all(g.coefficient(i, j) == rounded[0, i, j] for i, j in g.monomials)
+
+
+def test_spectral_set_up_numerators_are_the_public_differentials():
+    """The theta-function set-up reads the holomorphic differentials as Numerators; they are the public
+    sympy numerators (a smooth, a nodal and a symmetric-body curve)."""
+    from thetasol.curves.spectral import spectral_curve
+
+    u = np.diag([0.3, -0.2, 0.5])
+    M = np.array([[0, -0.4, 0.2], [0.4, 0, -0.7], [-0.2, 0.7, 0]])
+    for J, uu in ((np.diag([1.0, 1.5, 2.2]), u), (np.diag([1.0, 1.5, 2.2]), np.diag([0.3, 0.3, 0.5])),
+                  (np.diag([1.0, 1.0, 2.2]), u)):
+        C = spectral_curve(J, M, uu)
+        nums = C.holomorphic_numerators()
+        assert len(nums) == C.genus
+        assert [sp.srepr(g.to_sympy(C.x, C.y)) for g in nums] == [sp.srepr(e) for e in C.holomorphic_differentials()]
+        assert np.array_equal(np.asarray(C.period_matrix()), np.asarray(C.period_matrix(C.holomorphic_differentials())))
 
 
 # ---------------------------------------------------------------------- Abel map, Riemann constant

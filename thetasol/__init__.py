@@ -65,7 +65,7 @@ _group("thetasol.scenes.gyrostat_scene", "solve_gyrostat_configuration", "Gyrost
 # the machinery: theta functions and curves
 _group("thetasol.theta.riemann", "RiemannTheta", "riemann_theta", "riemann_theta_separated", "siegel_reduce")
 _group("thetasol.theta.grid", "theta_grid", "ThetaGrid")
-_group("thetasol.curves.plane_curve", "PlaneCurve", "Place")
+_group("thetasol.curves.plane_curve", "Numerator", "PlaneCurve", "Place")
 _group("thetasol.curves.hyperelliptic", "HyperellipticCurve")
 _group("thetasol.curves.spectral", "SpectralCurve", "spectral_curve")
 
@@ -91,7 +91,7 @@ def __dir__() -> list[str]:
 if TYPE_CHECKING:
     from thetasol import reference
     from thetasol.curves.hyperelliptic import HyperellipticCurve
-    from thetasol.curves.plane_curve import Place, PlaneCurve
+    from thetasol.curves.plane_curve import Numerator, Place, PlaneCurve
     from thetasol.curves.spectral import SpectralCurve, spectral_curve
     from thetasol.ensembles import solve_many
     from thetasol.integrators.fixed_point import integrate_fixed_point

@@ -20,8 +20,11 @@ integrals into places are summed, below 1e-19 (64 left 2e-10 of the largest term
 """
 from __future__ import annotations
 
+from fractions import Fraction
+
 import numpy as np
 
+from thetasol.curves._numerators import Numerator
 from thetasol.curves._quad import Piece
 
 # samples per turn.  The circle has radius half the distance to the next critical value, so in the
@@ -374,6 +377,19 @@ def differential_samples(curve, ld, cycle, P):
     return t, g / fy * dxdt
 
 
+def holomorphic_basis(curve, pts, sites=None) -> tuple:
+    """Numerators of a basis of holomorphic differentials: the monomials ``x^(i-1) y^(j-1)`` of the
+    interior points ``pts`` of the Newton polygon when they are as many as the genus, else the
+    subspace of their span that :func:`adjoint_subspace` selects (``sites`` as there)."""
+    g = curve.genus
+    cands = tuple(Numerator.monomial(i - 1, j - 1) for i, j in pts)
+    if len(pts) == g:
+        return cands
+    if len(pts) < g:
+        raise RuntimeError(f"genus {g} exceeds the Newton polygon bound {len(pts)} (internal error)")
+    return tuple(adjoint_subspace(curve, cands, sites))
+
+
 def adjoint_subspace(curve, candidates, sites=None):
     """Combinations of the candidate numerators whose differentials are holomorphic at every place.
 
@@ -416,12 +432,12 @@ def adjoint_subspace(curve, candidates, sites=None):
             raise RuntimeError("adjoint conditions are numerically ambiguous (singular value gap "
                                f"{gap:.2g}): the curve is nearly singular")
         N = Vh.conj().T[:, null]  # (ncand, g)
-    return _nice_basis(N, candidates, curve.x, curve.y)
+    return _nice_basis(N, candidates)
 
 
-def _nice_basis(N, candidates, x, y):
-    """Reduced row echelon form of the null space, cleaned to rationals where possible."""
-    import sympy as sp
+def _nice_basis(N, candidates):
+    """Reduced row echelon form of the null space, cleaned to rationals where possible: Numerators
+    (the candidates are monomials)."""
     B = N.T.copy()  # (g, ncand)
     g, m = B.shape
     piv_row = 0
@@ -437,41 +453,24 @@ def _nice_basis(N, candidates, x, y):
             if rr != piv_row:
                 B[rr] -= B[rr, col] * B[piv_row]
         piv_row += 1
-    from fractions import Fraction
     out = []
     for row in B:
         terms = []
         for c, cand in zip(row, candidates):
             if abs(c) < 1e-10:
                 continue
-            for v, unit in ((c.real, sp.Integer(1)), (c.imag, sp.I)):
-                if abs(v) < 1e-10:
-                    continue
-                fr = Fraction(v).limit_denominator(10000)
-                if abs(float(fr) - v) < 1e-11 * max(1.0, abs(v)):
-                    coef = sp.Rational(fr.numerator, fr.denominator)
-                else:
-                    coef = sp.Float(v)
-                terms.append(unit * coef * sp.sympify(cand))
-        out.append(expanded_sum(terms))
+            (i, j, _, _), = cand.terms
+            terms.append((i, j, _nice_number(c.real), _nice_number(c.imag)))
+        out.append(Numerator.from_terms(terms))
     return out
 
 
-def expanded_sum(terms):
-    """``sympy.expand(sympy.Add(*terms))`` for terms that are numbers times distinct monomials (distinct
-    products of powers of symbols and ``I``): the same expression, built in Add's canonical order
-    (the number first, the rest by ``Basic.compare``) without evaluating an Add, whose first
-    evaluation in a process imports ``sympy.tensor.tensor`` (25-35 ms of the set-up of the first
-    nodal or symmetric body; tests/test_curves.py checks the identity)."""
-    import functools
-
-    import sympy as sp
-    numbers = [t for t in terms if t.is_Number]
-    rest = sorted((t for t in terms if not t.is_Number), key=functools.cmp_to_key(sp.Basic.compare))
-    args = ([sum(numbers[1:], numbers[0])] if numbers else []) + rest
-    if not args:
-        return sp.Integer(0)
-    return args[0] if len(args) == 1 else sp.Add(*args, evaluate=False)
+def _nice_number(v: float) -> Fraction | float:
+    """``v`` as a Fraction of denominator <= 10000 within 1e-11 relative, else the float; 0 below 1e-10."""
+    if abs(v) < 1e-10:
+        return Fraction(0)
+    fr = Fraction(v).limit_denominator(10000)
+    return fr if abs(float(fr) - v) < 1e-11 * max(1.0, abs(v)) else float(v)
 
 
 def regular_samples(curve, x0, y0, M=M_SITE):

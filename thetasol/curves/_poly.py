@@ -62,6 +62,15 @@ def to_fraction_pair(c) -> tuple[Fraction, Fraction]:
     return out[0], out[1]
 
 
+def sympy_symbol(s):
+    """``s`` if it is a sympy Symbol, else the Symbol named ``s``: curves built from exact coefficients
+    (the spectral curves) name their coordinates, and sympy is imported when a symbol is first asked for."""
+    if isinstance(s, str):
+        import sympy as sp
+        return sp.Symbol(s)
+    return s
+
+
 class CurvePoly:
     """f(x, y) = sum c[i, j] x^i y^j with exact and complex128 coefficients.
 
@@ -112,7 +121,7 @@ class CurvePoly:
         if n == 0:
             raise ValueError(f"f does not involve {y}: it does not define a cover of the {x}-line")
         dx = max(i for i, _ in exact)
-        self.x, self.y = x, y
+        self._xy = (x, y)
         self.exact = exact
         self.n = n
         self.dx = dx
@@ -134,6 +143,9 @@ class CurvePoly:
         self._sympy = None
 
     # ------------------------------------------------------------------ sympy / exact
+    x = property(lambda self: sympy_symbol(self._xy[0]), doc="The first coordinate (sympy Symbol).")
+    y = property(lambda self: sympy_symbol(self._xy[1]), doc="The second coordinate (sympy Symbol).")
+
     def sympy_expr(self):
         import sympy as sp
         I = sp.I

@@ -20,6 +20,7 @@ degenerate curves.
 """
 from __future__ import annotations
 
+import sys
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
@@ -27,11 +28,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.curves._homology import LiftedGraph, symplectic_basis
-from thetasol.curves._numerators import cached_numerators
+from thetasol.curves._numerators import Numerator, cached_numerators
 from thetasol.curves._paths import CellGraph
 from thetasol.curves._places import (
-    adjoint_subspace,
     expansion,
+    holomorphic_basis,
     laurent,
     local_of,
     local_sites,
@@ -44,14 +45,14 @@ from thetasol.curves._places import (
     series_eval,
     series_integral,
 )
-from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections
+from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections, sympy_symbol
 from thetasol.curves._quad import Piece, Tracker, shaped_integrals
 
 if TYPE_CHECKING:
     import mpmath
     import sympy
 
-__all__ = ["PlaneCurve", "Place"]
+__all__ = ["Numerator", "PlaneCurve", "Place"]
 
 INF = complex("inf")
 
@@ -119,7 +120,7 @@ class Place:
         """
         return expansion(self.curve, self, None, int(order), "y")
 
-    def expand(self, numerator: str | sympy.Expr, order: int = 8,
+    def expand(self, numerator: str | sympy.Expr | Numerator, order: int = 8,
                differential: bool = True) -> tuple[np.ndarray, np.ndarray]:
         """Expansion of g(x, y) dx / f_y (differential=True) or of the function g(x, y) at this place.
 
@@ -175,7 +176,7 @@ class PlaneCurve:
     def __init__(self, f, x, y, *, _extra_sites=None, _tol=1e-15, _poly=None):
         # _poly: the curve already as a CurvePoly (a subclass with exact coefficients skips sympy's parsing)
         self._poly = CurvePoly(f, x, y) if _poly is None else _poly
-        self.x, self.y = x, y
+        self._xy = (x, y)
         self.n = self._poly.n
         if not self._poly.x_content_is_constant():
             raise ValueError("f is reducible: a polynomial in x alone divides it")
@@ -295,20 +296,23 @@ class PlaneCurve:
         inv = np.argsort(m)
         return inv[perm_at_v[m]]
 
+    x = property(lambda self: sympy_symbol(self._xy[0]), doc="The coordinate x (sympy Symbol).")
+    y = property(lambda self: sympy_symbol(self._xy[1]), doc="The coordinate y (sympy Symbol).")
+
     # ------------------------------------------------------------------ differentials
     def _numerators(self, exprs):
-        return cached_numerators(self._cache, exprs, self.x, self.y)
+        return cached_numerators(self._cache, exprs, lambda: (self.x, self.y))
 
     def polynomial(self) -> sympy.Expr:
         """The curve's polynomial f(x, y) as an exact sympy expression (rational coefficients)."""
         return self._poly.sympy_expr()
 
-    def differential_values(self, numerators: Sequence[str | sympy.Expr], x: ArrayLike, y: ArrayLike) -> np.ndarray:
+    def differential_values(self, numerators: Sequence[str | sympy.Expr | Numerator], x: ArrayLike, y: ArrayLike) -> np.ndarray:
         """Values ``g_d(x, y) / f_y(x, y)`` of the differentials ``g_d dx / f_y`` at points of the curve.
 
         Parameters
         ----------
-        numerators : sequence of sympy expressions or str
+        numerators : sequence of Numerator, sympy expressions or str
             Polynomials ``g_d`` in ``x``, ``y`` (e.g. :meth:`holomorphic_differentials`).
         x, y : array_like, same shape
             Points ``(x, y)`` on the curve (``y`` a root of ``f(x, .)``).
@@ -338,19 +342,18 @@ class PlaneCurve:
         their number equals the genus (f nondegenerate for its Newton polygon); otherwise the
         subspace of their span that satisfies the adjoint conditions at the singular points
         (Laurent coefficients at every place, or at those a subclass knows to hold the singular points).
+        The same numerators as exact :class:`Numerator` objects: :meth:`holomorphic_numerators`.
+        """
+        return [g.to_sympy(self.x, self.y) for g in self.holomorphic_numerators()]
+
+    def holomorphic_numerators(self) -> tuple[Numerator, ...]:
+        """:meth:`holomorphic_differentials` as :class:`Numerator` objects (exact coefficients; no sympy).
+
+        Every method that takes numerators accepts them, and the engine's own default is this basis.
         """
         if "holo" not in self._cache:
-            pts = self._poly.interior_points()
-            x, y = self.x, self.y
-            g = self.genus
-            if len(pts) == g:
-                diffs = [x ** (i - 1) * y ** (j - 1) for i, j in pts]
-            elif len(pts) > g:
-                diffs = adjoint_subspace(self, [x ** (i - 1) * y ** (j - 1) for i, j in pts], self._singular_sites())
-            else:
-                raise RuntimeError(f"genus {g} exceeds the Newton polygon bound {len(pts)} (internal error)")
-            self._cache["holo"] = diffs
-        return list(self._cache["holo"])
+            self._cache["holo"] = holomorphic_basis(self, self._poly.interior_points(), self._singular_sites())
+        return self._cache["holo"]
 
     def _singular_sites(self):
         """Entries of the local data (-1: infinity) known to hold every singular point; None: unknown."""
@@ -409,13 +412,13 @@ class PlaneCurve:
         self._cache[key] = Pm
         return Pm.copy()
 
-    def period_matrix(self, differentials: Sequence[str | sympy.Expr] | None = None,
+    def period_matrix(self, differentials: Sequence[str | sympy.Expr | Numerator] | None = None,
                       dps: int | None = None) -> np.ndarray | mpmath.matrix:
         """Periods [A | B] (g x 2g complex) of the differentials g dx / f_y over the symplectic basis.
 
         Parameters
         ----------
-        differentials : list of sympy polynomials, optional
+        differentials : sequence of Numerator or sympy polynomials, optional
             Numerators g; default :meth:`holomorphic_differentials`.  Any polynomial numerators are
             accepted (meromorphic differentials give their periods over the same cycles).
         dps : int, optional
@@ -425,11 +428,11 @@ class PlaneCurve:
         if dps is not None:
             if int(dps) != dps or dps < 15:
                 raise ValueError(f"dps must be an integer >= 15, got {dps}")
-            diffs = self.holomorphic_differentials() if differentials is None else list(differentials)
+            diffs = self.holomorphic_numerators() if differentials is None else list(differentials)
             return self._period_matrix_mp(diffs, int(dps))
         key = ("pm", None if differentials is None else tuple(map(str, differentials)))
         if key not in self._cache:
-            diffs = self.holomorphic_differentials() if differentials is None else list(differentials)
+            diffs = self.holomorphic_numerators() if differentials is None else list(differentials)
             a, b, _ = self._homology()
             Iv = self._edge_integrals(self._numerators(diffs))
             PA = (a @ Iv).T
@@ -550,10 +553,12 @@ class PlaneCurve:
     def _parse_targets(self, points):
         """Normalize the input of abel_map: returns (targets, weights, shape) where shape is
         'single', 'list' or 'divisor'."""
-        import sympy as sp
+        # a sympy number can only be given once sympy is loaded: the test does not import it
+        sp = sys.modules.get("sympy")
 
         def is_scalar(v):
-            return isinstance(v, (int, float, complex, np.number)) or (isinstance(v, sp.Basic) and v.is_number)
+            return isinstance(v, (int, float, complex, np.number)) or (
+                sp is not None and isinstance(v, sp.Basic) and v.is_number)
 
         if isinstance(points, Place):
             return [points], None, "single"
@@ -689,7 +694,7 @@ class PlaneCurve:
 
     def _holo_arrays(self):
         if "holoP" not in self._cache:
-            self._cache["holoP"] = self._numerators(self.holomorphic_differentials())
+            self._cache["holoP"] = self._numerators(self.holomorphic_numerators())
         return self._cache["holoP"]
 
     def normalization(self) -> np.ndarray:
@@ -731,7 +736,7 @@ class PlaneCurve:
             raw = raw @ self.normalization().T
         return shaped_integrals(raw, weights, shape)
 
-    def integrate(self, numerators: Sequence[str | sympy.Expr], points: Place | Sequence | Mapping,
+    def integrate(self, numerators: Sequence[str | sympy.Expr | Numerator], points: Place | Sequence | Mapping,
                   base: Place | tuple[complex, complex] | None = None) -> np.ndarray:
         """Integrals of the differentials p dx / f_y (p polynomials) from the base to the points.
 

@@ -202,7 +202,6 @@ class SpectralCurve(PlaneCurve):
     """
 
     def __init__(self, J, M, u, tol):
-        import sympy as sp
         J = np.asarray(J, float)
         evJ, VJ = np.linalg.eigh(J)
         degeneracy = []
@@ -275,7 +274,7 @@ class SpectralCurve(PlaneCurve):
                 for m in range(ll + 1):
                     term = cf * comb(ll, m) * (-shift) ** (ll - m)
                     coef[(kk, m)] = coef.get((kk, m), Fraction(0)) + term
-        E, w = sp.symbols("E w")
+        E, w = "E", "w"                  # sympy Symbols of these names when first asked for
         self.J2 = evJ**2
         self.J = J
         self.M = M

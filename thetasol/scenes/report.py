@@ -232,7 +232,7 @@ def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say
 
 
 def _load_closed_forms(scene: Scene) -> float:
-    """Import the theta-function machinery (and the curve engine's sympy and mpmath) once, if the scene needs it.
+    """Import the theta-function machinery (and the mpmath it uses) once, if the scene needs it.
 
     Seconds spent: a one-off cost per process, reported apart from the split's time as the integrators'
     imports are from theirs.
@@ -240,9 +240,8 @@ def _load_closed_forms(scene: Scene) -> float:
     if rotation_kind(scene.a) == "elliptic":
         return 0.0
     start = time.perf_counter()
-    # sympy imports sympy.tensor.tensor (20-60 ms) at its first symbolic sum, inside the first set-up
-    for name in ("thetasol.solutions.rotation", "thetasol.solutions.theta_rotation", "sympy", "sympy.tensor.tensor",
-                 "mpmath"):
+    # (the set-up itself does not import sympy)
+    for name in ("thetasol.solutions.rotation", "thetasol.solutions.theta_rotation", "mpmath"):
         importlib.import_module(name)
     return time.perf_counter() - start
 

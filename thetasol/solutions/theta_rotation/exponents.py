@@ -18,8 +18,8 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-import sympy as sp
 
+from thetasol.curves.plane_curve import Numerator
 from thetasol.solutions._symmetry import SNAP_TOL
 from thetasol.solutions.base import ClosedFormUnavailable
 from thetasol.solutions.theta_rotation.cauchy import (
@@ -173,7 +173,7 @@ def node_exponent_gap(curve: SpectralCurve, Pinf: Sequence[Place], Jinf: np.ndar
     pair = [j for j in range(3) if np.sum(np.abs(Jinf - Jinf[j]) <= SNAP_TOL * Jinf.max()) == 2]
     if len(pair) != 2:
         raise RuntimeError(f"no node over E = infinity (J at infinity {Jinf}; internal error)")
-    om = curve.x ** 2
+    om = Numerator.monomial(2, 0)                        # E^2
     k0, k1 = pair
     r, pa = third_kind_periods(curve, [Pinf[k0], Pinf[k1], Pinf[3 - k0 - k1]], om, G)
     # sum_j J_j c_j in closed form (Euler-Jacobi, see velocity_at_infinity): the t^0 coefficients
@@ -184,7 +184,7 @@ def node_exponent_gap(curve: SpectralCurve, Pinf: Sequence[Place], Jinf: np.ndar
     return None if snapped is None else (k0, k1, snapped)
 
 
-def third_kind_periods(curve: SpectralCurve, places: Sequence[Place], numerator: sp.Expr, G: np.ndarray) -> tuple:
+def third_kind_periods(curve: SpectralCurve, places: Sequence[Place], numerator: Numerator, G: np.ndarray) -> tuple:
     """(r, p) of the third-kind differential numerator dE / f_w with residues +-r at places[0], places[1]
     (checked: zero at any further place given) and a-periods r p in the adapted basis G."""
     res = []
@@ -259,7 +259,7 @@ def exact_exponents(curve: SpectralCurve, P0: Sequence[Place], slopes: Sequence[
         e.append(np.outer(np.ones(3), -dG / gval))
     if swap0:
         sa, sb = swap0
-        _, pa = third_kind_periods(curve, [P0[sa], P0[sb]], sp.Integer(1), G)
+        _, pa = third_kind_periods(curve, [P0[sa], P0[sb]], Numerator.monomial(0, 0), G)
         zgap = snap_rate(float(f[sa, 0] - f[sb, 0]), float((-(pa @ U)).imag), U, rdim)
         if zgap is None:
             return None

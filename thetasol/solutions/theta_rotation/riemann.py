@@ -19,14 +19,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from thetasol.curves.plane_curve import Numerator
 from thetasol.mechanics.lax import lax_matrix
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.lattice import reduce_lattice
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
 
 if TYPE_CHECKING:
-    import sympy as sp
-
     from thetasol.curves.plane_curve import Place
 
 __all__ = ["ThetaShifts", "theta_shifts"]
@@ -64,7 +63,7 @@ class ThetaShifts:
     d: np.ndarray
 
 
-def zero_order(Pl: Place, numerator: sp.Expr) -> int:
+def zero_order(Pl: Place, numerator: Numerator) -> int:
     """Order of vanishing of numerator dE / f_w at the place (from its expansion).
 
     A coefficient is significant against the largest term c_k t0^k on the sampling circle
@@ -94,7 +93,7 @@ def canonical_divisor(sd: SpectralData) -> dict:
         # and at the places at infinity (simple for distinct J; at a node read off the expansion)
         canon = {Pl: 1 for Pl in P0_reg}
         for Pl in sd.Pinf:
-            canon[Pl] = 1 if not curve.symmetric_body else zero_order(Pl, curve.x)   # curve.x: E
+            canon[Pl] = 1 if not curve.symmetric_body else zero_order(Pl, Numerator.monomial(1, 0))   # E
     if sum(canon.values()) != 2 * g - 2:
         raise RuntimeError(f"canonical divisor of E dE / f_w of degree {sum(canon.values())} on genus {g} "
                            "(orders read off the expansions at infinity; internal error)")

@@ -15,7 +15,6 @@ from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
-import sympy as sp
 
 from thetasol.curves.adapted_basis import real_flow_basis
 from thetasol.curves.spectral import spectral_curve
@@ -26,7 +25,7 @@ from thetasol.solutions.theta_rotation.node import node_branch_slopes
 from thetasol.theta.riemann import RiemannTheta
 
 if TYPE_CHECKING:
-    from thetasol.curves.plane_curve import Place
+    from thetasol.curves.plane_curve import Numerator, Place
     from thetasol.curves.spectral import SpectralCurve
 
 __all__ = ["SpectralData", "spectral_data"]
@@ -42,8 +41,8 @@ class SpectralData:
         The data in the principal (and, for a symmetric body, turning) frame.
     curve : thetasol.curves.spectral.SpectralCurve
         The curve of ``J, M, u`` (snapped where degenerate to ``SNAP_TOL``).
-    nums : tuple
-        Numerators ``g_i`` of the holomorphic differentials ``g_i dE / f_w``.
+    nums : tuple of Numerator
+        Numerators ``g_i`` of the holomorphic differentials ``g_i dE / f_w`` (exact, no sympy).
     G : ndarray of int, shape (2g, 2g)
         The adapted symplectic basis, columns ``[a' | b']`` in the curve's own cycles.
     rdim : int
@@ -97,19 +96,18 @@ class SpectralData:
         return self.curve.abel_map(points, normalized=False) @ self.Ainv.T
 
 
-def parities(curve: SpectralCurve, nums: Sequence[sp.Expr]) -> np.ndarray:
+def parities(curve: SpectralCurve, nums: Sequence[Numerator]) -> np.ndarray:
     """Parity of each differential g dE / f_w under sigma: E^i w^j -> (-1)^(i+1)."""
     out = []
     for gn in nums:
-        pol = sp.Poly(sp.sympify(gn), curve.x, curve.y)
-        ps = {(-1) ** (i + 1) for (i, _), _c in pol.terms()}
+        ps = {(-1) ** (i + 1) for i, _ in gn.monomials}
         if len(ps) != 1:
             raise RuntimeError(f"differential numerator {gn} has no definite parity under E -> -E")
         out.append(ps.pop())
     return np.array(out, float)
 
 
-def adapted_periods(curve: SpectralCurve, nums: Sequence[sp.Expr]) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
+def adapted_periods(curve: SpectralCurve, nums: Sequence[Numerator]) -> tuple[np.ndarray, int, np.ndarray, np.ndarray]:
     """(G, rdim, Ainv, tau): the basis adapted to the real torus, its normalization and Riemann matrix."""
     g = curve.genus
     Pm = curve.period_matrix()
@@ -120,7 +118,7 @@ def adapted_periods(curve: SpectralCurve, nums: Sequence[sp.Expr]) -> tuple[np.n
     return G, rdim, Ainv, 0.5 * (tau + tau.T)
 
 
-def flow_velocity(curve: SpectralCurve, nums: Sequence[sp.Expr], Ainv: np.ndarray, rdim: int) -> np.ndarray:
+def flow_velocity(curve: SpectralCurve, nums: Sequence[Numerator], Ainv: np.ndarray, rdim: int) -> np.ndarray:
     """U = A^-1 sum_j J_j omega(inf_j) / ds, checked real and zero beyond the torus (else inaccurate periods)."""
     g = curve.genus
     U = Ainv @ velocity_at_infinity(curve, nums)
@@ -133,7 +131,7 @@ def flow_velocity(curve: SpectralCurve, nums: Sequence[sp.Expr], Ainv: np.ndarra
 def spectral_data(frame: BodyFrame) -> SpectralData:
     """Stage 1: the curve of the initial data, its adapted periods, ``U`` and the places over 0 and infinity."""
     curve = spectral_curve(np.diag(frame.Jp), frame.M0, frame.u0, tol=SNAP_TOL)
-    nums = tuple(curve.holomorphic_differentials())
+    nums = curve.holomorphic_numerators()
     G, rdim, Ainv, tau = adapted_periods(curve, nums)
     Pinf, Jinf, B = infinity_data(curve, curve.J2, curve.M)
     U = flow_velocity(curve, nums, Ainv, rdim)
