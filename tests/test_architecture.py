@@ -131,14 +131,16 @@ def test_import_thetasol_loads_no_sympy():
 def test_theta_set_up_imports_only_what_it_uses():
     """Four bodies (generic, symmetric with axial spin, rank-one plus isotropic, symmetric rank-one) solved
     and evaluated in a fresh process: sympy stays unimported (the set-up reads the differentials as exact
-    Numerators; importing sympy costs ~0.25 s of a process's first set-up), and so does the Neumann model
-    (symmetric bodies without spin, ~30 ms)."""
+    Numerators; importing sympy costs ~0.25 s of a process's first set-up), and so do the Neumann model
+    (symmetric bodies without spin, ~30 ms) and numpy.random (the set-up's directions are fixed data, not
+    draws of a generator whose streams may change between numpy versions)."""
     refs = str(Path(__file__).parent / "data" / "rotation" / "refs.json")
     code = ("import json, sys, numpy as np, thetasol; d = json.load(open(sys.argv[1])); "
             "[thetasol.solve_rotation(np.diag(d[n]['J']), np.array(d[n]['a']), np.array(d[n]['Q0']), "
             "np.array(d[n]['omega0']))(np.array([0.5, 1e6])) for n in ('generic', 'symmetric_oblate', "
             "'rank_one_plus_isotropic', 'symmetric_rank_one')]; "
-            "print(sorted(m for m in ('thetasol.solutions.neumann_rotation', 'sympy') if m in sys.modules))")
+            "print(sorted(m for m in ('thetasol.solutions.neumann_rotation', 'sympy', 'numpy.random') "
+            "if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code, refs], capture_output=True, text=True, check=True,
                          timeout=300)
     assert out.stdout.strip().splitlines()[-1] == "[]"

@@ -16,9 +16,9 @@ evaluation gains 5-20%.
 Why lazily, and the cost: nothing is imported or compiled at ``import thetasol`` nor in a set-up;
 the first evaluation imports numba (~0.35 s) and compiles its kernels (``cache=True``: later processes
 load the machine code from numba's cache next to the module, or from ``NUMBA_CACHE_DIR``).  Measured
-(CPU time, this machine): a fresh process importing thetasol and solving the generic body takes 1.0 s
-with or without numba; its first evaluation then costs 0.35 s more with a warm cache, and 5.2-5.5 s
-more with an empty cache (compiling the two kernels, once per installation and source version).
+(CPU time, this machine): a fresh process importing thetasol and solving the generic body takes
+0.53-0.57 s with or without numba; its first evaluation then costs 0.67 s more with a warm cache, and
+6.3 s more with an empty cache (compiling the two kernels, once per installation and source version).
 That one-off cost is why they are opt-in: on by default, it lands in the first timed evaluation of
 a program (``python -m thetasol demo`` reports the closed form's evaluation at 470 us per time
 instead of 12 with a warm cache, and as never paying off while the kernels compile).

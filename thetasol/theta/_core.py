@@ -420,7 +420,7 @@ def _moments_split(lat, lset, Wr_re, Wr_im, s_T, bits, jet, V):
     P, g = Wr_re.shape
     N1, nK = Qm.shape
     o = jet.o if jet.r else 0
-    b1_vals = np.unique(bits[:, 0])
+    b1_vals = np.unique(bits[:, 0], return_inverse=True)[0]      # (the sorted path: no import of numpy.ma)
     rest = bits[:, 1:]
     rest_u, rest_idx = np.unique(rest, axis=0, return_inverse=True)
     rest_idx = np.asarray(rest_idx).reshape(-1)

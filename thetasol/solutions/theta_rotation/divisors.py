@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from thetasol.mechanics.lax import eigenvector_poles, lax_matrix, polish_eigenvector_poles, right_eigenvector
+from thetasol.solutions.theta_rotation._directions import ALPHA_CANDIDATES, DIVISOR_CANDIDATES
 from thetasol.solutions.theta_rotation.lattice import reduce_lattice
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
 
@@ -74,8 +75,7 @@ class EigenvectorDivisors:
 def choose_alpha(X: np.ndarray) -> np.ndarray:
     """A normalization vector far from orthogonal to the columns of X and to the axes."""
     best, score = None, -1.0
-    rng = np.random.default_rng(20240601)
-    cands = [np.array([1.0, 2 ** 0.5, 3 ** 0.5])] + [rng.normal(size=3) for _ in range(40)]
+    cands = [np.array([1.0, 2 ** 0.5, 3 ** 0.5])] + [np.array(c) for c in ALPHA_CANDIDATES]
     Xn = X / np.linalg.norm(X, axis=0, keepdims=True)
     for c in cands:
         c = c / np.linalg.norm(c)
@@ -88,11 +88,10 @@ def choose_alpha(X: np.ndarray) -> np.ndarray:
 def abel_friendly_divisor(Jp: np.ndarray, M: np.ndarray, u: np.ndarray, alpha: np.ndarray, bp: np.ndarray,
                           degree: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Pole divisor (E, w, alpha') of the eigenvector for the normalization vector alpha', among alpha
-    and random ones, whose points are farthest from the branch points and all within 10 |bp|max of E = 0."""
+    and fixed ones (:mod:`._directions`), whose points are farthest from the branch points and all within 10 |bp|max of E = 0."""
     R = float(np.abs(bp).max())
-    rng = np.random.default_rng(20240602)
     best, score = None, -np.inf
-    for c in [alpha] + [rng.normal(size=3) for _ in range(24)]:
+    for c in [alpha] + [np.array(c) for c in DIVISOR_CANDIDATES]:
         E, w = eigenvector_poles(Jp, M, u, c)
         if len(E) != degree or not np.all(np.isfinite(w)):
             continue
@@ -188,7 +187,10 @@ def auxiliary_places(sd: SpectralData) -> tuple[np.ndarray, np.ndarray]:
     trial = [0.35 * R * np.exp(1j * ang) for ang in (0.3, 1.1, 1.9, 2.7)]
     # Far branch points (|E| ~ 1/(J_2 - J_1) for nearly symmetric bodies) are where L ~ J^2 E^2 and
     # eigenvectors lose accuracy: use the core of the set only.
-    core = bp[np.abs(bp) <= 10.0 * np.median(np.abs(bp))]
+    # (the median as np.median computes it, without its import of numpy.ma: 8 ms of a first set-up)
+    r = np.sort(np.abs(bp))
+    med = r[len(r) // 2] if len(r) % 2 else (r[len(r) // 2 - 1] + r[len(r) // 2]) / 2
+    core = bp[np.abs(bp) <= 10.0 * med]
     for b in core:
         sep = np.abs(bp - b)
         sep = min(sep[sep > 0].min(), abs(b))
