@@ -68,7 +68,7 @@ def _setup_time(name, fallback):
     if fallback == "mp":
         _curve_quad.Tracked._add_dd = _curve_quad.Tracked._add_mp
     try:
-        solve_rotation(*_args(name))  # warm caches (Gauss-Legendre nodes, sympy)
+        solve_rotation(*_args(name))  # warm caches (Gauss-Legendre nodes, first-use imports)
         t, _ = best_of(lambda: solve_rotation(*_args(name)), repeat=3)
     finally:
         _curve_quad.Tracked._add_dd = orig

@@ -3,8 +3,8 @@
 Measured in one run on this machine, for every reference body of tests/data/rotation/refs.json:
 
 * **set-up**: solve_rotation (theta, or the body's closed form), best of 3 repeats, and the first
-  set-up of the body ("new body": sympy's caches then hold nothing of its curve, as for any body a
-  program meets once); heyoka's JIT compilation of one parametric float64 integrator, once for all
+  set-up of the body ("new body": the curve engine's caches then hold nothing of its curve, as for any
+  body a program meets once); heyoka's JIT compilation of one parametric float64 integrator, once for all
   bodies, reported apart (it is not a per-body cost);
 * **dense**: the cost per output time on [0, 1000] with 20001 equally spaced times (and the
   reference times below 1000): theta's evaluation; heyoka float64 (tol 1e-16) propagate_grid, without
@@ -104,7 +104,7 @@ def bench_body(name, data, ta, quick):
     grid = np.union1d(np.linspace(0.0, T_END, N_DENSE), tr[near])
     at_refs = np.searchsorted(grid, tr[near])
     row = {"case": name}
-    # a body new to the process (sympy's caches hold nothing of its curve), then repeats of it
+    # a body new to the process (no cache holds anything of its curve), then repeats of it
     row["setup_new"], _ = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=1, clock=CLOCK[0])
     row["setup"], sol = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=3, clock=CLOCK[0])
     row["method"] = sol.method
@@ -130,8 +130,8 @@ def bench_body(name, data, ta, quick):
 
 
 def first_setup(data) -> float:
-    """Seconds of this process's first set-up: its one-off costs (sympy's lazy imports, the BLAS
-    controllers) stay out of the table.  The body is the given one with omega0 scaled by 1.01, so that
+    """Seconds of this process's first set-up: its one-off costs (the imports of the set-up's modules, the
+    BLAS controllers) stay out of the table.  The body is the given one with omega0 scaled by 1.01, so that
     the table's first body is new to the process too."""
     args = (np.diag(data["J"]), np.array(data["a"]), np.array(data["Q0"]), 1.01 * np.array(data["omega0"]))
     return best_of(lambda: solve_rotation(*args), repeat=1, clock=CLOCK[0])[0]
