@@ -176,6 +176,16 @@ def test_numerator_parses_as_its_sympy_form(entries):
     assert all(g.coefficient(i, j) == rounded[0, i, j] for i, j in g.monomials)
 
 
+def test_numerator_rejects_repeated_or_negative_exponents():
+    from thetasol.curves.plane_curve import Numerator
+
+    with pytest.raises(ValueError, match="distinct non-negative"):
+        Numerator.from_terms([(1, 0, Fraction(1), Fraction(0)), (1, 0, Fraction(2), Fraction(0))])
+    with pytest.raises(ValueError, match="distinct non-negative"):
+        Numerator.monomial(-1, 0)
+    assert Numerator.from_terms([(2, 1, Fraction(0), Fraction(0))]).terms == ()
+
+
 def test_spectral_set_up_numerators_are_the_public_differentials():
     """The theta-function set-up reads the holomorphic differentials as Numerators; they are the public
     sympy numerators (a smooth, a nodal and a symmetric-body curve)."""

@@ -34,12 +34,16 @@ class Numerator:
     @classmethod
     def monomial(cls, i: int, j: int) -> Numerator:
         """``x^i y^j``."""
-        return cls(((int(i), int(j), Fraction(1), Fraction(0)),))
+        return cls.from_terms([(i, j, Fraction(1), Fraction(0))])
 
     @classmethod
     def from_terms(cls, terms) -> Numerator:
-        """From ``(i, j, re, im)`` entries with distinct ``(i, j)`` (zero coefficients dropped)."""
-        return cls(tuple(sorted((int(i), int(j), re, im) for i, j, re, im in terms if re != 0 or im != 0)))
+        """From ``(i, j, re, im)`` entries with distinct ``(i, j) >= 0`` (zero coefficients dropped)."""
+        out = sorted((int(i), int(j), re, im) for i, j, re, im in terms if re != 0 or im != 0)
+        keys = [(i, j) for i, j, _, _ in out]
+        if len(set(keys)) != len(keys) or any(min(k) < 0 for k in keys):
+            raise ValueError(f"numerator terms need distinct non-negative exponents (i, j), got {keys}")
+        return cls(tuple(out))
 
     def coefficient(self, i: int, j: int) -> complex:
         """``c_ij`` as a complex float (0 for a monomial it lacks)."""
