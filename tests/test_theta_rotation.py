@@ -546,11 +546,11 @@ def test_rank_one_node_next_to_branch_points_against_dop853():
 
 @pytest.mark.parametrize("name", ["generic", "nearly_symmetric", "near_unstable_equilibrium", "rank_one",
                                   "symmetric_oblate", "symmetric_rank_one"])
-def test_riemann_constant_from_stage_two_divisors_matches_random_divisors(name, monkeypatch):
+def test_riemann_constant_from_stage_two_divisors_matches_the_fallback_divisors(name, monkeypatch):
     """Riemann's vanishing theorem on the divisors made of stage 2's points (poles and component zeros)
-    picks the same half-period candidate as on three random divisors, and clearly: the runner-up's theta
-    is >= 1.1e-7 on these bodies (nearly_symmetric; 1e-2 on generic), above the 1e-8 that sends the choice
-    to random divisors.  Both choices satisfy theta(K + A(D')) ~ 1e-15 at their divisors."""
+    picks the same half-period candidate as on the fallback's three divisors in general position, and
+    clearly: the runner-up's theta is >= 1.1e-7 on these bodies (nearly_symmetric; 1e-2 on generic), above
+    the 1e-8 that sends the choice to the fallback.  Both choices satisfy theta(K + A(D')) ~ 1e-15 at their divisors."""
     from thetasol.solutions.theta_rotation import riemann as stage3
     from thetasol.solutions.theta_rotation.divisors import eigenvector_divisors
     from thetasol.solutions.theta_rotation.frame import body_frame
@@ -560,10 +560,10 @@ def test_riemann_constant_from_stage_two_divisors_matches_random_divisors(name, 
     sd = spectral_data(body_frame(J, a, Q0, w0))
     dv = eigenvector_divisors(sd)
     canon = stage3.canonical_divisor(sd)
-    K_random = stage3.riemann_constant(sd, canon)           # no stage 2 data: three random divisors
+    K_random = stage3.riemann_constant(sd, canon)           # no stage 2 data: the fallback's divisors
 
     def no_fallback(*args):
-        raise AssertionError("the stage 2 divisors did not decide: fell back to random divisors")
+        raise AssertionError("the stage 2 divisors did not decide: fell back to the fixed divisors")
 
     monkeypatch.setattr(stage3, "_random_divisor_constant", no_fallback)
     K_stage2 = stage3.riemann_constant(sd, canon, dv)

@@ -1,12 +1,13 @@
-"""Fixed directions for the normalization vectors of the eigenvector divisors (stage 2).
+"""Fixed "random" data of the set-up: directions for the normalization vectors of the eigenvector
+divisors (stage 2) and the points of the Riemann constant's fallback test divisors (stage 3).
 
-Any directions in general position serve: these are the normal draws of numpy's
-``default_rng(20240601)`` (40) and ``default_rng(20240602)`` (24), kept as data so that the set-up
-does not depend on numpy's generator, whose streams may change between numpy versions (NEP 19),
-and does not import ``numpy.random`` (14 ms of a process's first set-up).
+Any data in general position serve: these are draws of numpy's ``default_rng`` (the seeds below),
+kept as data so that the set-up does not depend on numpy's generator, whose streams may change
+between numpy versions (NEP 19), and does not import ``numpy.random`` (14 ms of a process's first
+set-up).
 """
 
-#: Candidates of :func:`.divisors.choose_alpha` after ``(1, sqrt 2, sqrt 3)``.
+#: Candidates of :func:`.divisors.choose_alpha` after ``(1, sqrt 2, sqrt 3)`` (normal draws, seed 20240601).
 ALPHA_CANDIDATES = (
     (0.6479062041731867, 0.4693207943802901, -0.6430206107408429),
     (-1.1782586485051316, -0.1446904068952663, 1.2034583961932943),
@@ -50,7 +51,7 @@ ALPHA_CANDIDATES = (
     (0.9742886204825227, -0.07888582525317299, -0.43483325141876344),
 )
 
-#: Candidates of :func:`.divisors.abel_friendly_divisor` after the chosen alpha.
+#: Candidates of :func:`.divisors.abel_friendly_divisor` after the chosen alpha (normal draws, seed 20240602).
 DIVISOR_CANDIDATES = (
     (-0.6705585386584472, -0.45918045382427514, 0.7051257350438169),
     (2.4215080991332742, 0.5126901378326624, 0.47024942686722426),
@@ -76,4 +77,18 @@ DIVISOR_CANDIDATES = (
     (-0.011981242530931552, 0.5151227322381382, 0.7934773811652625),
     (-0.4856877130482538, 0.6229805355770958, 0.4687472299686931),
     (1.1137403552888805, 0.5786591653700742, 0.08888822501054082),
+)
+
+#: Points of :func:`.riemann._random_divisor_constant`, one per row for up to three divisors of degree
+#: g - 1 <= 3: ``(radius fraction, turn, eigenvalue index)`` (uniform, uniform, one of three; seed 7).
+DIVISOR_POINTS = (
+    (0.625095466604667, 0.8972138009695755, 1),
+    (0.22520718999059186, 0.30016628491122543, 2),
+    (0.8735534453962619, 0.005265304565574724, 1),
+    (0.7970694287520462, 0.4679349528437208, 2),
+    (0.3030324268193135, 0.2784256121007733, 2),
+    (0.4450763058826466, 0.5045482589579533, 0),
+    (0.5534973520744925, 0.9955002834343927, 2),
+    (0.6221792294411627, 0.9889601476818849, 2),
+    (0.21530869823559895, 0.16021203385784455, 2),
 )

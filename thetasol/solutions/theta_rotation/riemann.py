@@ -21,6 +21,7 @@ import numpy as np
 
 from thetasol.curves.plane_curve import Numerator
 from thetasol.mechanics.lax import lax_matrix
+from thetasol.solutions.theta_rotation._directions import DIVISOR_POINTS
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.lattice import reduce_lattice
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
@@ -36,7 +37,7 @@ PRUNE = 1e-7
 #: Riemann constant from the divisors of stage 2: accepted when the runner-up's theta exceeds this
 #: and 100 x the best, i.e. does not vanish by the test that makes the best vanish (runner-ups on the
 #: 13 reference bodies: 1.1e-7 nearly_symmetric, 3.9e-7 near_unstable_equilibrium, 1e-2 generic); a
-#: closer call, such as the near tie of a nearly pinched cycle, goes to three random divisors
+#: closer call, such as the near tie of a nearly pinched cycle, goes to three fixed divisors
 CLEAR = 1e-8
 
 
@@ -130,7 +131,7 @@ def riemann_constant(sd: SpectralData, canon: dict, dv: EigenvectorDivisors | No
     taken (Riemann's vanishing theorem).  With ``dv`` the D' are made of the points of stage 2 (the
     poles ``D0`` and zeros ``Z_k``, whose Abel images are known) and the places over ``E = 0`` reuse
     stage 2's images; unless that choice is clear-cut (best < 1e-8, runner-up > ``CLEAR`` and
-    100 x best), three random divisors decide (:func:`_random_divisor_constant`).  Only regular places are involved, so
+    100 x best), three fixed divisors decide (:func:`_random_divisor_constant`).  Only regular places are involved, so
     clustered branch points do not matter.
     """
     g = sd.genus
@@ -151,17 +152,17 @@ def riemann_constant(sd: SpectralData, canon: dict, dv: EigenvectorDivisors | No
 
 
 def _random_divisor_constant(sd: SpectralData, canon: dict) -> np.ndarray:
-    """:func:`riemann_constant` tested on three random effective divisors of degree g - 1."""
+    """:func:`riemann_constant` tested on three effective divisors of degree g - 1 in general position
+    (fixed points, :mod:`._directions`)."""
     th, curve = sd.theta, sd.curve
     Jp, M, u = sd.frame.Jp, curve.M, curve.u
     g = th.g
     places = list(canon)
-    rng = np.random.default_rng(7)
     scale = float(np.abs(np.asarray(curve.branch_points)).max())
     pts = []
-    for _ in range(3 * (g - 1)):                     # three random effective divisors of degree g - 1
-        E = scale * (0.3 + 0.5 * rng.random()) * np.exp(2j * np.pi * rng.random())
-        pts.append((E, rng.choice(np.linalg.eigvals(lax_matrix(Jp, M, u, E)))))
+    for r, turn, k in DIVISOR_POINTS[:3 * (g - 1)]:     # three effective divisors of degree g - 1
+        E = scale * (0.3 + 0.5 * r) * np.exp(2j * np.pi * turn)
+        pts.append((E, np.linalg.eigvals(lax_matrix(Jp, M, u, E))[k]))
     A_all = sd.abel(places + pts)                       # one call: the paths are planned together
     AC = np.array([canon[P] for P in places], float) @ A_all[:len(places)]
     cands = _candidates(AC, th.tau)
