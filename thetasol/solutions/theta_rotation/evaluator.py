@@ -280,9 +280,9 @@ class FlowEvaluator:
         wr[ax] = w[ax] + spin
         wr[i] = c * w[i] - s * w[j]
         wr[j] = s * w[i] + c * w[j]
-        Qo = (Qr[:, :, None, :] * P.T[None, :, :, None]).sum(axis=1)    # Q~ R^T P^T
-        wo = (P[:, :, None] * wr[None]).sum(axis=1)
-        return Qo, wo
+        # Q~ R^T P^T row by row, and P omega: matrix products on the component rows (5 ns per time
+        # against 43 for the broadcast sums, on blocks of 1024 times)
+        return np.matmul(P, Qr), P @ wr
 
     def imaginary_residual(self, t: np.ndarray) -> np.ndarray:
         """max |Im Phi(0, t)| at the flat times ``t`` (it must vanish: the error of the evaluation)."""
