@@ -177,7 +177,9 @@ class FlowEvaluator:
                 return one
         vb, vd = v[:, :9].reshape(n, 3, 3), v[:, 9:]              # [n, s, k], [n, 1]
         ivd = 1.0 / vd
-        q = np.exp(self._turns(t) * TWO_PI_I)                      # exp(i nu t)
+        # exp(i nu t) on the distinct rows of turns only (4-9 of the 9 exponents), then spread
+        q = (np.exp(self._turns(t) * TWO_PI_I) if n == 1 else
+             np.exp(self._turn_rows(t).T * TWO_PI_I).take(self._row_of, axis=1).reshape(n, 3, 3))
         q *= self.amp
         q *= ivd[:, None, :]
         Z = np.empty((n, 2, 3, 3), complex)
@@ -207,12 +209,16 @@ class FlowEvaluator:
         tests/test_one_call.py).  One time: on Python floats, cheaper than numpy."""
         if t.shape[0] == 1:
             return np.array(self._turns_one(t.item())).reshape(1, 3, 3)
+        return self._turn_rows(t).T.take(self._row_of, axis=1).reshape(-1, 3, 3)
+
+    def _turn_rows(self, t: np.ndarray) -> np.ndarray:
+        """The distinct rows of :meth:`_turns` (rows, n): ``_turns`` is ``rows.T`` spread by ``_row_of``."""
         x = rate_turns(t, *self._pieces)                                 # (rates, n): rows contiguous
         rows = np.zeros((len(self._row_terms), t.shape[0]))
         for acc, terms in zip(rows, self._row_terms, strict=True):
             for j, a in terms:
                 acc += x[j] * a
-        return rows.T.take(self._row_of, axis=1).reshape(-1, 3, 3)
+        return rows
 
     def _turns_one(self, x: float) -> list[float]:
         """:meth:`_turns` of one time on Python floats, the same operations: the nine turns in the order
