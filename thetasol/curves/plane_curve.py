@@ -45,7 +45,7 @@ from thetasol.curves._places import (
     series_eval,
     series_integral,
 )
-from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections, sympy_symbol
+from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections
 from thetasol.curves._quad import Piece, Tracker, shaped_integrals
 
 if TYPE_CHECKING:
@@ -174,9 +174,9 @@ class PlaneCurve:
     """
 
     def __init__(self, f, x, y, *, _extra_sites=None, _tol=1e-15, _poly=None):
-        # _poly: the curve already as a CurvePoly (a subclass with exact coefficients skips sympy's parsing)
+        # _poly: the curve already as a CurvePoly (a subclass with exact coefficients skips sympy's parsing;
+        # its coordinates are the curve's)
         self._poly = CurvePoly(f, x, y) if _poly is None else _poly
-        self._xy = (x, y)
         self.n = self._poly.n
         if not self._poly.x_content_is_constant():
             raise ValueError("f is reducible: a polynomial in x alone divides it")
@@ -296,8 +296,8 @@ class PlaneCurve:
         inv = np.argsort(m)
         return inv[perm_at_v[m]]
 
-    x = property(lambda self: sympy_symbol(self._xy[0]), doc="The coordinate x (sympy Symbol).")
-    y = property(lambda self: sympy_symbol(self._xy[1]), doc="The coordinate y (sympy Symbol).")
+    x = property(lambda self: self._poly.x, doc="The coordinate x (sympy Symbol).")
+    y = property(lambda self: self._poly.y, doc="The coordinate y (sympy Symbol).")
 
     # ------------------------------------------------------------------ differentials
     def _numerators(self, exprs):

@@ -274,7 +274,6 @@ class SpectralCurve(PlaneCurve):
                 for m in range(ll + 1):
                     term = cf * comb(ll, m) * (-shift) ** (ll - m)
                     coef[(kk, m)] = coef.get((kk, m), Fraction(0)) + term
-        E, w = "E", "w"                  # sympy Symbols of these names when first asked for
         self.J2 = evJ**2
         self.J = J
         self.M = M
@@ -284,7 +283,8 @@ class SpectralCurve(PlaneCurve):
         self.degeneracy = degeneracy
         self.coefficients = C
         try:
-            super().__init__(None, E, w, _poly=CurvePoly.from_exact(coef, E, w))
+            # coordinates named E, w: sympy Symbols of these names only when first asked for
+            super().__init__(None, "E", "w", _poly=CurvePoly.from_exact(coef, "E", "w"))
         except ValueError as exc:
             if "reducible" in str(exc):
                 raise ValueError(f"the spectral curve of these data is reducible ({exc}); for example "
