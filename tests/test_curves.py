@@ -176,6 +176,21 @@ def test_numerator_parses_as_its_sympy_form(entries):
     assert all(g.coefficient(i, j) == rounded[0, i, j] for i, j in g.monomials)
 
 
+def test_numerators_mixed_with_sympy_expressions():
+    """One call may mix Numerators, sympy expressions and strings: the same array and exact form as each
+    parsed alone."""
+    from thetasol.curves._numerators import parse_numerators
+    from thetasol.curves.plane_curve import Numerator
+
+    mixed = [Numerator.monomial(1, 0), y ** 2 - sp.Rational(1, 3) * x, "x*y + 2"]
+    got = parse_numerators(mixed, lambda: (x, y))
+    for d, g in enumerate(mixed):
+        alone = parse_numerators([g], lambda: (x, y))
+        assert np.array_equal(got[d, :alone.shape[1], :alone.shape[2]], alone[0])
+        assert got.exact[d] == alone.exact[0]
+    assert got.shape == (3, 2, 3) and got[2, 1, 1] == 1 and got[1, 1, 0] == -1 / 3
+
+
 def test_numerator_rejects_repeated_or_negative_exponents():
     from thetasol.curves.plane_curve import Numerator
 
@@ -691,8 +706,9 @@ def test_exact_critical_polynomial_matches_sympy(f):
 
 def test_rotation_does_not_depend_on_sympy_ground_types():
     """sympy computes with python-flint's types when that package is installed and with its own
-    otherwise; the theta-function rotation gives the same floats either way (the bodies below differed by
-    1e-14 at t <= 1000 and 4e-10 at t = 1e6 when the critical values took sympy's normalization)."""
+    otherwise; the theta-function rotation gives the same floats either way (with sympy's own
+    normalization of the critical values the bodies below would differ by 1e-14 at t <= 1000 and 4e-10
+    at t = 1e6)."""
     pytest.importorskip("flint")
     import subprocess
     import sys

@@ -102,37 +102,17 @@ class _Numerators(np.ndarray):
 
 def parse_numerators(exprs, symbols):
     """Differential numerators (:class:`Numerator`, sympy expressions or strings in ``x``, ``y``) as a
-    complex coefficient array (nd, I, J) that carries their exact rational form in ``.exact``.
-    ``symbols()`` gives the sympy symbols ``(x, y)``; it is called only for numerators that are not
-    :class:`Numerator`."""
-    if all(isinstance(g, Numerator) for g in exprs):
-        return _from_numerators(exprs)
-    import sympy as sp
-    x, y = symbols()
-    polys = []
+    complex coefficient array (nd, I, J) that carries their exact rational form in ``.exact``: each part
+    of a coefficient correctly rounded in the array, exact in ``.exact`` (a Numerator's as it is, a sympy
+    expression's as sympy's Poly over ``x, y`` holds it).  ``symbols()`` gives the sympy symbols
+    ``(x, y)``; it is called only when a numerator is not a :class:`Numerator`."""
+    xy = None
+    nums = []
     for g in exprs:
-        g = sp.sympify(g)
-        extra = g.free_symbols - {x, y}
-        if extra:
-            raise ValueError(f"differential numerator {g} involves {sorted(map(str, extra))}")
-        polys.append(sp.Poly(g, x, y))
-    I = max([p.degree(x) for p in polys] + [0]) + 1
-    J = max([p.degree(y) for p in polys] + [0]) + 1
-    P = np.zeros((len(polys), I, J), dtype=complex)
-    exact = []
-    for d, p in enumerate(polys):
-        ex = {}
-        for (i, j), c in p.terms():
-            P[d, i, j] = complex(c)
-            ex[(int(i), int(j))] = to_fraction_pair(c)
-        exact.append(ex)
-    P = P.view(_Numerators)
-    P.exact = exact
-    return P
-
-
-def _from_numerators(nums) -> _Numerators:
-    """:func:`parse_numerators` of :class:`Numerator` objects: the same array and exact form."""
+        if not isinstance(g, Numerator):
+            xy = xy or symbols()
+            g = _from_sympy(g, *xy)
+        nums.append(g)
     I = max([i for g in nums for i, _, _, _ in g.terms] + [0]) + 1
     J = max([j for g in nums for _, j, _, _ in g.terms] + [0]) + 1
     P = np.zeros((len(nums), I, J), dtype=complex)
@@ -146,6 +126,17 @@ def _from_numerators(nums) -> _Numerators:
     P = P.view(_Numerators)
     P.exact = exact
     return P
+
+
+def _from_sympy(g, x, y) -> Numerator:
+    """A sympy expression or string in ``x``, ``y`` as a :class:`Numerator` with the exact parts of
+    sympy's coefficients (:func:`~thetasol.curves._poly.to_fraction_pair`)."""
+    import sympy as sp
+    g = sp.sympify(g)
+    extra = g.free_symbols - {x, y}
+    if extra:
+        raise ValueError(f"differential numerator {g} involves {sorted(map(str, extra))}")
+    return Numerator.from_terms((i, j, *to_fraction_pair(c)) for (i, j), c in sp.Poly(g, x, y).terms())
 
 
 def cached_numerators(cache: dict, exprs, symbols):
