@@ -142,7 +142,7 @@ _PARTS = st.one_of(st.just(0), st.fractions(max_denominator=50),
 def test_numerator_parses_as_its_sympy_form(entries):
     """A Numerator (exact coefficients, parsed without sympy) gives the curve engine the exact form and
     coefficient array that its sympy expression gives, and to_sympy is that expression.  The array holds
-    each part correctly rounded; sympy's complex() of an imaginary rational can be 1 ulp off it (77/23 i).
+    each part correctly rounded (sympy's own complex() of an imaginary rational can be 1 ulp off, 77/23 i).
     A numerator with a float coefficient is parsed by sympy over the floats, which rounds its rational
     coefficients too (to within an ulp); the Numerator keeps them exact."""
     from thetasol.curves._numerators import parse_numerators
