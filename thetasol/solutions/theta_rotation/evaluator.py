@@ -177,9 +177,9 @@ class FlowEvaluator:
                 return one
         vb, vd = v[:, :9].reshape(n, 3, 3), v[:, 9:]              # [n, s, k], [n, 1]
         ivd = 1.0 / vd
-        # exp(i nu t) on the distinct rows of turns only (4-9 of the 9 exponents), then spread
-        q = (np.exp(self._turns(t) * TWO_PI_I) if n == 1 else
-             np.exp(self._turn_rows(t).T * TWO_PI_I).take(self._row_of, axis=1).reshape(n, 3, 3))
+        # exp(i nu t) on the distinct rows of turns only (4-9 of the 9 exponents), then spread (for one
+        # time too: the numpy rows are the Python floats' turns bit for bit, tests/test_one_call.py)
+        q = np.exp(self._turn_rows(t).T * TWO_PI_I).take(self._row_of, axis=1).reshape(n, 3, 3)
         q *= self.amp
         q *= ivd[:, None, :]
         Z = np.empty((n, 2, 3, 3), complex)
