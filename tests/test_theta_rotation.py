@@ -565,7 +565,7 @@ def test_riemann_constant_from_stage_two_divisors_matches_the_fallback_divisors(
     def no_fallback(*args):
         raise AssertionError("the stage 2 divisors did not decide: fell back to the fixed divisors")
 
-    monkeypatch.setattr(stage3, "_random_divisor_constant", no_fallback)
+    monkeypatch.setattr(stage3, "_fallback_divisor_constant", no_fallback)
     K_stage2 = stage3.riemann_constant(sd, canon, dv)
     # the same candidate: the two differ only by the rounding of A(canonical divisor) / 2
     assert np.abs(K_stage2 - K_random).max() < 1e-13

@@ -79,7 +79,7 @@ DIVISOR_CANDIDATES = (
     (1.1137403552888805, 0.5786591653700742, 0.08888822501054082),
 )
 
-#: Points of :func:`.riemann._random_divisor_constant`, one per row for up to three divisors of degree
+#: Points of :func:`.riemann._fallback_divisor_constant`, one per row for up to three divisors of degree
 #: g - 1 <= 3: ``(radius fraction, turn, eigenvalue index)`` (uniform, uniform, one of three; seed 7).
 DIVISOR_POINTS = (
     (0.625095466604667, 0.8972138009695755, 1),

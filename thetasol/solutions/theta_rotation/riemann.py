@@ -131,12 +131,12 @@ def riemann_constant(sd: SpectralData, canon: dict, dv: EigenvectorDivisors | No
     taken (Riemann's vanishing theorem).  With ``dv`` the D' are made of the points of stage 2 (the
     poles ``D0`` and zeros ``Z_k``, whose Abel images are known) and the places over ``E = 0`` reuse
     stage 2's images; unless that choice is clear-cut (best < 1e-8, runner-up > ``CLEAR`` and
-    100 x best), three fixed divisors decide (:func:`_random_divisor_constant`).  Only regular places are involved, so
+    100 x best), three fixed divisors decide (:func:`_fallback_divisor_constant`).  Only regular places are involved, so
     clustered branch points do not matter.
     """
     g = sd.genus
     if dv is None or g < 2 or len(dv.A_points) < 2 * (g - 1):
-        return _random_divisor_constant(sd, canon)
+        return _fallback_divisor_constant(sd, canon)
     known = {Pl: i for i, Pl in enumerate(sd.P0)}
     rest = [Pl for Pl in canon if Pl not in known]
     A_rest = iter(sd.abel(rest)) if rest else iter(())
@@ -148,10 +148,10 @@ def riemann_constant(sd: SpectralData, canon: dict, dv: EigenvectorDivisors | No
     order = np.argsort(score)
     if score[order[0]] < 1e-8 and score[order[1]] > max(CLEAR, 100.0 * score[order[0]]):
         return cands[order[0]]
-    return _random_divisor_constant(sd, canon)
+    return _fallback_divisor_constant(sd, canon)
 
 
-def _random_divisor_constant(sd: SpectralData, canon: dict) -> np.ndarray:
+def _fallback_divisor_constant(sd: SpectralData, canon: dict) -> np.ndarray:
     """:func:`riemann_constant` tested on three effective divisors of degree g - 1 in general position
     (fixed points, :mod:`._directions`)."""
     th, curve = sd.theta, sd.curve
