@@ -60,8 +60,9 @@ def integer_coefficients(polys: list) -> tuple[list, int]:
 
 
 def discriminant_in_y(a: list) -> list | None:
-    """The discriminant in ``y`` of ``sum a[j](x) y^j`` for degree 2 or 3 in ``y`` (integer coefficient
-    lists), up to a positive constant; None for other degrees."""
+    """The discriminant in ``y`` of ``sum a[j](x) y^j`` for degree 2 or 3 in ``y`` (coefficient lists of
+    integers, or of Fractions as :func:`thetasol.curves.spectral.farthest_branch_point` gives them), up to
+    a positive constant; None for other degrees."""
     if len(a) == 3:
         c, b, a2 = a
         return add((1, mul(b, b)), (-4, mul(a2, c)))
