@@ -7,7 +7,8 @@ Run WITHOUT ``OPENBLAS_NUM_THREADS`` (the point is the default install):
 For each reference body (tests/data/rotation/refs.json): the set-up of solve_rotation, dense
 evaluation (2001 times on [0, 1000], per time) and one far time (t = 1e6), once with the library's
 limit (``thetasol.core.threads.LIMIT = 1``, the default) and once with ``LIMIT = None`` (the BLAS on
-its default threads, one per core).  Best of 3 for the evaluations, one set-up each.
+its default threads, one per core).  Best of 3 for the evaluations, one set-up each.  One time of a
+closed form runs without the limit either way (``Solution._run``): its two columns differ by noise.
 """
 from __future__ import annotations
 

@@ -63,6 +63,39 @@ def test_solution_evaluation_runs_on_one_thread(two_threads):
     assert set(_blas_threads()) == {2}
 
 
+def test_one_time_of_a_closed_form_skips_the_guard(two_threads):
+    """One time of a closed form runs with the BLAS as the user set it (matrix-vector products only);
+    a numerical reference, which integrates up to that time, still gets one thread."""
+    seen = []
+
+    class Probe(Solution):
+        def _evaluate(self, t):
+            seen.append(min(_blas_threads()))
+            return (t[:, None] * np.ones(3),)
+
+    class Reference(Probe):
+        _AT_ONCE = True
+
+    Probe()(0.5)
+    Probe()(np.array([0.5, 1.0]))
+    Reference()(0.5)
+    assert seen == [2, 1, 1]
+
+
+def test_one_time_bits_whatever_the_blas_threads(two_threads):
+    """The theta-function rotation at one time gives the same bits with the BLAS on 2 threads as inside
+    the guard: its matrix-vector products stay on one thread."""
+    from thetasol import solve_rotation
+
+    a = np.array([[0.3, 0.1, -0.2], [0.1, -0.4, 0.05], [-0.2, 0.05, 0.6]])
+    sol = solve_rotation([1.0, 1.7, 2.3], a, np.eye(3), [0.4, -0.3, 0.8])
+    assert sol.method.startswith("theta/")
+    w2, Q2 = sol(1e6)
+    with blas_threads():
+        w1, Q1 = sol(1e6)
+    assert np.array_equal(w1, w2) and np.array_equal(Q1, Q2)
+
+
 def test_solve_rotation_leaves_the_users_setting(two_threads):
     from thetasol import solve_rotation
 

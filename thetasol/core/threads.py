@@ -6,8 +6,10 @@ threads' wake-up and synchronisation instead.  Measured on the 13 reference bodi
 settings in one run (benchmarks/bench_blas_threads.py, docs/bench_theta_rotation.md): on the quiet
 machine dense evaluation with the default threads costs 0.77-1.02x the limited cost in wall time (its
 largest products use the second core, at more CPU time), and under other jobs' load it has cost 11x on one
-body (a BLAS thread waiting for a busy core); the guard's set and restore cost 2.3 us per call when the
-BLAS is on 2 threads (one far time: 37-41 us with the guard, 35-36 without, generic body).
+body (a BLAS thread waiting for a busy core).  The guard's set and restore cost 6-9 us per call when the
+BLAS is on 2 threads, a fifth of one far time of the theta-function rotation, whose matrix-vector
+products OpenBLAS runs on one thread anyway: a closed form evaluated at one time skips the guard
+(:meth:`thetasol.solutions.base.Solution._run`).
 
 :func:`blas_threads` (a context manager) and :func:`single_blas_thread` (a decorator) set every
 loaded BLAS to :data:`LIMIT` threads for the duration of the call, with threadpoolctl, and restore the

@@ -11,7 +11,8 @@ times afterwards, in any order, without time stepping:
   characteristic constants of the closed form.
 
 Evaluation runs with the BLAS on one thread (:mod:`thetasol.core.threads`; the user's setting is
-restored after the call).
+restored after the call), except the evaluation of a closed form at one time, whose products are
+matrix-vector products that the BLAS runs on one thread anyway (:meth:`Solution._run`).
 
 ``ClosedFormUnavailable`` is raised for valid data outside the closed forms (its message names the
 numerical reference to use instead); ``ValueError`` for bad data, naming the problem.
@@ -25,7 +26,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import hat
-from thetasol.core.threads import single_blas_thread
+from thetasol.core.threads import blas_threads
 from thetasol.mechanics.equations import inertia_from_moments
 
 __all__ = ["ClosedFormUnavailable", "Solution", "RotationSolution", "CHUNK"]
@@ -69,11 +70,21 @@ class Solution:
             return tuple(np.concatenate(p, axis=0) for p in zip(*parts))
         return np.concatenate(parts, axis=0)
 
-    @single_blas_thread
+    def _run(self, fn, flat: np.ndarray):
+        """``fn`` on the flat times in chunks, inside :func:`~thetasol.core.threads.blas_threads` unless it is
+        one time of a closed form.  One time makes matrix-vector products only (the theta-function
+        rotation's largest: 2836 x 40), which OpenBLAS runs on one thread whatever its setting (0.3.31:
+        CPU time equals wall time on 2 threads); the guard's set and restore would add 6-9 us to a
+        35-50 us call when the BLAS is on 2 threads (benchmarks/bench_theta_rotation.py, t = 1e6)."""
+        if flat.size == 1 and not self._AT_ONCE:
+            return fn(flat)
+        with blas_threads():
+            return self._chunked(fn, flat)
+
     def __call__(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
         """The state at times ``t`` (any shape): a tuple of arrays with ``t.shape`` leading."""
         tt, flat = self._times(t)
-        out = self._chunked(self._evaluate, flat)
+        out = self._run(self._evaluate, flat)
         if tt.ndim == 1:                                   # the shapes are already t.shape + state
             return tuple(out)
         return tuple(x.reshape(tt.shape + x.shape[1:]) for x in out)
@@ -142,11 +153,10 @@ class RotationSolution(Solution):
         """``(omega(t), Q(t))`` with shapes ``t.shape + (3,)`` and ``t.shape + (3, 3)``."""
         return super().__call__(t)
 
-    @single_blas_thread
     def omega(self, t: ArrayLike) -> np.ndarray:
         """Body angular velocity, shape ``t.shape + (3,)``."""
         tt, flat = self._times(t)
-        return self._chunked(self._omega, flat).reshape(tt.shape + (3,))
+        return self._run(self._omega, flat).reshape(tt.shape + (3,))
 
     def Q(self, t: ArrayLike) -> np.ndarray:
         """Attitude (body to space), shape ``t.shape + (3, 3)``."""

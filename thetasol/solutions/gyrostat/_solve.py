@@ -62,7 +62,7 @@ class GyrostatSolution(RotationSolution):
         ``wrap=True`` reduces them to ``(-pi, pi]`` with an exact product (far times)."""
         ra = self._rotor_impl()
         tt, flat = self._times(t)
-        out = self._chunked(lambda x: ra.angles(x, wrap), flat)
+        out = self._run(lambda x: ra.angles(x, wrap), flat)
         return out.reshape(tt.shape + (len(self.rotors),))
 
     def rotor_rates(self, t) -> np.ndarray:
