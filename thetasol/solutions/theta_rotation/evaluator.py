@@ -21,9 +21,9 @@ the 3x3 algebra runs on component rows: the polar factor by one Newton-Schulz st
 (:func:`thetasol.core.so3.polar_near_orthogonal`, 20x closer to the long-double polar factor than the
 SVD's, tests/test_theta_evaluation.py).  One time takes that state on Python complex numbers and
 floats around the one matrix product (:meth:`FlowEvaluator._state_one`): numpy's fixed cost per call
-exceeds the arithmetic on nine elements.  One far time then costs 38-56 us of CPU time, 62 near the
-unstable equilibrium (best of 7 x 100 calls on a shared 2-core machine, benchmarks/bench_theta_rotation.py):
-6-70 dense points.  With the numba kernels switched on (``THETASOL_NUMBA=1``,
+exceeds the arithmetic on nine elements.  One far time then costs 25-48 us of CPU time, 65 near the
+unstable equilibrium (best of 7 x 100 calls on a shared 2-core machine, benchmarks/bench_theta_rotation.py,
+docs/bench_theta_rotation.md): 6-62 dense points.  With the numba kernels switched on (``THETASOL_NUMBA=1``,
 :mod:`thetasol.core.jit`) the state is one compiled kernel per chunk of times.
 Working memory is ~2.5 KB per time (the flow's phases go in bounded blocks), so the default chunk of
 :class:`thetasol.solutions.base.Solution` applies.
