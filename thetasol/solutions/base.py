@@ -75,7 +75,8 @@ class Solution:
         one time of a closed form.  One time makes matrix-vector products only (the theta-function
         rotation's largest: 2836 x 40), which OpenBLAS runs on one thread whatever its setting (0.3.31:
         CPU time equals wall time on 2 threads); the guard's set and restore would add 6-9 us to a
-        35-50 us call when the BLAS is on 2 threads (benchmarks/bench_theta_rotation.py, t = 1e6)."""
+        35-50 us call when the BLAS is on 2 threads (one far time of the generic reference body, many
+        repetitions; tests/test_threads.py checks the bits are the same either way)."""
         if flat.size == 1 and not self._AT_ONCE:
             return fn(flat)
         with blas_threads():
