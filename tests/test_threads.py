@@ -83,8 +83,10 @@ def test_one_time_of_a_closed_form_skips_the_guard(two_threads):
 
 
 def test_one_time_bits_whatever_the_blas_threads(two_threads):
-    """The theta-function rotation at one time gives the same bits with the BLAS on 2 threads as inside
-    the guard: its matrix-vector products stay on one thread."""
+    """Skipping the guard changes no result: the theta-function rotation at one time gives the same bits
+    with the BLAS on the user's 2 threads as inside the guard.  (That OpenBLAS runs these matrix-vector
+    products on one thread, CPU time equal to wall time, is measured, not asserted: a timing test would
+    be flaky on a shared machine.)"""
     from thetasol import solve_rotation
 
     a = np.array([[0.3, 0.1, -0.2], [0.1, -0.4, 0.05], [-0.2, 0.05, 0.6]])
