@@ -24,7 +24,7 @@ from _common import machine_info
 from bench_units_sweep import REGIMES, _body
 
 from thetasol.ensembles import solve_many
-from thetasol.solutions.base import ClosedFormUnavailable
+from thetasol.protocol import ClosedFormUnavailable
 
 
 def bodies(n: int, seed: int) -> list[dict]:

@@ -126,7 +126,7 @@ def point():
 def refusals():
     from test_neumann_point import refused_cases
 
-    from thetasol.solutions.base import ClosedFormUnavailable
+    from thetasol.protocol import ClosedFormUnavailable
 
     def attempt(a, q0, v0):
         try:

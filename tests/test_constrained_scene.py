@@ -20,10 +20,10 @@ from thetasol.integrators.neumann import NumericalNeumann, integrate_neumann, nu
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.mechanics.constraints import Sphere
+from thetasol.protocol import ClosedFormUnavailable
 from thetasol.scenes.format import load_scene
 from thetasol.scenes.pipeline import solve_configuration
 from thetasol.scenes.report import run
-from thetasol.solutions.base import ClosedFormUnavailable
 from thetasol.solutions.neumann import NeumannSolution, solve_neumann
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "neumann_station.toml"

@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 
 from thetasol.ensembles import solve_many
+from thetasol.protocol import ClosedFormUnavailable
 from thetasol.scenes.format import load_scene
-from thetasol.solutions.base import ClosedFormUnavailable
 from thetasol.solutions.rotation import solve_rotation
 
 REFS = pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json"

@@ -10,7 +10,7 @@ from conftest import rand_Q
 
 from thetasol.integrators.gyrostat import integrate_gyrostat, integrate_heavy_gyrostat
 from thetasol.mechanics.rotors import gyrostat_energy
-from thetasol.solutions.base import ClosedFormUnavailable
+from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions.gyrostat import solve_gyrostat
 from thetasol.solutions.kepler import KeplerOrbit
 from thetasol.solutions.lagrange_gyrostat import solve_lagrange_gyrostat

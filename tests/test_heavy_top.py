@@ -18,7 +18,7 @@ import pytest
 from thetasol.core.so3 import rodrigues
 from thetasol.integrators.heavy_top import integrate_heavy_top
 from thetasol.mechanics.heavy_top import heavy_top_invariants, kovalevskaya_integral
-from thetasol.solutions.base import ClosedFormUnavailable
+from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions.heavy_top import solve_heavy_top
 
 TS = np.array([0.5, 1.0, 2.0, 10.0, 100.0, 1000.0])

@@ -173,7 +173,7 @@ def test_unconverged_phase_series_refused(monkeypatch):
     # a rate series not converged at the largest grid is refused, naming the numerical reference (seed 2 needs
     # 128 x 128; capped at 32 its truncation is 3.2e-6 rad)
     import thetasol.solutions.kovalevskaya_attitude as ka
-    from thetasol.solutions.base import ClosedFormUnavailable
+    from thetasol.protocol import ClosedFormUnavailable
     from thetasol.solutions.heavy_top import solve_heavy_top
 
     monkeypatch.setattr(ka, "GRID_MAX", 32)

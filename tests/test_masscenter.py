@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from thetasol.core.so3 import rodrigues
-from thetasol.solutions.base import CHUNK, Solution
+from thetasol.protocol import CHUNK, Solution
 from thetasol.solutions.mass_center import MassCenterMotion, mass_center, stumpff
 
 

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from thetasol.core.so3 import rodrigues
-from thetasol.solutions.base import ClosedFormUnavailable
+from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions.neumann import solve_neumann
 
 ROT = rodrigues([0.3, -0.5, 0.9])

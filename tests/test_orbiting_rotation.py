@@ -153,7 +153,7 @@ def test_shapes_and_negative_times():
 
 # -- closed forms --------------------------------------------------------------------------------
 
-from thetasol.solutions.base import ClosedFormUnavailable  # noqa: E402
+from thetasol.protocol import ClosedFormUnavailable  # noqa: E402
 from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation  # noqa: E402
 
 

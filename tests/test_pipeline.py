@@ -15,9 +15,9 @@ from thetasol.integrators.multibody import initial_state
 from thetasol.integrators.rotation import NumericalRotation, integrate_rotation
 from thetasol.mechanics.equations import invariants
 from thetasol.mechanics.trajectories import Trajectories
+from thetasol.protocol import Solution
 from thetasol.scenes.format import Scene
 from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
-from thetasol.solutions.base import Solution
 from thetasol.solutions.mass_center import MassCenterMotion
 
 

@@ -8,7 +8,7 @@ import pytest
 
 from thetasol.core import threads
 from thetasol.core.threads import blas_threads, single_blas_thread
-from thetasol.solutions.base import Solution
+from thetasol.protocol import Solution
 
 threadpoolctl = pytest.importorskip("threadpoolctl")
 

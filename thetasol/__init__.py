@@ -21,7 +21,7 @@ def _group(module: str, *names: str) -> None:
 
 
 # the solution protocol and its exceptions
-_group("thetasol.solutions.base", "Solution", "RotationSolution", "ClosedFormUnavailable")
+_group("thetasol.protocol", "Solution", "RotationSolution", "ClosedFormUnavailable")
 # closed forms, one per physical model
 _group("thetasol.solutions.rotation", "solve_rotation")
 _group("thetasol.solutions.gyrostat", "solve_gyrostat")
@@ -39,7 +39,7 @@ _group("thetasol.mechanics.trajectories", "Trajectories")
 _group("thetasol.mechanics.constraints", "Sphere", "Pivot")
 _group("thetasol.mechanics.rotors", "Rotor", "MasslessCarrier", "GyrostatConfiguration", "EffectiveGyrostat",
        "EffectiveRotor", "gyrostat_energy")
-_group("thetasol.mechanics.equations", "invariants", "spectral_coefficients", "torque")
+_group("thetasol.mechanics.equations", "inertia", "second_moments", "invariants", "spectral_coefficients", "torque")
 _group("thetasol.mechanics.heavy_top", "heavy_top_invariants", "kovalevskaya_integral")
 _group("thetasol.mechanics.gravity_gradient", "gravity_gradient_stability", "GravityGradientStability",
        "gravity_gradient_torque", "orbit_frame")
@@ -107,7 +107,7 @@ if TYPE_CHECKING:
     from thetasol.mechanics.bodies import Body
     from thetasol.mechanics.configuration import Configuration, Joint
     from thetasol.mechanics.constraints import Pivot, Sphere
-    from thetasol.mechanics.equations import invariants, spectral_coefficients, torque
+    from thetasol.mechanics.equations import inertia, invariants, second_moments, spectral_coefficients, torque
     from thetasol.mechanics.gravity_gradient import (
         GravityGradientStability,
         gravity_gradient_stability,
@@ -124,13 +124,13 @@ if TYPE_CHECKING:
         gyrostat_energy,
     )
     from thetasol.mechanics.trajectories import Trajectories
+    from thetasol.protocol import ClosedFormUnavailable, RotationSolution, Solution
     from thetasol.scenes.fixed_point import FixedPointSolution, solve_fixed_point
     from thetasol.scenes.format import Scene, demo_scene_path, load_scene
     from thetasol.scenes.gyrostat_scene import GyrostatSplit, load_gyrostat_scene, solve_gyrostat_configuration
     from thetasol.scenes.orbit import OrbitingConfigurationSolution, solve_orbiting_configuration
     from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
     from thetasol.scenes.report import run
-    from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution, Solution
     from thetasol.solutions.gyrostat import solve_gyrostat
     from thetasol.solutions.heavy_top import solve_heavy_top
     from thetasol.solutions.heavy_top_base import HeavyTopSolution

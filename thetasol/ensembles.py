@@ -34,8 +34,8 @@ from typing import Any
 
 import numpy as np
 
+from thetasol.protocol import ClosedFormUnavailable
 from thetasol.scenes.format import Scene, load_scene
-from thetasol.solutions.base import ClosedFormUnavailable
 
 __all__ = ["solve_many", "EXPECTED_ERRORS"]
 

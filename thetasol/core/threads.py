@@ -9,7 +9,7 @@ largest products use the second core, at more CPU time), and under other jobs' l
 body (a BLAS thread waiting for a busy core).  The guard's set and restore cost 6-9 us per call when the
 BLAS is on 2 threads, a fifth of one far time of the theta-function rotation, whose matrix-vector
 products OpenBLAS runs on one thread anyway: a closed form evaluated at one time skips the guard
-(:meth:`thetasol.solutions.base.Solution._run`).
+(:meth:`thetasol.protocol.Solution._run`).
 
 :func:`blas_threads` (a context manager) and :func:`single_blas_thread` (a decorator) set every
 loaded BLAS to :data:`LIMIT` threads for the duration of the call, with threadpoolctl, and restore the

@@ -28,7 +28,7 @@ from thetasol.core.so3 import cross, hat, polar_orthonormalize
 from thetasol.core.threads import single_blas_thread
 from thetasol.integrators._common import both_ways, solve_ivp_mQ
 from thetasol.mechanics.equations import inertia_from_moments, torque
-from thetasol.solutions.base import RotationSolution
+from thetasol.protocol import RotationSolution
 
 __all__ = ["integrate_fixed_point", "fixed_point_energy", "NumericalFixedPoint", "numerical_fixed_point"]
 
@@ -106,7 +106,7 @@ def integrate_fixed_point(J: ArrayLike, R: ArrayLike, a: ArrayLike, b: ArrayLike
 
 @dataclass(frozen=True, eq=False)
 class NumericalFixedPoint(RotationSolution):
-    """:func:`integrate_fixed_point` behind the :class:`~thetasol.solutions.base.RotationSolution` protocol.
+    """:func:`integrate_fixed_point` behind the :class:`~thetasol.protocol.RotationSolution` protocol.
 
     ``J`` are the second moments about the fixed point; ``sol(t)`` integrates on demand, once per
     call, from ``t = 0`` to every requested time.  Build it with :func:`numerical_fixed_point`.

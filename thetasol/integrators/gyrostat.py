@@ -34,7 +34,7 @@ from thetasol.core.so3 import cross, hat, polar_orthonormalize, vee
 from thetasol.core.threads import single_blas_thread
 from thetasol.integrators._common import extended_inertia, heyoka_and_type
 from thetasol.mechanics.heavy_top import heavy_top_data
-from thetasol.solutions.base import RotationSolution
+from thetasol.protocol import RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
 
 __all__ = ["integrate_gyrostat", "integrate_heavy_gyrostat", "gyrostat_rotor_data", "NumericalGyrostat",

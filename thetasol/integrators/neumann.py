@@ -23,7 +23,7 @@ from scipy.integrate import solve_ivp
 from thetasol.core import validate as V
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.constraints import point_on_sphere
-from thetasol.solutions.base import Solution
+from thetasol.protocol import Solution
 
 __all__ = ["integrate_neumann", "NumericalNeumann", "numerical_neumann"]
 

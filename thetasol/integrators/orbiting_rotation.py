@@ -39,7 +39,7 @@ from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
 from thetasol.core.threads import single_blas_thread
 from thetasol.integrators._common import both_ways, heyoka_and_type, solve_ivp_mQ
-from thetasol.solutions.base import RotationSolution
+from thetasol.protocol import RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
 
 __all__ = ["integrate_orbiting_rotation", "NumericalOrbitingRotation", "numerical_orbiting_rotation"]
@@ -188,7 +188,7 @@ def _heyoka(Jm, orbit, Q0, w0, tgrid, rtol, dtype):
 
 @dataclass(frozen=True, eq=False)
 class NumericalOrbitingRotation(RotationSolution):
-    """:func:`integrate_orbiting_rotation` behind the :class:`~thetasol.solutions.base.RotationSolution` protocol.
+    """:func:`integrate_orbiting_rotation` behind the :class:`~thetasol.protocol.RotationSolution` protocol.
 
     ``sol(t) -> (omega, Q)`` integrates on demand, once per call, from ``t = 0`` to every requested
     time (any shape and order); nothing is cached.  ``a`` is the tidal matrix (7.11) at ``t = 0``.

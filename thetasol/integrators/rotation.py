@@ -14,7 +14,7 @@ equation ``Qdot = Q hat(omega)``.  Three methods:
     heyoka's Taylor integrator (optional extra ``thetasol[bench]``); ``dtype="f128"`` or
     ``"ldbl"`` gives a quadruple/extended-precision reference.
 
-:class:`NumericalRotation` wraps it in the :class:`~thetasol.solutions.base.RotationSolution`
+:class:`NumericalRotation` wraps it in the :class:`~thetasol.protocol.RotationSolution`
 protocol, for bodies whose rotation has no closed form.
 """
 from __future__ import annotations
@@ -30,7 +30,7 @@ from thetasol.core.so3 import polar_orthonormalize
 from thetasol.core.threads import single_blas_thread
 from thetasol.integrators._common import both_ways, extended_inertia, heyoka_and_type, solve_ivp_mQ
 from thetasol.mechanics.equations import inertia_from_moments, invariants, rotation_rhs
-from thetasol.solutions.base import RotationSolution
+from thetasol.protocol import RotationSolution
 
 __all__ = ["integrate_rotation", "NumericalRotation", "numerical_rotation", "rotation_expressions"]
 
@@ -113,7 +113,7 @@ def integrate_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayL
 
 @dataclass(frozen=True, eq=False)
 class NumericalRotation(RotationSolution):
-    """:func:`integrate_rotation` behind the :class:`~thetasol.solutions.base.RotationSolution` protocol.
+    """:func:`integrate_rotation` behind the :class:`~thetasol.protocol.RotationSolution` protocol.
 
     ``sol(t)`` integrates on demand, once per call, from ``t = 0`` to every requested time (any
     shape, any order, negative allowed): no chunking, so a call costs one integration over

@@ -42,8 +42,8 @@ from thetasol.integrators.fixed_point import fixed_point_energy, numerical_fixed
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Pivot, pivot_mass_center
 from thetasol.mechanics.equations import inertia_from_moments, invariants as rotation_invariants
+from thetasol.protocol import ClosedFormUnavailable
 from thetasol.scenes.pipeline import ConfigurationSolution, closed_form_rotation, effective_rotations, rotation_kind
-from thetasol.solutions.base import ClosedFormUnavailable
 
 __all__ = ["PivotedBody", "pivoted_body", "main_rotation", "FixedPointSolution", "solve_fixed_point",
            "ZERO_RTOL"]

@@ -43,9 +43,9 @@ from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Joint
 from thetasol.mechanics.rotors import GyrostatConfiguration, MasslessCarrier, Rotor, axis_rotation, gyrostat_energy
 from thetasol.mechanics.trajectories import Trajectories
+from thetasol.protocol import Solution
 from thetasol.scenes.checks import ReportText
 from thetasol.scenes.pipeline import closed_form_rotation, rotation_kind
-from thetasol.solutions.base import Solution
 from thetasol.solutions.gyrostat import solve_gyrostat
 from thetasol.solutions.mass_center import MassCenterMotion
 

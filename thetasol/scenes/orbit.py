@@ -36,8 +36,8 @@ from thetasol.integrators.multibody_gravity import box_mass_points
 from thetasol.integrators.orbiting_rotation import numerical_orbiting_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.gravity_gradient import GravityGradientStability, gravity_gradient_stability, orbit_frame
+from thetasol.protocol import ClosedFormUnavailable
 from thetasol.scenes.pipeline import ConfigurationSolution
-from thetasol.solutions.base import ClosedFormUnavailable
 from thetasol.solutions.kepler import KeplerOrbit
 from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation
 

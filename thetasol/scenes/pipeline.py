@@ -40,7 +40,7 @@ from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import invariants as rotation_invariants
 from thetasol.mechanics.trajectories import Trajectories
-from thetasol.solutions.base import ClosedFormUnavailable, Solution
+from thetasol.protocol import ClosedFormUnavailable, Solution
 from thetasol.solutions.mass_center import MassCenterMotion
 from thetasol.solutions.neumann import NeumannSolution, solve_neumann
 

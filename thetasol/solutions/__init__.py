@@ -1,6 +1,5 @@
 """Closed-form solutions, one module per physical model, and the dispatch between them.
 
-* :mod:`~thetasol.solutions.base`: the :class:`Solution` protocol and :class:`ClosedFormUnavailable`;
 * :mod:`~thetasol.solutions.mass_center`: the mass centre (3.2) in elementary functions;
 * :mod:`~thetasol.solutions.rotation`: :func:`solve_rotation`, choosing among
   :mod:`~thetasol.solutions.euler_top` (Section 4 I), :mod:`~thetasol.solutions.pendulum`,

@@ -17,7 +17,7 @@ from thetasol.core.periodic import (
     integrated,
 )
 from thetasol.core.roots import monotone_newton, quadratic_roots
-from thetasol.solutions.base import ClosedFormUnavailable
+from thetasol.protocol import ClosedFormUnavailable
 
 __all__ = ["MIN_WIDTH", "DegenerateTorus", "Oscillator", "NeumannTorus"]
 

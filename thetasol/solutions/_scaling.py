@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from thetasol.mechanics.equations import invariants as _invariants
-from thetasol.solutions.base import RotationSolution
+from thetasol.protocol import RotationSolution
 
 __all__ = ["Scales", "choose_scales", "dimensionless_data", "ScaledRotation", "scaled_solution"]
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from thetasol.solutions.base import ClosedFormUnavailable
+from thetasol.protocol import ClosedFormUnavailable
 
 __all__ = ["SNAP_TOL", "sorted_principal_frame", "symmetric_without_spin", "symmetry_axis"]
 

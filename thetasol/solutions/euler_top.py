@@ -65,7 +65,7 @@ from thetasol.core.attitude import (
     uniform_rotation as _uniform_rotation,
     unit_rows as _unit,
 )
-from thetasol.solutions.base import RotationSolution
+from thetasol.protocol import RotationSolution
 from thetasol.special import elliptic as _el
 
 __all__ = ["EulerTopSolution", "solve_euler_top"]

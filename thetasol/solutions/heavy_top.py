@@ -11,7 +11,7 @@
 * Kovalevskaya's top (``I1 = I2 = 2 I3``, centre in the equatorial plane, any body frame): genus-2 theta
   functions, :mod:`thetasol.solutions.kovalevskaya_top` and :mod:`thetasol.solutions.kovalevskaya_attitude`
   (``method = "kovalevskaya/genus-2"``);
-* anything else: :class:`~thetasol.solutions.base.ClosedFormUnavailable` naming
+* anything else: :class:`~thetasol.protocol.ClosedFormUnavailable` naming
   :func:`thetasol.integrators.heavy_top.integrate_heavy_top`.
 
 Conventions (:mod:`thetasol.mechanics.heavy_top`): ``I`` the inertia about the fixed point, ``center`` the
@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 from thetasol.core.attitude import uniform_rotation
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants, kovalevskaya_integral
-from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
+from thetasol.protocol import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.heavy_top_base import HeavyTopSolution
 from thetasol.solutions.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame, lagrange_state
 from thetasol.solutions.rotation import solve_rotation

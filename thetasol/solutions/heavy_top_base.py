@@ -1,6 +1,6 @@
 """The result protocol of the heavy-top closed forms: ``sol(t) -> (omega, Q)``.
 
-A :class:`HeavyTopSolution` follows :class:`~thetasol.solutions.base.Solution` with the state of
+A :class:`HeavyTopSolution` follows :class:`~thetasol.protocol.Solution` with the state of
 :func:`thetasol.integrators.heavy_top.integrate_heavy_top`: the body angular velocity ``omega``
 (shape ``t.shape + (3,)``) and the attitude ``Q`` (body to space, ``t.shape + (3, 3)``).
 """
@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike
 
-from thetasol.solutions.base import Solution
+from thetasol.protocol import Solution
 
 __all__ = ["HeavyTopSolution"]
 

@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.dd import two_prod
-from thetasol.solutions.base import Solution
+from thetasol.protocol import Solution
 
 __all__ = ["KeplerOrbit", "stumpff_c"]
 

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
-from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
+from thetasol.protocol import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.gyrostat import solve_gyrostat
 from thetasol.solutions.heavy_top import LagrangeTopSolution, SteadyRotationSolution, solve_heavy_top
 from thetasol.solutions.heavy_top_base import HeavyTopSolution

@@ -38,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
-from thetasol.solutions.base import Solution
+from thetasol.protocol import Solution
 
 __all__ = ["MassCenterMotion", "mass_center", "stumpff"]
 
@@ -115,7 +115,7 @@ def _symmetry_axes(lam: np.ndarray, Vec: np.ndarray, beta: np.ndarray) -> tuple[
 class MassCenterMotion(Solution):
     """Closed-form motion of the mass centre in ``phi(x) = 1/2 x^T a x + 1/2 b^T x`` (3.2).
 
-    A :class:`~thetasol.solutions.base.Solution`: ``mc(t)`` returns ``(q, v)`` with shapes
+    A :class:`~thetasol.protocol.Solution`: ``mc(t)`` returns ``(q, v)`` with shapes
     ``t.shape + (3,)``; ``mc(t, dps=n)`` evaluates the same formulas in mpmath at ``n`` digits.
 
     Parameters

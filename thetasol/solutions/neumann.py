@@ -53,9 +53,9 @@ from thetasol.core.periodic import (
 from thetasol.core.roots import quadratic_roots
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.constraints import point_on_sphere
+from thetasol.protocol import ClosedFormUnavailable, Solution
 from thetasol.solutions._neumann_torus import MIN_WIDTH, DegenerateTorus, NeumannTorus, Oscillator
 from thetasol.solutions._symmetry import SNAP_TOL
-from thetasol.solutions.base import ClosedFormUnavailable, Solution
 
 __all__ = ["NeumannSolution", "solve_neumann", "NeumannTorus", "Oscillator", "EllipticNeumann",
            "LatitudeCircle", "PlanarNeumann", "neumann_model", "series_or_unavailable",

@@ -30,10 +30,10 @@ import numpy as np
 
 from thetasol.core.periodic import eval_series, integrated, powers, refined_fft, sum_series
 from thetasol.mechanics.equations import invariants as _invariants
+from thetasol.protocol import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._symmetry import (
     symmetric_without_spin,
 )
-from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.neumann import (
     EllipticNeumann,
     LatitudeCircle,

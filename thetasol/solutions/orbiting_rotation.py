@@ -49,7 +49,7 @@ from thetasol.core.attitude import angle_mod_2pi, principal_frame, uniform_rotat
 from thetasol.core.so3 import rotation_about
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability, orbit_frame
-from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
+from thetasol.protocol import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
 from thetasol.special.elliptic import ellipj, ellipk
 from thetasol.special.pendulum import pendulum_angle, pendulum_params

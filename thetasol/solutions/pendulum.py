@@ -22,7 +22,7 @@ import numpy as np
 
 from thetasol.core.so3 import rotation_about
 from thetasol.mechanics.equations import invariants as _invariants
-from thetasol.solutions.base import RotationSolution
+from thetasol.protocol import RotationSolution
 
 __all__ = ["PendulumRotation", "solve_pendulum"]
 

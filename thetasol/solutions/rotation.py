@@ -37,9 +37,9 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.threads import single_blas_thread
+from thetasol.protocol import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
 from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame, symmetric_without_spin, symmetry_axis
-from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 
 __all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]
 

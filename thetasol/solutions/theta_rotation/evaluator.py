@@ -26,7 +26,7 @@ unstable equilibrium (best of 7 x 100 calls on a shared 2-core machine, benchmar
 docs/bench_theta_rotation.md): 6-62 dense points.  With the numba kernels switched on (``THETASOL_NUMBA=1``,
 :mod:`thetasol.core.jit`) the state is one compiled kernel per chunk of times.
 Working memory is ~2.5 KB per time (the flow's phases go in bounded blocks), so the default chunk of
-:class:`thetasol.solutions.base.Solution` applies.
+:class:`thetasol.protocol.Solution` applies.
 
 The shifts ``b_sk = A(P_s) - e_k`` are sums of Abel images, known to ~1e-14; where ``psi_k(P_s)`` is
 small or zero that error shows directly in ``Psi``.  Each ``b_sk`` is moved by the least amount that

@@ -20,8 +20,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from thetasol.curves.plane_curve import Numerator
+from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions._symmetry import SNAP_TOL
-from thetasol.solutions.base import ClosedFormUnavailable
 from thetasol.solutions.theta_rotation.cauchy import (
     CauchyMeans,
     auxiliary_nu,

@@ -19,8 +19,8 @@ import numpy as np
 from thetasol.core.so3 import hat
 from thetasol.curves.spectral import farthest_branch_point
 from thetasol.mechanics.equations import inertia_from_moments
+from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame, symmetry_axis
-from thetasol.solutions.base import ClosedFormUnavailable
 
 __all__ = ["MIN_AXIAL_SPIN", "MIN_J_GAP", "MAX_FAR_BRANCH", "BodyFrame", "body_frame"]
 

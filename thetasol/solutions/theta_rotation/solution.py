@@ -21,8 +21,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.mechanics.equations import invariants as first_integrals
+from thetasol.protocol import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._symmetry import sorted_principal_frame, symmetry_axis
-from thetasol.solutions.base import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.theta_rotation.divisors import eigenvector_divisors
 from thetasol.solutions.theta_rotation.evaluator import FlowEvaluator, flow_evaluator
 from thetasol.solutions.theta_rotation.exponents import exponents
