@@ -10,6 +10,8 @@ import sys
 import tomllib
 from pathlib import Path
 
+import pytest
+
 from thetasol import reference
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -97,3 +99,29 @@ def test_the_pyproject_entry_point_loads_the_plugin(tmp_path):
     res = _pytest(_project(project), "--collect-only", "--thetasol-model=Kepler orbit", entry_point_dir=site)
     assert res.returncode == 0, res.stdout + res.stderr
     assert res.stdout.count("test_my_integrator[") == 2 and "kepler_hyperbola" in res.stdout
+
+
+def test_an_unknown_case_name_is_a_usage_error(tmp_path):
+    """A misspelt ``--thetasol-cases`` or ``--thetasol-model`` stops pytest with a usage error that
+    names the known cases, not a KeyError reported against the user's test file."""
+    project = _project(tmp_path)
+    res = _pytest(project, "--collect-only", "--thetasol-cases=kepler_ellipse,kepler_elipse")
+    assert res.returncode == pytest.ExitCode.USAGE_ERROR, res.stdout + res.stderr
+    assert "unknown reference case(s) kepler_elipse" in res.stderr and "kepler_ellipse" in res.stderr
+    assert "KeyError" not in res.stdout + res.stderr and "test_user.py" not in res.stdout + res.stderr
+    res = _pytest(project, "--collect-only", "--thetasol-model=heavy tops")
+    assert res.returncode == pytest.ExitCode.USAGE_ERROR and "known: " in res.stderr and "heavy top" in res.stderr
+
+
+def test_loading_the_plugin_imports_nothing_heavy():
+    """Every pytest session of the environment loads the plugin: a fresh interpreter importing it
+    must not import numpy, scipy or the closed forms (they load when a test asks for a case)."""
+    probe = ("import sys, thetasol.reference.pytest_plugin\n"
+             "print(sorted(m for m in sys.modules if m.split('.')[0] in ('numpy', 'scipy', 'mpmath', 'sympy')"
+             " or m.startswith(('thetasol.solutions', 'thetasol.reference.', 'thetasol.core'))"
+             " and m != 'thetasol.reference.pytest_plugin'))")
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    res = subprocess.run([sys.executable, "-c", probe], cwd=ROOT, env=env, capture_output=True, text=True,
+                         timeout=120)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout.strip() == "[]"
