@@ -85,7 +85,8 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_API))
+    """The public API only (not the helpers this module imports to load it)."""
+    return sorted(__all__)
 
 
 if TYPE_CHECKING:
