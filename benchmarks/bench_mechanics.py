@@ -63,7 +63,7 @@ def mass_centre_table():
         sec, qe = best_of(lambda: np.array([(expm(A * tk) @ y0)[:3] for tk in t]), REPEAT)
         rows.append(("scipy.linalg.expm per time", sec, np.max(np.abs(qe[::50] - ref)) / scale))
         print(f"\n### {label}: eigenvalues {lam}\n")
-        print("| method | time (ms) | max error / max |q| |")
+        print(r"| method | time (ms) | max error / max \|q\| |")
         print("|---|---|---|")
         for name, sec, err in rows:
             print(f"| {name} | {sec * 1e3:.2f} | {err:.1e} |")
