@@ -99,7 +99,9 @@ def test_against_the_jacobian_of_the_full_equations(I, region, n):
 
 
 def test_published_frequencies():
-    """SECTIONS_5_8 C.1 (checked there against the Jacobian of (7.16)), Omega = 1."""
+    """Two check bodies, one in each stable region, Omega = 1: the pitch and roll-yaw frequencies of the
+    linearized motion (Hughes, Spacecraft Attitude Dynamics, Wiley 1986, ch. 9; DeBra and Delp,
+    J. Astronaut. Sci. 8 (1961) 14-17), checked independently against the Jacobian of (7.16)."""
     s = gravity_gradient_stability(_moments((1.5, 2.0, 3.0)), 1.0)
     assert s.pitch_frequency == pytest.approx(0.707107, abs=1e-6)
     assert s.roll_yaw_frequencies == pytest.approx((0.802429, 1.762415), abs=1e-6)

@@ -4,8 +4,7 @@ characteristics (:class:`KovalevskayaMotion`).  The attitude is :mod:`thetasol.s
 :func:`thetasol.solutions.heavy_top.solve_heavy_top` puts them together (docs/heavy_top.md).  Checked along
 80-bit heyoka trajectories (tests/test_heavy_top.py, tests/test_kovalevskaya_top.py).
 
-Normalization of Kowalevski's memoir (Acta Math. 12 (1889) 177-232; transcribed in
-/work/shared/SECTIONS_5_8.md A.5): principal frame with ``I = diag(2, 2, 1) I3``, the mass centre
+Normalization of Kowalevski's memoir (S. Kowalevski, Acta Math. 12 (1889) 177-232): principal frame with ``I = diag(2, 2, 1) I3``, the mass centre
 ``x0 e1``, ``c0 = m |g| x0 / I3``, ``g`` the DOWNWARD vertical in the body frame (``-gamma`` of the
 paper's Section 5) and the physical time:
 

@@ -8,7 +8,7 @@ rotors' axial moments.  The axial momentum ``M3 = C omega3 + lam`` and the verti
 Lagrange top's cubic with ``a = M3 / A`` (the total axial momentum); the spin angle obeys
 ``phidot = omega3 - u psidot`` with ``omega3 = (M3 - lam) / C``.  So the closed form of
 :mod:`thetasol.solutions.lagrange_top` holds with one changed constant: the phase rate
-``kappa = a (A / C - 1)`` becomes ``omega3 - a`` (SECTIONS_5_8.md, A.1 (c)); everything else (turning
+``kappa = a (A / C - 1)`` becomes ``omega3 - a`` (from the spin equation above); everything else (turning
 points, Legendre integrals of the third kind, far-time reduction) is the top's.
 
 Checked against :func:`thetasol.integrators.gyrostat.integrate_heavy_gyrostat` (80-bit heyoka) in
