@@ -9,14 +9,13 @@ Where it runs:
 
 * by default, a local pool of processes (``concurrent.futures.ProcessPoolExecutor``, ``spawn``
   start method: the calling script needs the ``if __name__ == "__main__":`` guard), one per core,
-  started for the call and shut down after (0.7-0.8 s for 2 workers solving two Euler tops on the
-  quiet 2-core machine, most of it the workers' imports: for repeated calls pass your own executor
-  as ``client``);
+  started for the call and shut down after (its start-up, mostly the workers' imports, is timed
+  apart by benchmarks/bench_ensemble.py: for repeated calls pass your own executor as ``client``);
 * ``workers=1``: in this process, no pool (the baseline, and the way to debug);
 * ``client=``: a ``dask.distributed.Client`` (Dask is an optional extra, ``thetasol[dask]``),
   ``"dask"`` for the current default client, or any ``concurrent.futures.Executor``.
 
-A theta-function solution pickles to ~1 MB (its lattice tables): to bring back only states, give
+A theta-function solution pickles large (its lattice tables): to bring back only states, give
 ``t`` and each worker returns ``sol(t)`` instead of ``sol``.  Throughput and scaling are measured in
 benchmarks/bench_ensemble.py (docs/ensembles.md).
 """

@@ -366,7 +366,7 @@ def _region(k1: float, k3: float) -> str:
 def stability_grid(n: int = 201) -> tuple[np.ndarray, np.ndarray]:
     """``(k, regions)``: ``k`` the ``n`` values in ``[-1, 1]``, ``regions[i, j]`` the index in
     :data:`STABILITY_REGIONS` of the body with ``k1 = k[j]``, ``k3 = k[i]`` (classified by
-    :func:`thetasol.gravity_gradient_stability`, about 20 us a point)."""
+    :func:`thetasol.gravity_gradient_stability`, one call a point)."""
     k = np.linspace(-1.0, 1.0, int(n))
     names = list(STABILITY_REGIONS)
     return k, np.array([[names.index(_region(k1, k3)) for k1 in k] for k3 in k])
@@ -385,7 +385,7 @@ def stability_diagram(bodies: Mapping[str, ArrayLike] | None = None, *, n: int =
     bodies : mapping of str to array_like (3,), optional
         Bodies to mark, label -> principal inertia ``(I1, I2, I3)`` in the orbit axes.
     n : int
-        Grid points per axis (``n^2`` classifications: 0.9 s at 201).
+        Grid points per axis (``n^2`` classifications).
     ax : matplotlib.axes.Axes, optional
 
     Returns

@@ -5,7 +5,7 @@ A Fourier series of such a function needs ~36 / d terms (d the distance of the n
 from the real axis): thousands near a separatrix of a separated solution (docs/neumann.md).  Panels
 bisected until every singularity lies outside the Bernstein ellipse of parameter :data:`RHO` of its
 panel need only ~log2(1/d) panels per singularity, and :data:`NODES` Gauss-Legendre nodes integrate
-each to ``RHO^(-2 NODES)`` (5e-20) relative.
+each to ``RHO^(-2 NODES)`` relative, below float64 rounding.
 """
 from __future__ import annotations
 
@@ -27,8 +27,8 @@ RHO = 4.0
 
 @cache
 def gauss_legendre(N: int) -> tuple[np.ndarray, np.ndarray]:
-    """Gauss-Legendre nodes and weights on [-1, 1] of order N (numpy's ``leggauss``, ~0.25 ms a call,
-    kept per order): shared, not to be written into."""
+    """Gauss-Legendre nodes and weights on [-1, 1] of order N (numpy's ``leggauss``, computed once
+    per order and kept): shared, not to be written into."""
     return np.polynomial.legendre.leggauss(N)
 
 

@@ -5,8 +5,8 @@ that moves linearly in time.  This module holds what they share:
 
 * :func:`refined_fft`, :func:`fit_series`: the coefficients, the grid doubled until the outer band of
   the spectrum is below :data:`COEF_TOL` relative (or the noise of the samples);
-* :func:`powers`: ``e^{ikx}`` for k = 1..n by doubling, at most log2(k) roundings (4e-16 against
-  mpmath to k = 460, tests/test_neumann.py::test_powers_against_mpmath);
+* :func:`powers`: ``e^{ikx}`` for k = 1..n by doubling, at most log2(k) roundings (checked against
+  mpmath, tests/test_neumann.py::test_powers_against_mpmath);
 * :func:`sum_series`, :func:`sum_series_derivative`, :func:`eval_series`, :func:`grid_values` (on the
   uniform grid, by FFT), :func:`integrated`;
 * :class:`HermiteTable`: a piecewise-cubic model of a series, cheap for the first Newton steps;

@@ -17,7 +17,7 @@ def hat(v: np.ndarray) -> np.ndarray:
     """Skew matrix of a vector: ``hat(v) @ w = v x w``; shape ``(..., 3) -> (..., 3, 3)``."""
     v = np.asarray(v)
     x, y, w = v[..., 0], v[..., 1], v[..., 2]
-    # filled in place: nested np.stack cost 5x more on the single vectors of right-hand sides
+    # filled in place: nested np.stack costs several times more on the single vectors of right-hand sides
     S = np.zeros(v.shape[:-1] + (3, 3), dtype=v.dtype)
     S[..., 0, 1], S[..., 0, 2] = -w, y
     S[..., 1, 0], S[..., 1, 2] = w, -x
@@ -35,7 +35,7 @@ def vee(S: np.ndarray) -> np.ndarray:
 
 def cross(u: np.ndarray, v: np.ndarray) -> np.ndarray:
     """``np.cross`` of ``(..., 3)`` arrays with the same floating-point operations, minus its axis
-    handling (which dominates for the few vectors of a right-hand side: ~5x cheaper there)."""
+    handling (which dominates the cost for the few vectors of a right-hand side)."""
     u0, u1, u2 = u[..., 0], u[..., 1], u[..., 2]
     v0, v1, v2 = v[..., 0], v[..., 1], v[..., 2]
     return np.stack([u1 * v2 - u2 * v1, u2 * v0 - u0 * v2, u0 * v1 - u1 * v0], -1)
@@ -87,7 +87,7 @@ def polar_near_orthogonal(X: np.ndarray) -> np.ndarray:
     One Newton-Schulz step ``X (3 - X^T X) / 2``: with ``X = R (1 + S)``, ``S`` symmetric, it returns
     ``R (1 - 3 S^2 / 2 + ...)``, so for ``|X^T X - 1| <= 1e-8`` (``|S| <= 5e-9``) the result is the
     polar factor to rounding; columns beyond that take the SVD.  Elementwise over ``n`` (the same
-    operations for every column, whatever ``n``), 10-40x cheaper than a batched SVD.
+    operations for every column, whatever ``n``), far cheaper than a batched SVD.
     """
     D = np.add.reduce(X[:, :, None] * X[:, None, :], axis=0)        # X^T X, (3, 3, n)
     D -= _EYE

@@ -2,14 +2,11 @@
 
 The library's linear algebra is on 3x3 .. 8x8 matrices and stacks of them, far below the size at
 which a multi-threaded BLAS gains; with the BLAS's default threads (one per core) its calls pay the
-threads' wake-up and synchronisation instead.  Measured on the 13 reference bodies on 2 cores, both
-settings in one run (benchmarks/bench_blas_threads.py, docs/bench_theta_rotation.md): on the quiet
-machine dense evaluation with the default threads costs 0.77-1.02x the limited cost in wall time (its
-largest products use the second core, at more CPU time), and under other jobs' load it has cost 11x on one
-body (a BLAS thread waiting for a busy core).  The guard's set and restore cost 6-9 us per call when the
-BLAS is on 2 threads, a fifth of one far time of the theta-function rotation, whose matrix-vector
-products OpenBLAS runs on one thread anyway: a closed form evaluated at one time skips the guard
-(:meth:`thetasol.protocol.Solution._run`).
+threads' wake-up and synchronisation instead, and on a loaded machine a BLAS thread waits for a
+busy core (benchmarks/bench_blas_threads.py measures both settings on the reference bodies).  The
+guard's set and restore are a noticeable part of one far time of the theta-function rotation, whose
+matrix-vector products OpenBLAS runs on one thread anyway: a closed form evaluated at one time skips
+the guard (:meth:`thetasol.protocol.Solution._run`).
 
 :func:`blas_threads` (a context manager) and :func:`single_blas_thread` (a decorator) set every
 loaded BLAS to :data:`LIMIT` threads for the duration of the call, with threadpoolctl, and restore the
@@ -17,10 +14,9 @@ user's settings afterwards, also when the call raises.  Calls nest (only the out
 restores) and are safe from several Python threads at once (a process-wide count: the limit holds
 while any thread is inside).  They do nothing without threadpoolctl, with ``LIMIT = None``, or with
 ``THETASOL_BLAS_THREADS=keep`` in the environment (read at the first call).  A BLAS already at
-``LIMIT`` threads or fewer is left alone, so the cost is a sub-microsecond query per call then, a few
-microseconds otherwise.
+``LIMIT`` threads or fewer is left alone, so the cost is then one query per call.
 
-OpenBLAS (0.3.31 measured, tests/test_threads.py) ignores a setting made from a thread other than the
+OpenBLAS (tests/test_threads.py) ignores a setting made from a thread other than the
 main one once the main thread has set one: called from worker threads of such a process, the library
 runs with the BLAS as it finds it (Dask's worker processes start with ``OPENBLAS_NUM_THREADS=1``).
 """
@@ -49,7 +45,7 @@ def _blas_controllers() -> list:
     """(controller, its ``get_num_threads``) of the loaded BLAS libraries (numpy's, and scipy's once
     ``scipy.linalg`` is loaded), found once per state of ``scipy.linalg``.
 
-    Importing ``scipy.linalg`` here to load its BLAS would cost ~0.1 s at the first call of a process,
+    Importing ``scipy.linalg`` here to load its BLAS would slow the first call of a process,
     and the theta-function rotation makes no scipy call: a scipy BLAS first loaded inside a call is
     found at the next call."""
     key = "scipy.linalg" in sys.modules

@@ -107,7 +107,7 @@ def times(t: ArrayLike, name: str = "t") -> np.ndarray:
     """Finite real times of any shape.
 
     A float64 array goes through as it is, checked by two ufunc calls, and a Python float is checked
-    as a float: a third of :func:`finite_array`'s fixed cost on a single time (its conversion and
+    as a float: less fixed cost on a single time than :func:`finite_array` (its conversion and
     ``np.all`` wrapper).
     """
     if type(t) is np.ndarray and t.dtype == np.float64 and np.logical_and.reduce(np.isfinite(t), axis=None):

@@ -7,5 +7,5 @@ and Riemann constant (:mod:`thetasol.curves.plane_curve`), the half-period scan 
 Riemann constant (:mod:`thetasol.curves.riemann_constant`), the real homology basis of a Liouville torus
 (:mod:`thetasol.curves.adapted_basis`), the spectral curve of a body in a quadratic potential
 (:mod:`thetasol.curves.spectral`), and hyperelliptic curves ``y^2 = f(x)`` of odd degree built from their
-branch points alone, ~100x faster than the general path (:mod:`thetasol.curves.hyperelliptic`).  Depends on :mod:`thetasol.theta` and below.
+branch points alone, much faster than the general path (:mod:`thetasol.curves.hyperelliptic`).  Depends on :mod:`thetasol.theta` and below.
 """

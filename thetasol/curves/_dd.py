@@ -79,7 +79,7 @@ def gauss_legendre_dd(N: int):
     Orders in :data:`TABLE_ORDERS` are read from a table of the values of
     :func:`gauss_legendre_dd_mp` (curves/data/gauss_legendre_dd.npz, written by
     :func:`write_gauss_legendre_table`; tests/test_curve_dd.py checks it bit for bit): reading it
-    costs ~1 ms, computing the orders a set-up needs ~150 ms, paid once per process.
+    is far cheaper than computing the orders a set-up needs, which would be paid once per process.
     """
     if N in TABLE_ORDERS:
         offsets, nodes = _table()
@@ -103,7 +103,7 @@ def gauss_legendre_dd_mp(N: int):
 
 
 def write_gauss_legendre_table(path: Path = _TABLE) -> None:
-    """Write the table of :func:`gauss_legendre_dd` for :data:`TABLE_ORDERS` (~3 s of mpmath)."""
+    """Write the table of :func:`gauss_legendre_dd` for :data:`TABLE_ORDERS` (in mpmath: slow, run by hand)."""
     parts = [np.stack(gauss_legendre_dd_mp(N)) for N in TABLE_ORDERS]
     offsets = np.cumsum([0] + [p.shape[1] for p in parts])[:-1]
     np.savez_compressed(path, offsets=offsets, nodes=np.concatenate(parts, axis=1))
@@ -117,10 +117,8 @@ def _horner(C, z, deriv=False):
     factors [[Re z, Im z], [-Im z, Re z]] and two sums: the elementwise operations of
     :func:`thetasol.core.dd.cdd_mul` and ``cdd_add`` (the same bits), with z split once per call and
     each partial sum once per step (``cdd_mul`` splits every part once per product it enters): fewer
-    passes over the arrays, and a quarter of the numpy calls.  Calls of a set-up replayed (best of 20),
-    stacked against one cdd product per step: 264 pairs of a cubic with its derivative 0.20 against
-    0.34 ms, 964 nodes of the degree-6 coefficients 1.6 against 2.2 ms; a single step on 2892 x 8
-    points 1.3 against 1.0 ms (the stacking does not pay for one step).
+    passes over the arrays, and a quarter of the numpy calls (the stacking pays over several steps,
+    not for a single one).
     """
     n = C[0].shape[-1] - 1
     # Every factor of the products (partial sums of the value and the derivative, parts of z) is
@@ -268,8 +266,8 @@ def _newton_dd(Ap, y0):
     Steps in float (they are small corrections).  A root is done when its step is below the
     rounding bound of the double-double residual, 2^-104 (n + 1) sum |a_j| |y|^j / |f_y|
     (ill-conditioned roots near colliding sheets), or when its steps stop decreasing below
-    1e-26 relative; it then leaves the iteration with its y and f_y (after two steps 1-36 % of the
-    roots of the reference bodies still step by more than 1e-30 relative: the ill-conditioned ones)."""
+    1e-26 relative; it then leaves the iteration with its y and f_y (the ill-conditioned roots still
+    step after the others are done)."""
     y = tuple(np.array(v) for v in cdd(y0))       # (four arrays: updated in place below)
     fy = tuple(np.zeros(len(y0)) for _ in range(4))
     prev = np.full(len(y0), np.inf)
@@ -334,7 +332,7 @@ class IntervalRoots:
     """What :func:`intervals_dd` computes before any numerator: the nodes ``X`` (complex double-double),
     the (node, track) pairs, the polished roots ``y`` and ``w dx/dtau / f_y`` per pair.  The curve engine
     keeps it per set of intervals, so further differentials over the same cycles (the third-kind periods
-    of the theta-function rotation) pay only for their numerators (~5 ms a set on its nodal curves)."""
+    of the theta-function rotation) pay only for their numerators."""
 
     X: tuple
     pairs: _Pairs

@@ -3,8 +3,8 @@ private to :mod:`thetasol.curves.plane_curve`, which also exports :class:`Numera
 
 A numerator is given as a sympy expression, a string in ``x``, ``y``, or a :class:`Numerator` (exact
 coefficients, no sympy: the holomorphic differentials of the engine and the numerators of the
-theta-function rotation's set-up, which then runs without importing sympy, ~0.25 s of a process's
-first set-up); the engine works with its complex coefficient array and, for the double-double and
+theta-function rotation's set-up, which then runs without importing sympy, a large part of a
+process's first set-up); the engine works with its complex coefficient array and, for the double-double and
 mpmath sums, its exact rational form.
 """
 from __future__ import annotations
@@ -83,7 +83,7 @@ def expanded_sum(terms):
     """``sympy.expand(sympy.Add(*terms))`` for terms that are numbers times distinct monomials (distinct
     products of powers of symbols and ``I``): the same expression, built in Add's canonical order
     (the number first, the rest by ``Basic.compare``) without evaluating an Add, whose first
-    evaluation in a process imports ``sympy.tensor.tensor`` (25-35 ms; tests/test_curves.py checks
+    evaluation in a process imports ``sympy.tensor.tensor`` (slow; tests/test_curves.py checks
     the identity)."""
     import sympy as sp
     numbers = [t for t in terms if t.is_Number]
@@ -141,7 +141,7 @@ def _from_sympy(g, x, y) -> Numerator:
 
 def cached_numerators(cache: dict, exprs, symbols):
     """:func:`parse_numerators` kept in ``cache`` (a curve's) per tuple of numerators, read-only: the callers
-    share it (sympy's parsing costs ~0.3 ms a numerator, and a set-up asks for the same ones many times)."""
+    share it (sympy's parsing is slow, and a set-up asks for the same numerators many times)."""
     exprs = tuple(exprs)
     key = ("parsed", exprs)
     try:

@@ -14,9 +14,9 @@ Accuracy next to close critical values (motions near relative equilibria: pairs 
 to their size).  The chart is centred at the exact critical value (its float64 value plus the low part
 from :func:`~thetasol.curves._poly.root_corrections`), the samples are evaluated through the exactly
 shifted polynomial, and f_y is taken at the exact roots (:meth:`CurvePoly.polish_dd`): each of these
-three roundings alone moved the series by ~eps |b| / r, i.e. 1e-12 relative next to a pair.  M = 128
-samples per turn keep the truncation of the series at the sampling circle, where tails of Abel
-integrals into places are summed, below 1e-19 (64 left 2e-10 of the largest term).
+three roundings alone would move the series by ~eps |b| / r, large next to a pair.  M = 128 samples
+per turn keep the truncation of the series at the sampling circle, where tails of Abel integrals into
+places are summed, below float64 rounding (~2^(-M/2) of the largest term).
 """
 from __future__ import annotations
 
@@ -30,7 +30,7 @@ from thetasol.curves._quad import Piece
 # samples per turn.  The circle has radius half the distance to the next critical value, so in the
 # local parameter the series converges like 2^(-k/e) there and the FFT keeps e M / 2 terms: the
 # truncation is ~2^(-M/2) of the largest term.  That is what tails into places are summed with
-# (at t0 itself); M = 64 left ~2e-10 (1e-13 in Abel images of places, 3e-11 next to close pairs).
+# (at t0 itself); M = 128 puts it below float64 rounding, fewer samples would not.
 M_SITE = 128
 M_INF = 128
 
@@ -331,8 +331,8 @@ def noise_level(ld):
     1e-9, raised to 100 eps |b| / radius for circles tiny against |b|, where rounding of the
     centre or of the sample positions (~eps |b|) would show up as ~eps |b| / radius.  The charts
     are centred on the exact critical value with exactly shifted samples (:func:`local_data`), so
-    that rounding does not occur, and the raise needs |b| / radius > 4.5e4 (8.5e3 at most on the
-    near-equilibrium curve of tests/test_abel_clusters.py, where it stays 1e-9)."""
+    that rounding does not occur, and the raise applies only when |b| / radius > 4.5e4 (1e-9 /
+    (100 eps))."""
     if ld.kind != "critical":
         return 1e-9
     return max(1e-9, 100 * np.finfo(float).eps * abs(ld.center) / abs(ld.x1 - ld.center))

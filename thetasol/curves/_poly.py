@@ -12,7 +12,7 @@ nearly equal floating roots.
 The compensated (double-double) evaluations use the coefficients as hi + lo pairs of the exact
 rationals, not their float64 roundings: next to two nearly colliding branch points (relative distance
 d) a relative change eps of the coefficients moves them by ~eps / d and the differentials by
-~eps / d^2 (5e-10 in the periods of a motion near a relative equilibrium, d ~ 2e-4).
+~eps / d^2 (large in the periods of a motion near a relative equilibrium, where d is small).
 """
 from __future__ import annotations
 
@@ -109,7 +109,7 @@ class CurvePoly:
     @classmethod
     def from_exact(cls, coef: dict, x, y) -> CurvePoly:
         """The curve ``sum coef[(i, j)] x^i y^j`` from exact real coefficients (Fractions), without sympy's
-        parsing (~0.7 ms, 3.4 ms for a polynomial it has not seen): the spectral curves' path."""
+        parsing (slow, more so for a polynomial it has not seen): the spectral curves' path."""
         self = cls.__new__(cls)
         self._set_exact({k: (Fraction(v), Fraction(0)) for k, v in coef.items() if v != 0}, x, y)
         return self
@@ -245,8 +245,8 @@ class CurvePoly:
 
         Companion-matrix eigenvalues (backward stable), then ``polish`` vectorized Newton steps.
         ``any_order``: for callers that match the roots by value (the tracker), the roots of a cubic
-        come from the closed form in another order than the eigenvalues' (a fifteenth of their cost:
-        ~1.5 us a point; rows where its backward error exceeds 1e-8 fall back to eigenvalues).
+        come from the closed form in another order than the eigenvalues' (far cheaper than the
+        eigenvalues; rows where its backward error exceeds 1e-8 fall back to eigenvalues).
         Raises ValueError where the leading coefficient vanishes (a pole of y).
         """
         A = self.coeff_polys(x)
@@ -279,7 +279,7 @@ class CurvePoly:
     def horner_y(A, Y):
         """p(Y), p'(Y) for p(y) = sum_j A[:, j] y^j, Y of shape (K, m)."""
         n = A.shape[1] - 1
-        p = np.empty(Y.shape, A.dtype)   # (filled by broadcasting: 1 us, np.broadcast_to().copy() 6 us)
+        p = np.empty(Y.shape, A.dtype)   # (filled by broadcasting: cheaper than np.broadcast_to().copy())
         p[...] = A[:, n:n + 1]
         dp = np.zeros_like(p)
         for j in range(n - 1, -1, -1):
@@ -638,9 +638,8 @@ def _cadd_eft(a, b):
 
 
 #: Points per block of :func:`comp_horner`: its ~15 temporaries of 4 x block doubles (64 kB) stay in
-#: L2 and below the allocator's threshold for fresh mappings, and the blocks are few.  The calls of a
-#: set-up replayed (best of 10): generic 34-36 ms with 1024, 29-31 with 2048, 29-30 unblocked;
-#: near_unstable_equilibrium 47-48 ms with 1024, 41-43 with 2048 or 4096.
+#: L2 and below the allocator's threshold for fresh mappings, and the blocks are few (smaller blocks
+#: pay more per-call overhead, larger ones leave the cache).
 _HORNER_BLOCK = 2048
 
 
@@ -658,7 +657,7 @@ def comp_horner(chi, clo, z):
         rows = lambda c, i: c[i:i + step] if c.ndim - 1 == z.ndim and c.shape[0] == z.shape[0] else c  # noqa: E731
         parts = [comp_horner(rows(chi, i), rows(clo, i), z[i:i + step]) for i in range(0, z.shape[0], step)]
         return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
-    # (filled by broadcasting assignment: np.broadcast_to costs ~10 us a call on these small arrays)
+    # (filled by broadcasting assignment: np.broadcast_to's per-call overhead dominates on these small arrays)
     s = np.empty(z.shape, complex)
     s[...] = chi[..., n]
     comp = np.empty(z.shape, complex)

@@ -4,9 +4,8 @@ The plane-curve engine needs, once per curve, the discriminant of ``f`` in ``y``
 part (the critical values of ``x``), and whether the coefficients ``a_j(x)`` share a factor.  For a real
 curve of degree 2 or 3 in ``y`` (the spectral curves of the theta-function rotation, the hyperelliptic
 curves) these are a few products of polynomials of degree <= 6 in ``x`` and one gcd: on integer
-coefficient lists (the coefficients of a curve given in floats are dyadic rationals) that is ~0.3 ms,
-where sympy's ``discriminant``, ``sqf_part`` and ``gcd`` cost 2.7 ms on a curve it has seen and 6 ms on a
-new one (its caches).  Other curves go through sympy (:meth:`thetasol.curves._poly.CurvePoly.critical_polynomial`).
+coefficient lists (the coefficients of a curve given in floats are dyadic rationals) that is an order
+of magnitude cheaper than sympy's ``discriminant``, ``sqf_part`` and ``gcd``.  Other curves go through sympy (:meth:`thetasol.curves._poly.CurvePoly.critical_polynomial`).
 
 Polynomials are lists of coefficients in ascending powers.  :func:`square_free_part` takes the leading
 coefficient it is to have: the curve engine gives it that of ``disc * lc`` (as sympy's ``Poly.sqf_part``

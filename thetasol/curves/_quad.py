@@ -16,8 +16,8 @@ from both ends must meet at the midpoint far closer than the roots are to each o
 gap-closing-time test and a tangent-turn test.  Where sheets turn together, gaps a small fraction of
 their common motion (large circles, far branch points of nearly symmetric bodies), the Hermite test on
 y would need steps ~ gap^(1/3); it is also tried on log y, and on the mean and half-difference of a
-tight pair of sheets, either of which matches such steps safely (3300 nodes per circle -> 129 at
-J_2 / J_1 = 1 + 1e-7).  Steps that fail every test are subdivided in vectorized rounds;
+tight pair of sheets, either of which matches such steps safely (far fewer nodes per circle for
+nearly symmetric bodies).  Steps that fail every test are subdivided in vectorized rounds;
 roots that float64 cannot separate are recomputed with mpmath from the exact coefficients, and
 intervals whose float64 sum is not accurate enough are re-summed in double-double from the exact
 coefficients (:mod:`thetasol.curves._dd`, vectorized over all nodes and tracks; nearly singular curves).
@@ -60,7 +60,7 @@ class Piece:
         tau = np.asarray(tau, dtype=float)
         if self.kind == "line":
             # the end exactly b: a + (b - a) is off by ~eps |a|, which a line from a far vertex
-            # (|a| ~ 1e7, nearly symmetric body) next to a branch point turned into 2e-7 in y
+            # (nearly symmetric body) next to a branch point magnifies in y
             return np.where(tau == 1.0, self.b, self.a + (self.b - self.a) * tau)
         if self.kind == "circle":  # around b, starting at a; e = +1 ccw, -1 cw
             return self.b + (self.a - self.b) * np.exp(2j * np.pi * self.e * tau)
@@ -627,7 +627,7 @@ class Tracked:
         ``exact`` attribute of ``numerators``); when available, intervals whose float64 sum is not
         accurate enough (:meth:`critical_intervals`) are re-summed in double-double at exact node
         positions (:meth:`_add_dd`); ``dd_all`` re-sums every interval (periods: float64 sums of many
-        intervals leave ~2e-15 relative).
+        intervals leave a few ulps).
         Returns a list over pieces of arrays (len(y0), ndiff).
         """
         if not self.pieces:

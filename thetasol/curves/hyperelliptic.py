@@ -17,7 +17,7 @@ evaluations of a product, and no path graph, sympy or sheet matching (as in Plan
   branches ``y_k, y_{k+1}`` at the vertex.  Integer symplectic reduction of this tridiagonal form
   gives ``a_1..a_g, b_1..b_g`` with ``a_i . b_j = delta_ij``, then changed (integer symplectic steps on the
   cycles) until ``tau`` is Siegel-reduced, so that theta sums and lattice reductions of callers see short
-  periods (Kovalevskaya's top against heyoka: 1.3e-13 with it, 8.4e-13 with the chain's basis, seed 4).
+  periods (which keeps Kovalevskaya's top closer to its numerical reference than the chain's basis does).
 * **Periods.**  On ``x = m + h cos(th)`` the branch is ``y = C_k sin(th) P_k(th)``, ``P_k`` the product of
   ``sqrt((x - e_j)/(m - e_j))`` over the other branch points (principal roots: continuous because no
   ``e_j`` lies on the segment), so ``int x^i dx / y = (h / C_k) int_0^pi x^i / P_k dth``: the square-root
@@ -39,18 +39,12 @@ evaluations of a product, and no path graph, sympy or sheet matching (as in Plan
   the 40 tops of benchmarks/bench_heavy_top.py).
 
 Everything is built from differences of branch points, so nothing depends on the units of ``x``.
-Measured (tests/test_hyperelliptic.py): periods against mpmath ``quad`` at 30 digits to <= 5.1e-16
-relative, also with two branch points 1e-3 or 1e-5 apart (relative to their spread); against
-:class:`~thetasol.curves.plane_curve.PlaneCurve` the bases differ by an integer symplectic matrix
-(integral to 1.4e-14, Abel maps equal modulo the lattice to 1.4e-14); tau symmetric to 1.4e-15;
-Jacobi inversion (Kleinian functions from theta give back ``x1 + x2``, ``x1 x2``) to 2.1e-13.  Three
-branch points within 6e-5 (a cusp forming) cost ~2 digits: vanishing-cycle periods ~150 against
-``tau ~ 1`` (tau symmetric to 2.2e-14, the Kleinian functions to 8e-10).
-Cost (CPU, one core, tests' quintics): 0.5-0.9 ms for the periods and tau, 0.13 ms for the Abel map of
-two points, 0.06 ms more for the Riemann constant in genus 2 (parities; in higher genus one theta call,
-~1.7 ms, the theta set-up, ~1.1 ms, shared through ``theta=``), against ~75 ms for a PlaneCurve of the same
-quintic.  In :mod:`thetasol.solutions.kovalevskaya_top` the curve set-up (with the theta set-up) costs
-2.2/2.5 ms (benchmarks/bench_heavy_top.py tops, seeds 2/17).
+Checked in tests/test_hyperelliptic.py: periods against mpmath ``quad`` at 30 digits, also with close
+branch points; against :class:`~thetasol.curves.plane_curve.PlaneCurve` the bases differ by an integer
+symplectic matrix (integrals and Abel maps equal modulo the lattice); tau symmetric; Jacobi inversion
+(Kleinian functions from theta give back ``x1 + x2``, ``x1 x2``).  Three branch points close together
+(a cusp forming) lose digits in proportion to the size of the vanishing-cycle periods.  The cost is a
+small fraction of a PlaneCurve's on the same curve (benchmarks/bench_curves.py, docs/bench_curves.md).
 """
 from __future__ import annotations
 

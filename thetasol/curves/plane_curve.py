@@ -387,7 +387,7 @@ class PlaneCurve:
         return C @ G @ C.T
 
     def _edge_integrals(self, P):
-        # all in double-double (float64: ~2e-15 relative, docs/theta_rotation.md); periods, potentials share it
+        # all in double-double (float64 sums over many edges lose digits); periods, potentials share it
         ck = ("edges", P.shape, P.tobytes(), repr(getattr(P, "exact", None)))
         if ck not in self._cache:    # rows e * n + s, one column per numerator
             self._cache[ck] = np.concatenate(self._edge_tracks.integrate(P, dd_all=True), axis=0)

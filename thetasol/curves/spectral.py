@@ -75,7 +75,7 @@ def _exact_coefficients(J, M, u) -> list:
     The floats of J, M, u are taken as the binary rationals they are and the determinant is expanded in
     rational arithmetic.  In float64 the coefficients lose the small terms they carry: near an
     equilibrium ``|M|^2 ~ 1e-6`` enters the ``E^2 w`` coefficient beside O(1) terms, and a few ulps there
-    moved the flow velocity U by 3e-11 relative (1e-8 in the attitude at t = 4000).
+    move the flow velocity U enough to show in the attitude at far times.
     """
     Jf = [[_fr(v) for v in row] for row in np.asarray(J, float)]
     J2 = [[sum(Jf[i][k] * Jf[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
@@ -114,11 +114,11 @@ def farthest_branch_point(J: ArrayLike, M: ArrayLike, u: ArrayLike) -> float:
     The roots of the discriminant in ``w`` of the cubic ``f = a w^3 + b w^2 + c w + d`` (``a = -1``, so
     the branch points are its roots), ``b^2 c^2 - 4 a c^3 - 4 b^3 d - 27 a^2 d^2 + 18 a b c d``
     (:func:`thetasol.curves._qpoly.discriminant_in_y`), formed from the exact rational coefficients
-    (:func:`_exact_coefficients`) and rounded once: ~1 ms, where
+    (:func:`_exact_coefficients`) and rounded once: cheap, where
     building the Riemann surface of a curve with branch points far out (a nearly spherical symmetric
-    body with a small axial spin) takes seconds to minutes.  A multiple root (a symmetric body's node)
-    comes out of ``np.roots`` with ~sqrt(eps) relative error, a simple one with ~eps (2.1e-15 measured,
-    tests/test_curve_public_helpers.py).  No snapping: pass the data as the curve is to be built
+    body with a small axial spin) can take minutes.  A multiple root (a symmetric body's node)
+    comes out of ``np.roots`` with ~sqrt(eps) relative error, a simple one with ~eps
+    (tests/test_curve_public_helpers.py).  No snapping: pass the data as the curve is to be built
     (e.g. two ``J_i`` already made equal).
 
     Parameters
@@ -295,7 +295,7 @@ class SpectralCurve(PlaneCurve):
         """The local data of the node over E = 0 (rank-one u) and, for a symmetric body, of the node
         over E = infinity, when these account for the whole drop of the genus (else None: all sites).
         The adjoint conditions then need the circles around them only (those around the other
-        critical values cost 30-45 ms of the set-up)."""
+        critical values are a large part of the set-up)."""
         sites = []
         if self.node is not None:
             k = self._site_index(0.0)

@@ -53,8 +53,7 @@ def extended_inertia(M: np.ndarray, w0: np.ndarray, fp: type, *, from_moments: b
     ``I = tr(J) 1 - J`` is formed exactly).  Everything is formed in mpmath at 60 digits and rounded
     once to ``fp`` as the sum of the float64 triple-word split: the float64 inverse of the float64
     inertia is another body, about one ulp away, and next to an unstable relative equilibrium that
-    ulp moves the trajectory by 5.8e-9 at t = 3727 against a conditioning of ~1e-10
-    (tests/test_equations.py).
+    ulp moves the trajectory far more than the data's conditioning (tests/test_equations.py).
     """
     import mpmath
 

@@ -327,8 +327,8 @@ def integrate_multibody(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     Notes
     -----
     Equations derived independently of the split (module docstring).  Cost is dominated
-    by Python overhead per right-hand side (dense ``(6N, 6N)`` algebra): 0.14-0.21 ms per
-    evaluation inside solve_ivp for N = 5 (docs/bench_mechanics.md, section 2).
+    by Python overhead per right-hand side (dense ``(6N, 6N)`` algebra; docs/bench_mechanics.md,
+    section 2, written by benchmarks/bench_mechanics.py).
     """
     if not isinstance(config, Configuration):
         raise ValueError(f"config must be a Configuration, got {type(config).__name__}")

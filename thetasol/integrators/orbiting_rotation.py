@@ -18,14 +18,11 @@ Methods:
     heyoka's Taylor integrator of the same equations with the orbit integrated alongside
     (``dtype="ldbl"``: 80-bit, ``"f128"``: quadruple precision) -- the extended-precision reference.
 
-Accuracy (tests/test_orbiting_rotation.py): DOP853 at ``rtol = 1e-12`` over 20 orbits (LEO, SI
-units; circular, e = 0.05 librating, e = 0.3 tumbling) stays within 7.3e-11 of 80-bit heyoka
-(``|dQ|`` and ``|d omega| / |omega|_max``; the data's own conditioning there is up to 1.5e-11 per
-1e-14 of omega0); the Jacobi integral (7.18) holds to 1.3e-13 on circular orbits; a centrally
-symmetric body of point masses in the exact 1/r field differs from it by ``16 (size / r)^2`` after
-two orbits, as the expansion (7.3) says.  Cost: 1.3 s (librating) to 5-8 s (tumbling at 10 n) for
-20 LEO orbits, ~50 us per right-hand side, most of it the Kepler solve
-(benchmarks/bench_orbiting_station.py).  No symplectic splitting is offered here: the torque depends
+Accuracy (tests/test_orbiting_rotation.py): DOP853 is checked against 80-bit heyoka over many
+orbits (circular, librating and tumbling), the Jacobi integral (7.18) on circular orbits, and a
+centrally symmetric body of point masses in the exact 1/r field differs from it by ``16 (size / r)^2``
+after two orbits, as the expansion (7.3) says.  Most of the cost of a right-hand side is the Kepler
+solve (benchmarks/bench_orbiting_station.py measures it).  No symplectic splitting is offered here: the torque depends
 on time through the orbit.
 """
 from __future__ import annotations
@@ -105,7 +102,7 @@ def _solve_ivp(Jm, Im, orbit, Q0, m0, tgrid, rtol, atol, method):
 
 
 def _make_rhs(Im, orbit):
-    """The right-hand side on Python floats: numpy's per-call overhead on 3-vectors would be ~5x the work.
+    """The right-hand side on Python floats: numpy's per-call overhead on 3-vectors would be several times the work.
 
     The same formulas as :func:`gravity_gradient_torque` (checked against it in the tests).
     """

@@ -29,8 +29,8 @@ The attitude is linearly stable iff ``I2 > I1`` (pitch), ``k1 k3 > 0``, ``1 + 3 
 ``(1 + 3 k1 + k1 k3)^2 > 16 k1 k3``; with ``I3 > I2 > I1`` (Lagrange region, the potential's minimum)
 all hold; the rest of the stable set (``k1, k3 < 0``) is the DeBra-Delp region (gyroscopic
 stability only).  The frequencies agree with the eigenvalues of the finite-difference Jacobian of
-the full equations (central differences in 40-digit mpmath) to 4.4e-16 relative on seven bodies
-in the three regions (tests/test_gravity_gradient.py).
+the full equations (central differences in 40-digit mpmath) to rounding, on bodies in the three
+regions (tests/test_gravity_gradient.py).
 """
 from __future__ import annotations
 

@@ -103,17 +103,16 @@ def polish_eigenvector_poles(J: np.ndarray, M: np.ndarray, u: np.ndarray, alpha:
     """The points of :func:`eigenvector_poles` polished by Newton's method in double-double.
 
     ``np.roots`` leaves E a few ulps off; next to a tight pair of branch points (motion near a
-    relative equilibrium) those ulps move the Abel image of the divisor by up to 6e-11.  Here
+    relative equilibrium) those ulps move the Abel image of the divisor by many more.  Here
     ``(L(E) - w) v = 0`` with ``v = b1 + s b2`` (or ``s b1 + b2``) in the plane ``alpha^T v = 0``
     (bilinear; ``b1, b2`` two of ``alpha x e_i``, whose entries are entries of alpha: exact) is solved
     for ``(E, w, s)`` from the float values, with ``J^2`` taken exactly as the spectral curve takes it
     (the square of the binary J), all points at once.  The residual is computed in double-double
     (errors ~1e-32 of its terms), the Jacobian in float64: each step multiplies the error by about
     eps times the Jacobian's condition, so ``iters = 3`` steps from np.roots' few ulps end at the
-    double-double limit, and the points rounded to complex128 are the correctly rounded roots: against
-    a 40-digit mpmath Newton, on the 13 bodies of tests/data/rotation/refs.json with 19 normalizations
-    each, 2614 of 2642 values are identical and 28 differ by <= 2e-32 of the largest (points at
-    E = 0, where the node is).  Returns ``(E, w)``.
+    double-double limit, and the points rounded to complex128 are the correctly rounded roots (checked
+    against a 40-digit mpmath Newton; points at E = 0, where the node is, may differ in the low word).
+    Returns ``(E, w)``.
     """
     Eo, wo = np.array(E, dtype=complex), np.array(w, dtype=complex)
     idx = np.nonzero(np.isfinite(Eo) & np.isfinite(wo))[0]

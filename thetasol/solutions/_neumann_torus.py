@@ -188,9 +188,8 @@ class NeumannTorus:
                 raise DegenerateTorus("Neumann solution: the torus is on a separatrix within rounding "
                                       f"(two branch points {min(below + above) / scale:.1e} apart, relative)")
             if w <= MIN_WIDTH * scale and "b" in (roots[i_lo][1], roots[i_hi][1]):
-                # the widths are accurate (roots anchored at the k_i): 1e-8 rad off a great circle (width
-                # 1e-16) is still within 1e-11 at t = 1000, but released at rest 1e-7 rad from a saddle
-                # (width 1e-14 and near a separatrix) the error is ~100x the conditioning at t = 100
+                # the widths are accurate (roots anchored at the k_i), but a thin torus next to a
+                # separatrix (released at rest near a saddle) loses far more than the data's conditioning
                 raise DegenerateTorus(
                     f"Neumann solution: nearly degenerate torus (a sphero-conical coordinate stays within "
                     f"{max(w, 0.0) / scale:.1e} of the span of k: the point within ~{np.sqrt(max(w, 0.0) / scale):.0e} "

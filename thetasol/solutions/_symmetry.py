@@ -14,10 +14,9 @@ __all__ = ["SNAP_TOL", "sorted_principal_frame", "symmetric_without_spin", "symm
 
 #: Relative size below which a near-degeneracy of the data is snapped to an exact one: 8 ulps, the
 #: rounding of an eigen-decomposition.  Snapping a gap d moves the trajectory by about d / eps times
-#: the float64 conditioning (error and conditioning both grow like t): the exactly symmetric model of a
-#: body with J gaps 5e-13 / 5e-14 / 5e-15 / 5e-16 is 1400 / 140 / 14 / 2.0 x the conditioning off
-#: heyoka 80-bit at t <= 4002 (benchmarks/bench_snapping.py).  Gaps above it and below the engines' own
-#: limits are refused.
+#: the float64 conditioning (error and conditioning both grow like t; benchmarks/bench_snapping.py
+#: measures it), so only gaps at the level of rounding are snapped.  Gaps above it and below the
+#: engines' own limits are refused.
 SNAP_TOL = 8 * float(np.finfo(float).eps)
 
 
@@ -42,7 +41,7 @@ def symmetric_without_spin(J: np.ndarray, a: np.ndarray, omega0: np.ndarray):
     """``(Jp, P, axis)`` when the body is symmetric, ``a`` is not isotropic and ``omega0`` has no axial
     part (relative to ``|omega0| + sqrt|a|``, within :data:`SNAP_TOL`): Neumann's case of
     :func:`thetasol.solve_rotation`; else None.  Here, apart from the Neumann model, so that the
-    dispatcher imports that model's ~30 ms of modules only for the bodies it solves."""
+    dispatcher imports that model's modules only for the bodies it solves."""
     Jp, P = sorted_principal_frame(J)
     if Jp[-1] - Jp[0] <= SNAP_TOL * Jp[-1]:
         return None                                    # spherical: no torque

@@ -24,15 +24,11 @@ derivative is ``r >= q``), and for ellipses ``|chi| <= sqrt(a) (n |dt| + 2 e)`` 
 
 Many revolutions.  For ellipses ``dt`` is reduced modulo the period first, with ``alpha`` and the
 period formed once in 40-digit mpmath from the float64 data and the period kept as two floats:
-``t = 100`` periods costs what ``t = 1`` costs and keeps its digits.  (In float64, ``alpha`` of an
-e = 0.99 orbit started at periapsis loses ~8 bits to cancellation, which is a phase error of
-3e-10 of the orbit's size after 100 revolutions.)  Measured (tests/test_kepler.py), relative to
-the orbit's size and to the largest speed: within 2.0e-14 / 7.4e-15 of an 80-bit heyoka integration
-over 100 revolutions for e <= 0.9 (that is the reference's own drift), within 1.1e-16 of a
-quadruple-precision one for e = 0.99 and 0.999; t up to 1e6 periods against Kepler's equation in
-50-digit mpmath 6.7e-16; hyperbolic orbits (e from 1 + 1e-12 to 30) 2.1e-15.  Cost: ~1.5 us per
-time on arrays, ~20-60 us per call of the scalar :meth:`KeplerOrbit.state_at`
-(benchmarks/bench_orbiting_station.py).
+``t = 100`` periods costs what ``t = 1`` costs and keeps its digits.  (In float64, ``alpha`` of a
+highly eccentric orbit started at periapsis loses bits to cancellation, a phase error that grows
+with the revolutions.)  tests/test_kepler.py checks the orbit against 80-bit and quadruple-precision
+heyoka integrations over many revolutions, against Kepler's equation in 50-digit mpmath at far times,
+and on hyperbolic orbits; benchmarks/bench_orbiting_station.py measures the cost.
 
 A radial orbit (zero angular momentum) is refused: its collision makes the closed form singular.
 """
@@ -249,7 +245,7 @@ class KeplerOrbit(Solution):
         return self(t)[1]
 
     def state_at(self, t: float) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-        """``(r, v)`` at one time as tuples of Python floats: the same formulas on scalars, ~20x
+        """``(r, v)`` at one time as tuples of Python floats: the same formulas on scalars, far
         cheaper per call than ``orbit(t)`` (for right-hand sides of ODE integrators)."""
         s = self._s
         t = float(t)

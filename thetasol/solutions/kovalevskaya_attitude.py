@@ -22,12 +22,9 @@ plus the dropped sum) is ``diagnostics["phase_tail"]``.
 
 The samples come from :meth:`KovalevskayaMotion.values_on_grid` (:func:`thetasol.theta.grid.theta_grid`: the
 theta functions on the grid as matrix products), which gives the seven theta values and derivatives in another
-common unit per point than :meth:`KovalevskayaMotion.values_at`; the rate, a quotient, is the same to a few 1e-15
-(tests/test_theta_grid.py: the series' coefficients 1.7e-15 apart, ``Q(t)`` 4.6e-14 on ``[0, 30]``).  Set-up
-cost (CPU time, one thread, best of 7, benchmarks/bench_theta_grid.py, 2-core machine shared with other jobs):
-11.7 ms for test seed 2 (grid 128 x 128 in two grid calls, 0.71 us per grid point) and 5.1 ms for seed 17
-(32 x 64, most of it the 22 candidate references on the first grid), against 228 ms and 31 ms (14 .. 15 us per
-point) with ``values_at`` at every point.
+common unit per point than :meth:`KovalevskayaMotion.values_at`; the rate, a quotient, is the same to rounding
+(tests/test_theta_grid.py), and the grid is much cheaper than ``values_at`` at every point
+(benchmarks/bench_theta_grid.py measures both).
 """
 from __future__ import annotations
 
@@ -97,8 +94,7 @@ class Reference:
 def _references(I: np.ndarray, omega0: np.ndarray) -> list[Reference]:
     """The candidates: ``M``, the three body axes, and ``M/|M(0)| + lam e_k`` for ``|lam|`` in 1/2, 1, 2 (a
     combination keeps its horizontal part, and the rate's series converges faster, where ``M`` and the axes
-    pass near the vertical: on the tops ``_top(seed)`` of tests/test_kovalevskaya_top.py, seeds 10, 1, 39, the box
-    of modes above 1e-15 on a 256 x 512 grid is 1.5x, 4.1x, 6.9x smaller than for the one of ``M`` and the axes
+    pass near the vertical: its box of significant modes is smaller than for the one of ``M`` and the axes
     farthest from the vertical)."""
     refs = [Reference(0.0, 1.0, k) for k in range(3)]
     m0 = float(np.linalg.norm(I @ omega0))
@@ -272,9 +268,8 @@ def _predicted_grid(rate, nu):
     """The grid ``(n1, n2)`` (powers of two, ``GRID_START .. GRID_MAX / 2``) at which the edge coefficients of the
     rate's series on the first grid would fall below ``PHASE_TOL``, extrapolating each axis' geometric decay
     between ``|j| = n/4`` and its edge.  An underestimate costs one more doubling, an overestimate samples points
-    the doubling test leaves unused (hence the cap: the early decay is often the slower one; on the 40 tops of
-    benchmarks/bench_heavy_top.py the prediction is exact on 33 and one doubling short on 7, uncapped it was
-    long, 512 for 256, on 2)."""
+    the doubling test leaves unused (hence the cap: the early decay is often the slower one, so an uncapped
+    extrapolation overshoots)."""
     j, k, C, _ = _integrated(rate, nu)
     out = []
     for A, m in ((np.abs(C), np.abs(j)), (np.abs(C).T, np.abs(k))):
@@ -296,7 +291,7 @@ def _predicted_grid(rate, nu):
 def _phase_grid(motion, I, center, mg, k1, k2, nu, refs):
     """The reference vector and the rate's Fourier series on a grid refined per axis: each axis doubles until its
     edge coefficients are below ``PHASE_TOL``.  The grid predicted from the first grid's decay is sampled in one
-    call (a call costs ~1.5 ms besides its points), the doublings take their samples from it; beyond it a
+    call (a call has a fixed cost besides its points), the doublings take their samples from it; beyond it a
     doubling samples only the new (odd) rows or columns."""
     def sample(i1, n1, i2, n2, refs):
         return _rate_on_grid(motion, I, center, mg, (k1, k2, i1 / n1, i2 / n2), refs)

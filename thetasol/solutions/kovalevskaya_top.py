@@ -81,7 +81,7 @@ def kovalevskaya_variables(frame: KovalevskayaFrame, gravity: ArrayLike, omega: 
     # s' = s - l1/2 are (R12 -+ root)/den; where R12 and root cancel (|s'_near| < |s'_far|/4) the near one comes
     # from the product s1' s2' = (R12^2 - R(x1) R(x2))/den^2 = F/(2 den), F free of the factor (x1 - x2)^2
     # (sympy): the cancelling form loses ~|s'_far|/|s'_near| relative, e.g. with q -> 0 (tests/test_kovalevskaya_top.py
-    # against mpmath, seed 19: s1 4.8e-13 -> 5.3e-16; seed 4: 8.6e-14 -> 6.1e-15)
+    # checks both against mpmath)
     R12, pp = np.real(R12), p * p + q * q
     F = (c0 * c0 * (4 * l * l - 6 * l1 + 4 * p * p) + 8 * c0 * l * p * pp - 4 * k * k * p * p
          + 6 * l1 * (k * k + pp * pp))
@@ -205,7 +205,7 @@ def _curve_setup(I, center, Q0, omega0, mass, gravity) -> _CurveSetup:
 
 def kovalevskaya_separated_flow(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, mass: float,
                                 gravity: ArrayLike) -> SeparatedFlow:
-    """Set up :class:`SeparatedFlow` from the data (the curve, its periods and Abel map: ~5 ms)."""
+    """Set up :class:`SeparatedFlow` from the data (the curve, its periods and Abel map)."""
     st = _curve_setup(I, center, Q0, omega0, mass, gravity)
     s1, s2 = st.s
     coef = kovalevskaya_curve(st.l1, st.l, st.k, st.frame.c0)
@@ -284,8 +284,8 @@ class KovalevskayaMotion:
     V1: np.ndarray = None   # the other real flow of the torus (``sum_i ds_i/y_i``)
 
     def _jets(self, z, chars, order=1):
-        # one pass over the lattice for all 16 half characteristics (the reduction of z done once): at 4096
-        # points 0.6x the time of seven passes, at one point 0.12x
+        # one pass over the lattice for all 16 half characteristics (the reduction of z done once): cheaper
+        # than seven passes, most of all at few points
         e, v, gr, *H = self.theta.jet(z, char="all", order=max(order, 1), separated=True)
         dv = gr @ self.V2
         d2v = np.einsum("i,...cij,j->...c", self.V2, H[0], self.V2) if order == 2 else dv
@@ -369,7 +369,7 @@ def _memoir_state(val, der, coef, c0, l1):
 def _refine(coef, val, der, rows, c0, l1, l, k):
     """Gauss-Newton on the constants: Taylor rows at ``t = 0`` plus, at the sample points, reality, the
     integrals and the two equations of motion not used in the construction (``2 pdot = q r``,
-    ``2 qdot = -p r - c0 g3``); the Taylor fit alone leaves ~1e-11 in the constants (1e-6 where
+    ``2 qdot = -p r - c0 g3``); the Taylor fit alone is not accurate enough (much less so where
     ``theta(z0 + K)`` is small), so its rows only pin the start (``TAYLOR_WEIGHT``).  The residuals of all
     central-difference steps are one batched evaluation (:func:`_fit_residuals`); the start is within the
     quadratic basin, so the iteration stops when a step no longer lowers the residual (2-4 steps)."""
@@ -393,9 +393,8 @@ def _refine(coef, val, der, rows, c0, l1, l, k):
 FIT_STEPS = 6   # Gauss-Newton steps at most (the fit converges in 2-4 from the Taylor constants)
 # weight of the Taylor rows against the sample points' residuals in the Gauss-Newton fit: the rows only pin the
 # start, the 40 sample points determine the constants.  The rows' matrices come from series divisions by
-# theta(z0 + K), which is small when a point of the divisor is next to infinity (q(0) ~ 0): on seed 19 of
-# tests/test_kovalevskaya_top.py (theta 0.01) they are off by ~1e-9 and at weight 1 pulled the state 4e-11 off
-# heyoka (9e-14 at weight 1e-4)
+# theta(z0 + K), which is small when a point of the divisor is next to infinity (q(0) ~ 0): the rows are then
+# inaccurate, and at a weight comparable to the points' they would pull the fitted state off the motion
 TAYLOR_WEIGHT = 1e-4
 
 
@@ -468,8 +467,8 @@ def kovalevskaya_motion(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: 
     coef = np.stack([np.linalg.solve(A, b + 0j) for A, b in rows])
     coef, resid = _refine(coef, val, der, rows, c0, l1, setup.l, k)
     # the fitted state at t = 0 against the data: flags a model (z0, periods) off the data, which the sample
-    # points alone do not see (seed 25 of tests/test_kovalevskaya_top.py: 1.5e-11, the state's error against
-    # heyoka 1.4e-11; the sample points' residual 7.7e-13)
+    # points alone do not see (their residual can be far below the state's error against the numerical
+    # reference)
     x0 = np.real(np.concatenate(_memoir_state(val0, der0, coef, c0, l1)))
     resid = max(resid, float(np.max(np.abs(x0 - x) / np.r_[[max(np.max(np.abs(x[:3])), np.sqrt(c0))] * 3, 1, 1, 1])))
     return KovalevskayaMotion(setup.theta, z0, V2, ch1, ch2, coef, c0, l1, setup.frame.P,

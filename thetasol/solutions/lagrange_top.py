@@ -29,17 +29,16 @@ phase integrals are Legendre integrals of the third kind written so that no term
   terms positive).  Near the hanging position (``w1 -> 0``) the arctangent carries the jump of
   ``chi+`` by ``pi`` with its full relative accuracy.  The Legendre-Carlson form
   ``F + (n/3) s^3 R_J`` subtracts two O(1) numbers to get ``Pi ~ sqrt(w1/D)`` and multiplies by
-  ``(b + a)/w1 ~ w1^(-1/2)``: on the Bruls-Cardona top (``w1 = 2.6e-13``) its phase is off by
-  1.1e-8 where this form is within 1.8e-15 of 40-digit mpmath
-  (tests/test_heavy_top.py::test_hanging_phase_against_mpmath);
+  ``(b + a)/w1 ~ w1^(-1/2)``, so on a top near the hanging position its phase loses about half the
+  digits, which this form keeps (tests/test_heavy_top.py::test_hanging_phase_against_mpmath);
 * ``int dx / (v2 + D cn^2) = Pi(D/v1; am x | m) / v1``, ``v1 = 1 - u1``, with the Carlson form
   ``s R_F(c^2, d^2, 1) + (n/3) s^3 R_J(c^2, d^2, 1, (v2 + D c^2)/v1)`` (all terms positive).
 
 The frames, ``A``, ``C``, the integrals and ``w1``, ``v2``, ``D`` (from the cubic written about the
 initial point) are formed in 60-digit mpmath from the float64 data taken as exact; ``lambda``,
 the initial argument, ``2K`` and the per-period phase increments are kept as two float64 words,
-so that the error does not grow with ``t`` (Simo-Wong and Bruls-Cardona within 7.8e-15 of 80-bit
-heyoka up to t = 1000; 5.9e-12 and 1.5e-11 with one-word float64 frequencies).  When the axis passes exactly through a pole (``b + a = 0``,
+so that the error does not grow with ``t`` (one-word float64 frequencies would add a phase error
+growing like ``eps t``; tests/test_heavy_top.py checks far times against 80-bit heyoka).  When the axis passes exactly through a pole (``b + a = 0``,
 ``w1 = 0``; ``b - a = 0``, ``v2 = 0``) the amplitude is taken signed, ``sqrt(D/2) sn`` (resp.
 ``sqrt(D/2) cn``), and the jump disappears.  Far times: the argument ``lambda (t - t1)`` is reduced
 modulo ``2K`` with exact products, each phase is ``j Delta + (periodic part)`` with ``j Delta``
@@ -69,7 +68,7 @@ __all__ = ["lagrange_frame", "build_lagrange_top", "lagrange_state", "SYMMETRY_R
 #: a tensor formed as R diag(I) R^T in float64; larger asymmetries are another body).
 SYMMETRY_RTOL = 1e-13
 _DPS = 60
-#: The fit of the two constant phases to (Q0, omega0) leaves a few ulps (<= 6.8e-16 on the test tops);
+#: The fit of the two constant phases to (Q0, omega0) leaves a few ulps;
 #: more means the turning points or the initial argument are wrong.
 FIT_WARN = 1e-12
 
@@ -127,7 +126,7 @@ def _hilo(x):
 
 def _bisect(p, lo, hi):
     """The root of ``p`` in ``[lo, hi]`` with ``p(lo) < 0 < p(hi)``, to the working precision
-    (bisection: slow, about 1 ms at 60 digits, and certain)."""
+    (bisection: slow and certain)."""
     for _ in range(4 * mpmath.mp.dps):
         mid = (lo + hi) / 2
         if mid in (lo, hi):

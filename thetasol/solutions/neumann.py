@@ -329,7 +329,7 @@ def _pendulum(psi0: float, psidot0: float, nu: float):
     ``psidot(t)``) and the kind of motion."""
     if nu == 0.0 or (psidot0 == 0.0 and (np.sin(psi0) == 0.0 or abs(psi0) == np.pi)):     # at rest on an axis
         return {"kind": "uniform", "phi0": 0.0, "w0": 0.5 * psidot0}, ("uniform" if psidot0 else "rest")
-    # scipy.special (~80 ms to import) only once a pendulum is needed: solve_rotation imports this module
+    # scipy.special (slow to import) only once a pendulum is needed: solve_rotation imports this module
     from thetasol.special.pendulum import pendulum_params
 
     c, _ = pendulum_params(psi0, psidot0, nu)

@@ -25,12 +25,11 @@ for everything else:
 
 Angles are reduced modulo 2 pi with an exact product (:func:`thetasol.core.attitude.angle_mod_2pi`),
 the elliptic functions modulo their periods: ``t = 1e6`` orbits costs what ``t = 1`` costs.
-Accuracy (tests/test_orbiting_rotation.py, LEO in SI units): the pitch angle against the pendulum
-equation integrated by 80-bit heyoka over 20 orbits 9.0e-14 rad, its rate 8.8e-15 n; the attitude
-against the full 3-D equations in 80-bit heyoka 2.1e-13 to 5.0e-11 over 20 orbits, the larger
-figures where the planar motion is out-of-plane sensitive (conditioning up to 9.9e-13 per 1e-16 of
-the data); relative equilibria against DOP853 9.9e-14 (stable) and 4.0e-12 (unstable) over one
-orbit; the pitch energy at t = 1e6 orbits to 6.9e-16 n^2.
+Accuracy is checked in tests/test_orbiting_rotation.py (LEO in SI units): the pitch angle and rate
+against the pendulum equation and the attitude against the full 3-D equations, both integrated by
+80-bit heyoka over many orbits (the attitude is less accurate where the planar motion is out-of-plane
+sensitive, as the data's conditioning is); relative equilibria against DOP853; the pitch energy at
+far times.
 
 A circular orbit means ``e <= 1e-13`` (``KeplerOrbit.diagnostics["e"]``; data rounded from a
 circular orbit give ~1e-16); the error that ``e`` leaves is of order ``e n t``, reported as

@@ -96,7 +96,7 @@ def solve_pendulum(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndar
     # psi = 2 phi + delta - pi [kappa > 0] obeys psi'' = -nu^2 sin psi; phi(0) = 0
     psi0 = np.remainder(delta - (np.pi if kappa > 0 else 0.0) + np.pi, 2 * np.pi) - np.pi
     nu = np.sqrt(abs(kappa))
-    # scipy.special (~80 ms to import) only once the branch applies: solve_rotation tries it for every body
+    # scipy.special (slow to import) only once the branch applies: solve_rotation tries it for every body
     from thetasol.special.elliptic import ellipk
     from thetasol.special.pendulum import pendulum_params
 

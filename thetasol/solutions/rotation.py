@@ -70,7 +70,7 @@ def _pendulum_branch(J, a, Q0, omega0, dps):
 
 def _neumann_branch(J, a, Q0, omega0, dps):
     # symmetric body without axial spin: the axis moves as in Neumann's problem (tacnode of (4.12));
-    # other bodies do not import its ~30 ms of modules
+    # other bodies do not import its modules
     if symmetric_without_spin(J, a, omega0) is None:
         return None
     from thetasol.solutions.neumann_rotation import solve_neumann_rotation
@@ -80,15 +80,14 @@ def _neumann_branch(J, a, Q0, omega0, dps):
 
 #: Smallest potential the theta-function set-up is given, as ``|a - c 1| / (|omega0|^2 + |a - c 1|)``
 #: (eigenvalue norms; J of order one after the change of units): below it the spectral curve is within
-#: a few digits of the free top's and the set-up fails or loses accuracy.  Measured against heyoka
-#: 80-bit at t <= 4002 (benchmarks/bench_units_sweep.py, tests/test_units.py): a generic body keeps
-#: 2.1e-11 at 1e-10 (8.5e-11 and a warning at 1e-12); a rank-one a 1.7e-14 at 1e-5 and is refused by
-#: the curve engine at 1e-6 after 1.6 s; a symmetric body 1.4e-11 at 1e-6, 7.2e-10 at 1e-7.
+#: a few digits of the free top's and the set-up fails or loses accuracy.  Each value is the smallest at
+#: which that kind of body still keeps its accuracy against 80-bit heyoka at far times (tests/test_units.py
+#: checks bodies on both sides; benchmarks/bench_units_sweep.py sweeps random data).
 MIN_POTENTIAL = {"generic": 1e-10, "rank-one": 1e-5, "symmetric": 1e-6}
 #: Two eigenvalues of ``a`` closer than this (relative to their spread) but not within ``SNAP_TOL``: the
-#: spectral curve is near the node of a rank-one potential and is refused at once.  Measured on one body
-#: against heyoka 80-bit at t <= 4002: gap 1e-5 2.2e-11, 1e-6 1.3e-10, 1e-7 2.0e-10, 3e-8 2.2e-9, 1e-8
-#: 6.1e-9 (no warning), 1e-11 .. 1e-9 refused by the set-up after 1.5-3 s.
+#: spectral curve is near the node of a rank-one potential and is refused at once: below it the error
+#: grows as the gap shrinks, without a warning, and smaller gaps are refused by the set-up only after a
+#: long computation.
 MIN_A_GAP = 1e-7
 
 

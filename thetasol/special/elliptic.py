@@ -18,12 +18,11 @@ Method
         D = c^2 + s^2 d^2,  sn(2u) = 2 s c d / D,  cn(2u) = (c^4 - mc s^4) / D,
         dn(2u) = (mc + m c^4) / D
 
-    (the idea of Fukushima, Numer. Math. 2013, with our own variables).  Accuracy (measured
-    against mpmath on 900 points of [0, K], ``mc`` from 1e-300 to 1): absolute error at most
-    1.5 eps, ``sn`` within 2 eps relative; the relative accuracy of ``cn`` and ``dn`` where they
-    are small (next to ``u = K``) is limited by the rounding of ``K`` itself (``K - u`` is
-    formed from the float ``K``: 1.6e-13 relative at ``K - u = 1.3e-3``).  On
-    ``[-6K, 6K]`` the error is within 4 eps ``(4 + |u|)``, the argument's own resolution.
+    (the idea of Fukushima, Numer. Math. 2013, with our own variables).  Accuracy (tests/test_elliptic.py,
+    against mpmath for ``mc`` from 1e-300 to 1): absolute errors of a few eps, ``sn`` to a few eps
+    relative; the relative accuracy of ``cn`` and ``dn`` where they are small (next to ``u = K``) is
+    limited by the rounding of ``K`` itself (``K - u`` is formed from the float ``K``).  Over several
+    periods the error is a few eps ``(4 + |u|)``, the argument's own resolution.
 ``ellipk``, ``ellipe``, ``ellipf``, ``ellipeinc``, ``ellippi``, ``ellippiinc``:
     Carlson's symmetric forms (DLMF 19.25) evaluated with :func:`scipy.special.elliprf`,
     ``elliprd``, ``elliprj``, ``elliprg``, written with ``mc`` so that no term cancels, and
@@ -34,7 +33,7 @@ Why hand-written
 :func:`scipy.special.ellipj` (Cephes ``ellpj``) switches to a first-order expansion for
 ``m > 1 - 1e-9`` that is wrong beyond ``u ~ K`` (scipy issue #8480, still in scipy 1.17),
 and it takes ``m`` only, so ``1 - m`` is already rounded; calling it at ``lambda t`` without
-reducing the argument also loses ~1e-12 by ``t = 1000``.  ``scipy.special.ellipk/ellipe``
+reducing the argument also loses digits in proportion to ``t``.  ``scipy.special.ellipk/ellipe``
 take ``m`` only as well.  Carlson's integrals in scipy are accurate and are used as they are.
 
 Precision

@@ -39,8 +39,7 @@ _LOG_SAFE = 600.0
 #: Target size (complex entries) of the per-chunk work arrays.
 _CHUNK_ENTRIES = 1 << 20
 #: The same for the split engine, whose several (points x tails) arrays are each read once or twice:
-#: 1 MB arrays stay in cache (the Cauchy circles' 588 points x 393 tails of the generic body's set-up:
-#: 4.8 ms per evaluation against 6.5 with 16 MB).
+#: 1 MB arrays stay in cache, where larger ones would not.
 _SPLIT_CHUNK_ENTRIES = 1 << 16
 
 
@@ -161,8 +160,8 @@ class ReducedLattice:
     def _half_form(self, mf: np.ndarray) -> np.ndarray:
         """``m.X.m / 2`` modulo 1 for integer points m (N, g), from exact products summed in double-double
         (X up to 1/2 but m.X.m up to ~100).  X is symmetric (the reduction keeps it so): the g (g + 1) / 2
-        products ``X_ij m_i m_j`` (halved on the diagonal) in one call and one pairwise sum, ~0.3 ms
-        for 2000 points instead of ~1.2 ms for g^2 sequential additions."""
+        products ``X_ij m_i m_j`` (halved on the diagonal) in one call and one pairwise sum, cheaper
+        than g^2 sequential additions."""
         g = self.g
         if np.array_equal(self.X, self.X.T):
             i, j = np.triu_indices(g)
@@ -247,7 +246,7 @@ def _solve_transposed_upper(T: np.ndarray, B: np.ndarray) -> np.ndarray:
     """Rows ``x`` with ``T^T x = b`` for the rows ``b`` of ``B`` (P, g), ``T`` upper triangular (g, g).
 
     Forward substitution over the g coordinates, vectorized over the points: scipy.linalg's
-    ``solve_triangular`` would cost its import (~0.1 s) at the first set-up of a process, and its bits
+    ``solve_triangular`` would cost its slow import at the first set-up of a process, and its bits
     depend on the BLAS kernel (OpenBLAS's dtrsm rounds with FMA), these do not.
     """
     X = np.empty(B.shape)
@@ -361,8 +360,7 @@ def _tail_polynomials(jet: Jet, V: np.ndarray, tails: np.ndarray, o: int) -> np.
 
     Up to order 2 a term has at most two factors and an entry at most two terms, so the entries are
     written directly, with the operands in the order of the general loop (the same values, in one
-    numpy call per kind of subset instead of ~10 per subset: 0.2 against 0.9 ms for the 37 subsets of
-    order 2 in 8 directions); higher orders run the general loop.
+    numpy call per kind of subset instead of about ten per subset); higher orders run the general loop.
     """
     nK = len(tails)
     vk = tails @ V[:, 1:].T if jet.r else np.zeros((nK, 0))  # (nK, r)

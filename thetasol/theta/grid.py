@@ -22,15 +22,13 @@ rounding ~2e-15.  The terms are ``|nu|_Y <= r + rho`` (``|v|_Y^2 = v.Y.v``): ``p
 is the ellipsoid criterion of :mod:`thetasol.theta.flow` (the terms outside every point's own ellipsoid are
 left out), ``rho`` bounds ``|o + delta_n|_Y`` over the cube and the block (circumradii).  The sums run in
 the frame of ``tau`` (no Siegel reduction): their cost grows as ``1/sqrt(det Im tau)`` and their error as
-``cond(Im tau) eps`` (tests/test_theta_grid.py: 3e-15 at condition 1, 4.5e-14 at 300).
+``cond(Im tau) eps`` (tests/test_theta_grid.py).
 
-Cost (CPU time, one thread, best of 7, benchmarks/bench_theta_grid.py, on a 2-core machine shared with other
-jobs): genus 2, the seven characteristics of the Kovalevskaya top and their derivatives along ``V2``, 1.8 / 0.64 /
-0.35 us per point on 32 x 32 / 64 x 64 / 128 x 128 grids for test seed 2 (94 terms per alpha), 1.1 / 0.39 / 0.21
-us for seed 17 (50 terms), against 13 .. 22 us per point of ``KovalevskayaMotion.values_at``
-(``RiemannTheta.jet``, all 16 characteristics, order 1); the two agree to 8e-15 relative to each point's largest
-value (values, and the Wronskians ``val_i der_j - val_j der_i``).  The matrix products run at the BLAS peak; the
-rest is elementwise work on the factors and ~1 ms of per-call overhead, which dominates the small grids.
+On the Kovalevskaya top's grids a point costs a small fraction of one of ``KovalevskayaMotion.values_at``
+(``RiemannTheta.jet``), and the two agree to rounding relative to each point's largest value (values, and the
+Wronskians ``val_i der_j - val_j der_i``); benchmarks/bench_theta_grid.py measures both.  The matrix products run
+at the BLAS peak; the rest is elementwise work on the factors and a per-call overhead, which dominates the small
+grids.
 """
 from __future__ import annotations
 
@@ -49,10 +47,8 @@ __all__ = ["ThetaGrid", "theta_grid"]
 
 #: A block spans at most this length ``|da k1_n|_Y`` of the lattice along ``a`` and twice it along ``b``
 #: (1 .. 128 points per axis): larger blocks spread over more lattice terms (the matrix products grow) and
-#: larger factors, whose rounding grows (4x along ``b``: 1.0e-14 against 8.2e-15 on test seed 2's 128 x 128
-#: grid); smaller ones cost more elementwise work per point, mostly along ``b`` (each block column forms its own
-#: left factors).  1x, 2x and 4x along ``b`` cost the same within 10% on the Kovalevskaya grids of
-#: benchmarks/bench_theta_grid.py.
+#: larger factors, whose rounding grows; smaller ones cost more elementwise work per point, mostly along ``b``
+#: (each block column forms its own left factors).
 BLOCK_SPREAD = 1.0
 
 
@@ -285,7 +281,7 @@ def theta_grid(tau: ArrayLike, z0: ArrayLike, k1: ArrayLike, k2: ArrayLike, a: A
         for i, rows in enumerate(groups):
             left = Am[i][None] * Cq[rows][:, :, None, :]                        # (nrow, P, sa, S)
             G = (left.reshape(-1, nu.shape[1]) @ Bm[i, q]).reshape(len(rows), P, sa, sb)
-            for j, row in enumerate(rows):          # one slice each: a fancy-indexed assignment is ~10x slower
+            for j, row in enumerate(rows):          # one slice each: a fancy-indexed assignment is much slower
                 out[row, :, :, q, :] = G[j]
     out = out.reshape(nout, P * sa, Q * sb)[:, :A.n, :B.n]
     shift = np.broadcast_to(cen.K[:, None, :, None, :], (P, sa, Q, sb, 2 * g)).reshape(P * sa, Q * sb, 2 * g)

@@ -105,7 +105,7 @@ def siegel_reduction(tau0: np.ndarray, max_iter: int = 500, dps: int = 40) -> Re
 
     The integer steps are chosen in float64, then replayed with mpmath at ``dps`` digits: the
     transformation constants (``c0``, ``Q``, ``l``) carry phases of size ~100 that would otherwise
-    cost ~1e-13 of accuracy.  The float fields are the correctly rounded mp results; the mp
+    cost about 100 eps of accuracy.  The float fields are the correctly rounded mp results; the mp
     values are kept in ``mp`` for the characteristic tables.
 
     Ties (``Re tau_ij = +-1/2``, LLL coefficients ``+-1/2``, ``|tau_11| = 1``) are common for
@@ -215,7 +215,7 @@ def _replay(tau0: np.ndarray, steps: list, dps: int) -> Reduction:
             # u_1 = M_1 w + s_1 with s = tau a_s + b_s (exact halves times tau)
             s1 = ctx.fsum(tau[0][j] * ctx.mpf(a_s[j]) for j in range(g)) + ctx.mpf(b_s[0])
             M1 = list(M[0])
-            # one reciprocal, then products (the ~3 g^2 divisions cost ~1 ms; 1e-40 either way); the
+            # one reciprocal, then products (cheaper than ~3 g^2 mpmath divisions, as accurate); the
             # products a_i a_j first, so that Q and tau stay exactly symmetric
             r11 = 1 / t11
             M1r = [x * r11 for x in M1]
@@ -251,8 +251,8 @@ def _replay(tau0: np.ndarray, steps: list, dps: int) -> Reduction:
 
 def dense_unique(codes: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
     """``np.unique(codes, return_inverse=True)`` for integers in ``0 .. size - 1``, by marking a table
-    instead of sorting (the generic and near_unstable_equilibrium bodies' 38 000 and 68 000 flow terms
-    fall into tables of 936 and 7225 codes: 0.10 and 0.16 ms instead of 1.3 and 2.4 ms for the sort)."""
+    instead of sorting (the flow terms of a body fall into tables far smaller than their count, where
+    marking is an order of magnitude cheaper than the sort)."""
     if size > 4 * codes.size + 4096:
         codes, inv = np.unique(codes, return_inverse=True)
         return codes, np.asarray(inv).reshape(-1)
@@ -267,11 +267,11 @@ def unique_rows(a: np.ndarray, lo: np.ndarray | None = None,
     """``np.unique(a, axis=0, return_inverse=True)`` for integer rows (N, c): the distinct rows in
     lexicographic order and the index of each row, through one mixed-radix code per row in the box
     ``lo .. lo + span - 1`` (default: the rows' own box; a larger box gives the same result) and
-    :func:`dense_unique` (0.1 ms instead of 0.9 for 2105 rows of 3 integers)."""
+    :func:`dense_unique` (cheaper than numpy's sort of the rows)."""
     if a.shape[0] == 0 or a.shape[1] == 0:
         rows, inv = np.unique(a, axis=0, return_inverse=True)
         return rows, np.asarray(inv).reshape(-1)
-    if lo is None:   # column by column: numpy's integer min/max over axis 0 of (N, c) cost ~0.4 ms here
+    if lo is None:   # column by column: numpy's integer min/max over axis 0 of (N, c) is slower here
         lo = np.array([a[:, i].min() for i in range(a.shape[1])], dtype=np.int64)
         span = np.array([a[:, i].max() for i in range(a.shape[1])], dtype=np.int64) - lo + 1
     codes, inv = dense_unique(np.ravel_multi_index(tuple((a - lo).T), span), int(np.prod(span)))
@@ -301,8 +301,8 @@ def tail_bound(R: float, rho: float, g: int, order: int = 0, a: float = 1.0) -> 
 
     ``-h'`` is negative below ``t* = _weight_turn(order, a)`` (the bound counts it as 0) and a polynomial
     times ``exp(-pi t^2)`` beyond: composite Gauss-Legendre (32 panels of 20 nodes) on
-    ``[max(R, t*), R + 12]``, to ~1e-14 relative against scipy's adaptive quadrature
-    (tests/test_setup_kernels.py), without importing scipy.integrate (~0.4 s at its first use).
+    ``[max(R, t*), R + 12]``, to rounding against scipy's adaptive quadrature
+    (tests/test_setup_kernels.py), without importing scipy.integrate (slow at its first use).
     """
     t0 = max(R, _weight_turn(order, a)) if order else R
     if t0 >= R + 12.0:
@@ -364,7 +364,7 @@ def _tail_closed(R: float, rho: float, g: int, order: int, a: float) -> float | 
 
 def _tail_above(R: float, tol: float, rho: float, g: int, order: int, a: float) -> bool:
     """``tail_bound(R) > tol``, decided by the closed form where it is clear by a factor 1 +- 1e-4
-    (far beyond the quadrature's 1e-6), else by the quadrature: the same decisions, ~30x cheaper."""
+    (far beyond the quadrature's 1e-6), else by the quadrature: the same decisions, far cheaper."""
     v = _tail_closed(R, rho, g, order, a)
     if v is not None and math.isfinite(v):
         if v > tol * (1 + 1e-4):

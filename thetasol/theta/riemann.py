@@ -27,11 +27,11 @@ Method
 * **Precision where float64 fails**: the reduction steps are replayed in mpmath (the constants
   carry phases ~1e3), and the O(g^2)-per-point maps whose inputs are large but whose results
   are O(1) (``z - tau k``, ``pi k.X.k mod 2 pi``, ``e``, ``M z``, the Babai shift in the reduced
-  frame) run in double-double (:mod:`thetasol.core.dd`).  Measured errors against FLINT are
-  1e-15 .. 5e-15 (values) and <= 1e-13 (gradients) on all test families (docs/theta.md).
+  frame) run in double-double (:mod:`thetasol.core.dd`).  The errors against FLINT on the test
+  families are in docs/bench_theta.md, written by benchmarks/bench_theta.py.
 
 Written by hand because no allowed dependency evaluates Riemann theta functions in float64
-(python-flint's certified ``acb_theta`` is an optional test oracle, 25x-10000x slower per point,
+(python-flint's certified ``acb_theta`` is an optional test oracle, much slower per point,
 docs/bench_theta.md).
 An mpmath path (``dps=``) sums the defining series directly in the original frame.
 
@@ -176,7 +176,7 @@ class RiemannTheta:
         # form of (alpha, beta) assembled once (_char_form) and evaluated per characteristic
         tau0, Qm, lm, Mm = mp["tau0"], mp["Q"], mp["l"], mp["M"]
         # the zero characteristic (the theta-function rotation's only one) needs c alone: the
-        # 2g x 2g form H costs ~2 ms of mpmath dot products
+        # 2g x 2g form H costs many mpmath dot products
         zero = not (np.any(alpha) or np.any(beta))
         H, h, c = ([], [], _char_constant(mp, shift)) if zero else _char_form(mp, Lam, shift)
         n = alpha.shape[0]
@@ -414,7 +414,7 @@ class RiemannTheta:
 def _mp_inverse_spd(ctx, Y: np.ndarray) -> list:
     """Inverse of a symmetric positive definite float matrix in mpmath at ``ctx``'s precision, by
     Gauss-Jordan elimination without pivoting (stable for positive definite matrices), as nested lists:
-    ~0.1 ms for g = 4 where mpmath's matrix inverse costs ~0.4 ms."""
+    cheaper than mpmath's matrix inverse."""
     g = len(Y)
     A = [[ctx.mpf(float(Y[i, j])) for j in range(g)] + [ctx.mpf(int(i == j)) for j in range(g)] for i in range(g)]
     for k in range(g):

@@ -29,8 +29,8 @@ written with our Jacobi functions (three real roots of ``4x^3 - g2 x - g3``:
 ``wp = e3 + (e1 - e3)/sn^2``; one real root: the ``cn`` form).  Multiplied through by ``sn^2``
 (resp. ``1 - cn``), its homogeneous numerator and denominator never vanish together.  (The
 formula based at a general point, the anchor, has a numerator and a denominator with two
-common zeros per period; for some data, about 3 in 100 generic ones, they lie on the real orbit,
-where float64 evaluation is 0/0: energy errors up to 1e-3 of its scale next to them.)  Of the
+common zeros per period; for some generic data they lie on the real orbit, where float64
+evaluation is 0/0: large energy errors next to them.)  Of the
 zeros bounding the orbit the steepest is taken (next to a separatrix the other can be one of a
 nearly double pair, where ``wp - c`` would cancel), and ``t_r``, the time it is reached, comes
 from ``wp(t_a - t_r)`` by Carlson's ``R_F``.  The point is rebuilt from ``z`` and ``W`` (a root
@@ -84,11 +84,8 @@ the Fourier tail of ``psi'``; a :class:`RuntimeWarning` is issued above 1e-10.  
 round-off is reached everywhere except on nearly planar orbits (a rotor momentum small against
 ``|m|`` next to the Euler top's separatrix, where the torsion of the orbit is small everywhere
 and every pencil of planes through a line meeting the curve twice degenerates): there the loss
-grows like ``eps / torsion ratio`` and the estimate reports it (``J = (2, 0.25, 1)``,
-``omega0 = (0, 0, 1)``, ``N = (0, n, 0)``, the error of ``m`` relative to ``max |m|`` on 4001
-times of one period against quadruple heyoka: 3.4e-12 at ``n = 1e-3``, 3.6e-10 at ``1e-4``,
-1.6e-6 at ``1e-6``; estimated 5.4e-12, 4.6e-10, 2.9e-6;
-measured as in ``test_nearly_planar_orbits_report_their_loss``).  Orbits within 1e-307 (but not exactly
+grows like ``eps / torsion ratio`` and the estimate reports it (checked against quadruple heyoka in
+``test_nearly_planar_orbits_report_their_loss``).  Orbits within 1e-307 (but not exactly
 on) a separatrix, and motions within 1e-60 (relative) of a relative equilibrium, raise
 :class:`NotImplementedError`.  There is no ``dps=`` path.
 """

@@ -1,13 +1,12 @@
 """Fixed "random" data of the set-up: directions for the normalization vectors of the eigenvector
 divisors (stage 2) and the points of the Riemann constant's fallback test divisors (stage 3).
 
-Any data in general position serve: these are draws of numpy's ``default_rng`` (the seeds below),
-kept as data so that the set-up does not depend on numpy's generator, whose streams may change
-between numpy versions (NEP 19), and does not import ``numpy.random`` (14 ms of a process's first
-set-up).
+Any data in general position serve: these are pseudo-random draws, kept as data so that the set-up
+does not depend on numpy's generator, whose streams may change between numpy versions (NEP 19), and
+does not import ``numpy.random`` (a cost on a process's first set-up).
 """
 
-#: Candidates of :func:`.divisors.choose_alpha` after ``(1, sqrt 2, sqrt 3)`` (normal draws, seed 20240601).
+#: Candidates of :func:`.divisors.choose_alpha` after ``(1, sqrt 2, sqrt 3)`` (normal draws).
 ALPHA_CANDIDATES = (
     (0.6479062041731867, 0.4693207943802901, -0.6430206107408429),
     (-1.1782586485051316, -0.1446904068952663, 1.2034583961932943),
@@ -51,7 +50,7 @@ ALPHA_CANDIDATES = (
     (0.9742886204825227, -0.07888582525317299, -0.43483325141876344),
 )
 
-#: Candidates of :func:`.divisors.abel_friendly_divisor` after the chosen alpha (normal draws, seed 20240602).
+#: Candidates of :func:`.divisors.abel_friendly_divisor` after the chosen alpha (normal draws).
 DIVISOR_CANDIDATES = (
     (-0.6705585386584472, -0.45918045382427514, 0.7051257350438169),
     (2.4215080991332742, 0.5126901378326624, 0.47024942686722426),
@@ -80,7 +79,7 @@ DIVISOR_CANDIDATES = (
 )
 
 #: Points of :func:`.riemann._fallback_divisor_constant`, one per row for up to three divisors of degree
-#: g - 1 <= 3: ``(radius fraction, turn, eigenvalue index)`` (uniform, uniform, one of three; seed 7).
+#: g - 1 <= 3: ``(radius fraction, turn, eigenvalue index)`` (uniform, uniform, one of three).
 DIVISOR_POINTS = (
     (0.625095466604667, 0.8972138009695755, 1),
     (0.22520718999059186, 0.30016628491122543, 2),

@@ -57,8 +57,7 @@ class EigenvectorDivisors:
     aux_places : tuple of ndarray
         ``(E, w)`` of the auxiliary points of stage 4 (:func:`auxiliary_places`).
     A_aux : ndarray, shape (n, g)
-        Their Abel images (in the same call as the divisors': ~3 ms less on the generic body, ~8 ms next
-        to the unstable equilibrium, than a call of their own).
+        Their Abel images (in the same call as the divisors': cheaper than a call of their own).
     """
 
     alpha: np.ndarray
@@ -187,7 +186,7 @@ def auxiliary_places(sd: SpectralData) -> tuple[np.ndarray, np.ndarray]:
     trial = [0.35 * R * np.exp(1j * ang) for ang in (0.3, 1.1, 1.9, 2.7)]
     # Far branch points (|E| ~ 1/(J_2 - J_1) for nearly symmetric bodies) are where L ~ J^2 E^2 and
     # eigenvectors lose accuracy: use the core of the set only.
-    # (the median as np.median computes it, without its import of numpy.ma: 8 ms of a first set-up)
+    # (the median as np.median computes it, without its import of numpy.ma, a cost on a first set-up)
     r = np.sort(np.abs(bp))
     med = r[len(r) // 2] if len(r) % 2 else (r[len(r) // 2 - 1] + r[len(r) // 2]) / 2
     core = bp[np.abs(bp) <= 10.0 * med]

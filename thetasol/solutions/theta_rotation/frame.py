@@ -25,14 +25,14 @@ from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame, symme
 __all__ = ["MIN_AXIAL_SPIN", "MIN_J_GAP", "MAX_FAR_BRANCH", "BodyFrame", "body_frame"]
 
 #: A symmetric body's axial spin, relative to |omega0| + sqrt|a|, below which the data are refused: two
-#: branch points sit near |E| ~ 1 / spin and the set-up grows to minutes (measured on 23 random bodies at
-#: 3e-4 and 16 rank-one ones down to 1e-4, docs/theta_rotation.md).
+#: branch points sit near |E| ~ 1 / spin and below it the set-up grows to minutes (docs/theta_rotation.md,
+#: "Limits").
 MIN_AXIAL_SPIN = 3e-4
 #: Relative gap of two principal second moments (over max J) below which the data are refused: branch
-#: points near |E| ~ 1 / gap; from 7e-8 up 32 random bodies were solved to <= 5.3e-12 at t = 4002.
+#: points near |E| ~ 1 / gap, beyond the curve engine's reach below it (docs/theta_rotation.md, "Limits").
 MIN_J_GAP = 1e-7
 #: A symmetric body whose farthest branch point lies beyond this, in units of sqrt(max |eig a|) / max J,
-#: is refused (a nearly spherical body with a small spin: at 4.2e4 the set-up took 4.8 s CPU).
+#: is refused (a nearly spherical body with a small spin, whose set-up would take seconds).
 MAX_FAR_BRANCH = 2e4
 
 

@@ -68,8 +68,8 @@ def velocity_at_infinity(curve: SpectralCurve, nums: Sequence[Numerator]) -> np.
         sum_j J_j omega_i / ds (inf_j) = -(beta_i e2 - alpha_i) / (lc (J1 + J2)(J1 + J3)(J2 + J3)),
 
     e2 = J1 J2 + J1 J3 + J2 J3.  The terms of the sum grow like 1 / (J_1 - J_2) for a nearly
-    symmetric body and cancel; the divided difference does not (at J2/J1 = 1 + 1e-6 the plain sum
-    loses six digits, 1e-10 in U).
+    symmetric body and cancel (the plain sum loses about log10(J_1 / (J_2 - J_1)) digits of U); the
+    divided difference does not.
 
     Symmetric body (x_a = x_b = x_p at the node's two branches, x_s at the third place): the g_i
     have degree <= 1 in w, so by Euler-Jacobi sum_l g_i(E, w_l) / f_w(E, w_l) = 0 for every E and
@@ -79,8 +79,8 @@ def velocity_at_infinity(curve: SpectralCurve, nums: Sequence[Numerator]) -> np.
         sum_j J_j omega_i / ds (inf_j) = -h_i(x_s) / (lc (J_s + J_p)(x_s - x_p)).
 
     The expansions at the node's branches are not used: their coefficients grow like spin^-k
-    (branch points at |E| ~ 1 / spin, the axial spin) and the FFT loses 5e-12 of the t^0 sum at
-    relative spin 4e-4 (measured against a 40-digit contour integral), a rate error of U.
+    (branch points at |E| ~ 1 / spin, the axial spin), so the FFT would lose digits of the t^0 sum at
+    small spins, a rate error of U.
     """
     lc = float(curve.coefficients[0, -1])               # the w^3 term of det(L(E) - w): -1, for every E
     x = np.asarray(curve.J2, float)                     # exact J_j^2 (snapped), not read off the places

@@ -35,7 +35,7 @@ if TYPE_CHECKING:
 
 __all__ = ["ThetaRotation"]
 
-#: |Im Phi(0, t)| at t = 1000 above which the set-up warns (1e-13..1e-9 on accurate solutions).
+#: |Im Phi(0, t)| at t = 1000 above which the set-up warns (accurate solutions stay well below it).
 RESIDUAL_WARN = 1e-8
 
 
