@@ -364,8 +364,8 @@ def test_bad_data(bad, match):
 
 
 def test_dop853_reference_accuracy():
-    # the integrator's docstring figures: DOP853 at rtol 1e-12 against 80-bit heyoka; measured 1.3e-11 and
-    # 1.1e-11 at t = 100 (random slow / hanging tops), 3.4e-11 at t = 10 (Simo-Wong)
+    # the integrator's Notes: DOP853 at rtol 1e-12 against 80-bit heyoka on random slow and hanging tops
+    # and on Simo-Wong's fast top
     worst = 0.0
     for case, tmax in ((SIMO_WONG, 10.0), (_random_top("slow", 0), 100.0), (_random_top("hanging", 0), 100.0)):
         I, c, Q0, w0, kw = case
