@@ -87,7 +87,7 @@ def polar_near_orthogonal(X: np.ndarray) -> np.ndarray:
     One Newton-Schulz step ``X (3 - X^T X) / 2``: with ``X = R (1 + S)``, ``S`` symmetric, it returns
     ``R (1 - 3 S^2 / 2 + ...)``, so for ``|X^T X - 1| <= 1e-8`` (``|S| <= 5e-9``) the result is the
     polar factor to rounding; columns beyond that take the SVD.  Elementwise over ``n`` (the same
-    operations for every column, whatever ``n``), far cheaper than a batched SVD.
+    operations for every column, whatever ``n``), much cheaper than a batched SVD.
     """
     D = np.add.reduce(X[:, :, None] * X[:, None, :], axis=0)        # X^T X, (3, 3, n)
     D -= _EYE
