@@ -33,3 +33,12 @@ def test_dir_is_the_api_in_a_fresh_interpreter():
     code = "import thetasol; print(' '.join(dir(thetasol)))"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
     assert out.stdout.split() == sorted(thetasol.__all__)
+
+
+def test_reference_names_are_not_shadowed_by_modules():
+    """Whatever is loaded first, ``reference.benchmark`` is the function (no submodule of that name
+    replaces it in the package), in a fresh interpreter."""
+    code = ("import types; from thetasol import reference; reference.Table; import thetasol.reference._case; "
+            "print(callable(reference.benchmark) and not isinstance(reference.benchmark, types.ModuleType))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120)
+    assert out.stdout.strip() == "True"

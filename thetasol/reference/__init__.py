@@ -14,7 +14,8 @@ True
 
 The names load on first use: the pytest plugin (:mod:`thetasol.reference.pytest_plugin`) is a
 submodule that every pytest session in the environment imports, and importing this package must
-not pull in numpy and the closed forms for the sessions that never ask for a case.
+not pull in numpy and the closed forms for the sessions that never ask for a case.  (The modules
+behind the names are private: a submodule named like a function, once imported, would shadow it.)
 """
 from __future__ import annotations
 
@@ -23,7 +24,7 @@ from typing import TYPE_CHECKING
 
 #: public name -> module that defines it
 _API = {"Case": "_case", "Group": "_case", "Report": "_case", "Score": "_case",
-        "Table": "benchmark", "benchmark": "benchmark",
+        "Table": "_benchmark", "benchmark": "_benchmark",
         "case": "catalogue", "cases": "catalogue", "names": "catalogue"}
 
 __all__ = ["Case", "Group", "Report", "Score", "Table", "benchmark", "case", "cases", "names"]
@@ -44,6 +45,6 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:
+    from thetasol.reference._benchmark import Table, benchmark
     from thetasol.reference._case import Case, Group, Report, Score
-    from thetasol.reference.benchmark import Table, benchmark
     from thetasol.reference.catalogue import case, cases, names
