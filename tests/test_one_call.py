@@ -1,12 +1,10 @@
-"""One call on a few times (a far time): the few-times paths of the theta-function rotation against
-the batched ones.
+"""One call on a few times (a far time): the theta-function rotation's evaluation of few times against
+the same times in a batch, and its phases far out.
 
-With few times the evaluation takes shortcuts that compute the same numbers with fewer numpy calls:
-the phases of the Fourier flow gather all their factors at once (``thetasol.theta.flow.FEW_PRODUCTS``;
-the same operations in the same order: bit-identical), and for one time the state after the flow runs
-on Python complex numbers and floats around its one matrix product (the 3x3 algebra with the same
-operations as numpy's, ``thetasol.core.so3.polar_near_orthogonal_one``; the complex products round
-differently).  Besides, a product with one row (gemv) sums in another order than with many (gemm).
+One implementation serves every number of times; with few times the phases of the Fourier flow gather
+all their factors at once (``thetasol.theta.flow.FEW_PRODUCTS``; the same operations in the same order:
+bit-identical).  A product with one row (gemv) sums in another order than with many (gemm), so one time
+and the same time in a batch agree to rounding.
 """
 import json
 import pathlib
@@ -16,8 +14,6 @@ import pytest
 
 from thetasol import invariants, solve_rotation
 from thetasol.core import validate as V
-from thetasol.core.so3 import NEWTON_SCHULZ_MAX, polar_near_orthogonal, polar_near_orthogonal_one, rodrigues
-from thetasol.solutions.theta_rotation.evaluator import FlowEvaluator
 from thetasol.theta import flow as F
 
 REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
@@ -31,11 +27,6 @@ def sol(request):
     return solve_rotation(np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"]))
 
 
-def _ulps(x: np.ndarray, ref: np.ndarray) -> float:
-    """max |x - ref| in units of the spacing of max |ref| (ulps of the array's scale)."""
-    return float(np.abs(x - ref).max() / np.spacing(np.abs(ref).max()))
-
-
 @pytest.mark.parametrize("n", [1, 3, 16])
 def test_few_time_phases_equal_the_prefix_products(sol, n, monkeypatch):
     """The one gather and multiply.reduce of few times against the products over prefixes of the modes
@@ -45,22 +36,9 @@ def test_few_time_phases_equal_the_prefix_products(sol, n, monkeypatch):
     phi = np.multiply.outer(t, flow.u)
     phi -= np.rint(phi)
     monkeypatch.setattr(F, "FEW_PRODUCTS", 10**9)
-    few = flow.phases(phi, compiled=False)
+    few = flow.phases(phi)
     monkeypatch.setattr(F, "FEW_PRODUCTS", 0)
-    assert np.array_equal(flow.phases(phi, compiled=False), few)
-
-
-def test_one_time_floats_against_the_numpy_rows(sol, monkeypatch):
-    """One time: the state from the flow's values on Python complex numbers and floats against the numpy
-    rows of a batch on the same values (the same formulas; Python's complex products round differently
-    from numpy's).  Measured on the 13 reference bodies at 0 .. 1e9: <= 3 ulps of the largest component
-    (omega <= 4.3e-16 relative, Q <= 3.3e-16); bound 6 ulps."""
-    times = np.append(TIMES, 1e9)
-    one = [sol(np.array([t])) for t in times]
-    monkeypatch.setattr(FlowEvaluator, "_state_one", lambda self, *args: None)   # numpy rows for one time
-    rows = [sol(np.array([t])) for t in times]
-    for (w1, Q1), (w2, Q2) in zip(one, rows, strict=True):
-        assert _ulps(w1, w2) <= 6 and _ulps(Q1, Q2) <= 6
+    assert np.array_equal(flow.phases(phi), few)
 
 
 def test_one_call_against_the_batch(sol):
@@ -91,22 +69,6 @@ def test_scalar_and_shaped_times(sol):
     w3, Q3 = sol(np.array([0.7, 1e6]))
     assert w2.shape == (2, 1, 3) and Q2.shape == (2, 1, 3, 3)
     assert np.array_equal(w2[:, 0], w3) and np.array_equal(Q2[:, 0], Q3)
-
-
-def test_polar_near_orthogonal_one_is_the_batched_step():
-    """The plain-float Newton-Schulz step of one matrix against the batched step: the same bits on 2000
-    rotations perturbed by 1e-15 .. 1e-9 (all within the step's range); None beyond it."""
-    rng = np.random.default_rng(5)
-    R = rodrigues(rng.normal(size=(2000, 3)) * 2.0)
-    S = rng.normal(size=(2000, 3, 3))
-    scale = 10.0 ** rng.uniform(-15, -9, size=(2000, 1, 1))
-    X = R @ (np.eye(3) + scale * 0.5 * (S + S.transpose(0, 2, 1)))
-    batched = polar_near_orthogonal(X.transpose(1, 2, 0)).transpose(2, 0, 1)
-    for k in range(len(X)):
-        one = polar_near_orthogonal_one(X[k].ravel().tolist())
-        assert one is not None and np.array_equal(np.array(one).reshape(3, 3), batched[k])
-    far = R[0] @ (np.eye(3) + 10 * NEWTON_SCHULZ_MAX * np.diag([1.0, 0.0, 0.0]))
-    assert polar_near_orthogonal_one(far.ravel().tolist()) is None
 
 
 def test_times_checks():
@@ -175,8 +137,8 @@ def test_turns_against_mpmath(sol):
         assert max(abs(mpmath.mpf(float(ev.nu.ravel()[m])) - nu[m]) for m in range(9)) <= 3 * scale
         ref = np.array([[float(mpmath.frac(nu[m] * mpmath.mpf(t) / (2 * mpmath.pi) + mpmath.mpf(0.5)) - 0.5)
                          for m in range(9)] for t in times])
-    batch = ev._turns(np.array(times)).reshape(-1, 9)
-    one = np.array([ev._turns_one(t) for t in times])
+    batch = ev.turns(np.array(times)).reshape(-1, 9)
+    one = np.concatenate([ev.turns(np.array([t])).reshape(-1, 9) for t in times])
     for x in (batch, one):
         d = x - ref
         assert np.abs(d - np.rint(d)).max() <= 5e-16
@@ -193,16 +155,18 @@ def test_fitted_exponents_keep_their_own_rates(sol):
 
     import mpmath
 
+    from thetasol.solutions.theta_rotation.evaluator import phase_turns
     from thetasol.solutions.theta_rotation.exponents import PhaseRates
 
     ev = sol.evaluator
-    fit = dataclasses.replace(ev, phase=PhaseRates.of_fit(ev.nu))
+    fit = dataclasses.replace(ev, turns=phase_turns(PhaseRates.of_fit(ev.nu)))
     assert fit.phase.lattice.size == 0 and np.array_equal(fit.phase.e, np.eye(9))
     times = [0.7, 4002.0, 1e6 + 0.3, 1e9 + 0.5]
     with mpmath.workdps(40):
         ref = np.array([[float(mpmath.frac(mpmath.mpf(float(x)) * mpmath.mpf(t) / (2 * mpmath.pi) + mpmath.mpf(0.5))
                                - 0.5) for x in ev.nu.ravel()] for t in times])
-    for x in (fit._turns(np.array(times)).reshape(-1, 9), np.array([fit._turns_one(t) for t in times])):
+    for x in (fit.turns(np.array(times)).reshape(-1, 9),
+              np.concatenate([fit.turns(np.array([t])).reshape(-1, 9) for t in times])):
         d = x - ref
         assert np.abs(d - np.rint(d)).max() <= 5e-16
     t = TIMES[TIMES <= 4002.0]

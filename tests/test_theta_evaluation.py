@@ -47,7 +47,7 @@ def test_phase_rows_are_the_phases(sol):
     time): the same products of the same table entries, to the rounding of the powers (<= 4 ulp)."""
     flow = sol.evaluator.flow
     phi = flow.turns(np.linspace(-7.0, 3e3, 150))
-    rows, cols = flow.phase_rows(phi), flow.phases(phi, compiled=False)
+    rows, cols = flow.phase_rows(phi), flow.phases(phi)
     assert rows.shape == (flow.n_phases, len(phi))
     assert np.abs(rows.T - cols).max() <= 4 * np.finfo(float).eps * np.abs(flow.table_columns()[1]).max()
 
@@ -127,60 +127,6 @@ def test_polar_near_orthogonal_against_long_double():
     X = R @ (np.eye(3) + 1e-3 * S)
     got = polar_near_orthogonal(X.transpose(1, 2, 0)).transpose(2, 0, 1)
     assert np.array_equal(got, polar_orthonormalize(X))
-
-
-def test_compiled_kernels_agree_with_the_numpy_path(sol, monkeypatch):
-    """With numba (thetasol.core.jit) the phases and the state are compiled kernels; without it numpy
-    runs the same formulas.  Measured: phases <= 3.5e-16, omega <= 8.8e-16 relative and Q <= 5e-16
-    (1.7e-13 and 1.1e-13 near the unstable equilibrium, whose state is that sensitive to the order
-    of the sums); bounds 4x the measurement."""
-    pytest.importorskip("numba")
-    from thetasol.core import jit
-
-    t = np.concatenate([TIMES, np.linspace(0.0, 100.0, 301)])
-    phi = np.multiply.outer(t, sol.evaluator.flow.u)
-    phi -= np.round(phi)
-    out = {}
-    for enabled in (False, True):
-        monkeypatch.setattr(jit, "ENABLED", enabled)
-        assert jit.numba_available() is enabled
-        out[enabled] = (sol.evaluator.flow.phases(phi),) + sol(t)
-    sensitive = sol.diagnostics["fourier_modes"] > 2000
-    assert np.abs(out[True][0] - out[False][0]).max() <= 1.5e-15
-    assert np.abs(out[True][1] - out[False][1]).max() <= (7e-13 if sensitive else 3.5e-15) * np.abs(out[False][1]).max()
-    assert np.abs(out[True][2] - out[False][2]).max() <= (4.5e-13 if sensitive else 2e-15)
-
-
-def test_numba_is_opt_in(monkeypatch):
-    """The compiled kernels need THETASOL_NUMBA=1 (their one-off compilation, seconds, would land in
-    a program's first timed evaluation); without it, or with 0, the numpy path runs."""
-    from thetasol.core import jit
-
-    monkeypatch.setattr(jit, "ENABLED", None)
-    for value, on in (("", False), ("0", False), ("1", True)):
-        monkeypatch.setenv("THETASOL_NUMBA", value)
-        monkeypatch.setitem(jit._state, "env_on", None)        # the environment is read once
-        assert jit.numba_available() is (on and jit._state["numba"] is not False)
-        assert (jit.Kernel(lambda x: x).get() is None) is not jit.numba_available()
-
-
-def test_the_set_up_does_not_import_numba():
-    """With the kernels switched on, numba is imported by the first evaluation, not by import thetasol
-    or solve_rotation (whose check at one time runs in numpy): a user who only solves does not pay
-    its ~0.35 s."""
-    import os
-    import subprocess
-    import sys
-
-    d = {k: REFS["generic"][k] for k in ("J", "a", "Q0", "omega0")}
-    code = ("import sys, numpy as np; from thetasol import solve_rotation; "
-            f"d = {json.dumps(d)}; "
-            "solve_rotation(np.diag(d['J']), np.array(d['a']), np.array(d['Q0']), np.array(d['omega0'])); "
-            "print('numba' in sys.modules)")
-    env = dict(os.environ, THETASOL_NUMBA="1")
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120, check=True,
-                         env=env)
-    assert res.stdout.split()[-1] == "False"
 
 
 def test_flow_tables_against_mpmath(sol):

@@ -5,12 +5,10 @@ its inverse on skew matrices.  All functions broadcast over leading axes.
 """
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 
 __all__ = ["hat", "vee", "cross", "rotation_about", "rodrigues", "polar_orthonormalize", "polar_near_orthogonal",
-           "polar_near_orthogonal_one", "complete_frame"]
+           "NEWTON_SCHULZ_MAX", "complete_frame"]
 
 
 def hat(v: np.ndarray) -> np.ndarray:
@@ -100,31 +98,6 @@ def polar_near_orthogonal(X: np.ndarray) -> np.ndarray:
         bad = np.maximum.reduce(D, axis=(0, 1)) > NEWTON_SCHULZ_MAX
         out[:, :, bad] = polar_orthonormalize(X[:, :, bad].transpose(2, 0, 1)).transpose(1, 2, 0)
     return out
-
-
-def polar_near_orthogonal_one(g: Sequence[float]) -> list[float] | None:
-    """:func:`polar_near_orthogonal` of one matrix, as 9 Python floats (row-major) in and out.
-
-    The same floating-point operations in the same order (sums over the three terms from the first,
-    no fused multiply-add), so the same bits; None when ``|G^T G - 1| > NEWTON_SCHULZ_MAX`` (the
-    matrix then needs the SVD).  Plain floats cost ~3 us here against ~10 us for numpy's calls on one
-    3x3 matrix (the fixed cost of a far time, benchmarks/bench_theta_rotation.py).
-    """
-    g00, g01, g02, g10, g11, g12, g20, g21, g22 = g
-    a00 = g00 * g00 + g10 * g10 + g20 * g20
-    a01 = g00 * g01 + g10 * g11 + g20 * g21
-    a02 = g00 * g02 + g10 * g12 + g20 * g22
-    a11 = g01 * g01 + g11 * g11 + g21 * g21
-    a12 = g01 * g02 + g11 * g12 + g21 * g22
-    a22 = g02 * g02 + g12 * g12 + g22 * g22
-    d00, d11, d22 = a00 - 1.0, a11 - 1.0, a22 - 1.0
-    if not max(abs(d00), abs(d11), abs(d22), abs(a01), abs(a02), abs(a12)) <= NEWTON_SCHULZ_MAX:
-        return None
-    h00, h11, h22 = 1.0 - 0.5 * d00, 1.0 - 0.5 * d11, 1.0 - 0.5 * d22
-    h01, h02, h12 = 0.0 - 0.5 * a01, 0.0 - 0.5 * a02, 0.0 - 0.5 * a12
-    return [g00 * h00 + g01 * h01 + g02 * h02, g00 * h01 + g01 * h11 + g02 * h12, g00 * h02 + g01 * h12 + g02 * h22,
-            g10 * h00 + g11 * h01 + g12 * h02, g10 * h01 + g11 * h11 + g12 * h12, g10 * h02 + g11 * h12 + g12 * h22,
-            g20 * h00 + g21 * h01 + g22 * h02, g20 * h01 + g21 * h11 + g22 * h12, g20 * h02 + g21 * h12 + g22 * h22]
 
 
 _EYE = np.eye(3)[:, :, None]

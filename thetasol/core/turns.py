@@ -8,10 +8,8 @@ both exact) and a rate is given as ``c1 + c2 + c3`` with ``c1``, ``c2`` of 22 si
 rate's float value, multiplied by ``|t2| <= 1/2``.  For ``|t| >= 2^31`` the integer part is not split off
 (``t1 = 0``): the plain product.
 
-:func:`rate_turns` (arrays) and :func:`rate_turns_one` (one time on Python floats, cheaper than numpy's
-calls) run the same operations in the same order, so they agree bit for bit; the theta rotation's numba
-kernel repeats them (thetasol/solutions/theta_rotation/evaluator.py).  The result is not reduced: a
-caller reduces it, or first takes integer combinations of several rates' turns.
+:func:`rate_turns` forms these turns for any number of times.  The result is not reduced: a caller
+reduces it, or first takes integer combinations of several rates' turns.
 """
 from __future__ import annotations
 
@@ -19,7 +17,7 @@ import math
 
 import numpy as np
 
-__all__ = ["TURNS_EXACT", "split_rate", "split_rate_exact", "rate_turns", "rate_turns_one"]
+__all__ = ["TURNS_EXACT", "split_rate", "split_rate_exact", "rate_turns"]
 
 #: Below this ``|t|`` the products of ``rint(t)`` with 22-bit pieces are exact (22 + 31 bits).
 TURNS_EXACT = 2.0 ** 31
@@ -65,17 +63,3 @@ def rate_turns(t: np.ndarray, c1: np.ndarray, c2: np.ndarray, c3: np.ndarray, c:
     x += np.multiply.outer(c3, t1)
     x += np.multiply.outer(c, t2)
     return x
-
-
-def rate_turns_one(x: float, rates: list[tuple[float, float, float, float]]) -> list[float]:
-    """:func:`rate_turns` at one time ``x`` for the rates ``(c1, c2, c3, c)``, on Python floats (``round``
-    rounds half to even, as ``rint``)."""
-    t1 = float(round(x))
-    if not abs(t1) < TURNS_EXACT:
-        t1 = 0.0
-    t2 = x - t1
-    out = []
-    for c1, c2, c3, c in rates:
-        y, z = t1 * c1, t1 * c2
-        out.append((((y - round(y)) + (z - round(z))) + t1 * c3) + t2 * c)
-    return out

@@ -23,34 +23,28 @@ import math
 
 import numpy as np
 
-from thetasol.core.jit import Kernel
-from thetasol.core.turns import rate_turns, rate_turns_one, split_rate
+from thetasol.core.turns import rate_turns, split_rate
 from thetasol.theta.lattice import unique_rows
 
-__all__ = []
+__all__ = ["FlowTheta", "ellipsoid_candidates", "ellipsoid_candidates_many", "lower_factor", "row_sums"]
 
 #: Bytes of phase products per block of times in :meth:`FlowTheta.__call__`, and the most times per
 #: block: the real matrix (2 x phases, 4 x shifts) is read once per block, so larger blocks pay off until
-#: the products leave the cache (dense evaluation of the near-unstable body, 1418 phases: 12.7 us per
-#: time with 0.5 MB blocks, 10.0 with 4 MB; generic body 2.9 and 2.65; caps of 256-1024 times alike).
+#: the products leave the cache (benchmarks/bench_theta_rotation.py measures the dense evaluation).
 BLOCK_BYTES = 1 << 22
 BLOCK_CAP = 1024
 #: Up to this many products (times x phases) :meth:`FlowTheta.phases` gathers all factors at once
 #: instead of forming the products over prefixes of the modes (the same products in the same order):
-#: fewer numpy calls, more multiplications.  Measured per call, one time: 5.7 us against 6.7 on the
-#: generic body (288 phases), 4.2 against 4.6 on symmetric_oblate (46); four times on the generic body
-#: and one on near_unstable_equilibrium (1418) break even.
+#: fewer numpy calls, more multiplications, which pays off for a few times on a few hundred phases.
 FEW_PRODUCTS = 512
 #: From this many times on, :meth:`FlowTheta.tables` forms its powers along the times
 #: (:meth:`FlowTheta.table_rows`, one numpy call per power) instead of by cumprod along short rows: the
-#: same products, 2x faster on blocks of 1024 times (generic body 0.11 against 0.23 us per time), slower
-#: below ~100 times.
+#: same products, cheaper on long blocks of times and dearer on short ones.
 COLUMN_POWERS = 128
 #: From this many times on, and for up to :data:`ROWS_MAX_PHASES` phases, :meth:`FlowTheta.__call__`
 #: forms the phases as rows, one per phase along the times (:meth:`FlowTheta.phase_rows`), and the matrix
 #: product from their real and imaginary planes, in blocks of up to 1024 times: contiguous products instead
-#: of gathers along short rows.  Generic body (288 phases): phases 0.6 against 1.1 us per time, the flow
-#: 1.8 against 2.0; near_unstable_equilibrium (1418 phases): 9.4-10 against 9.1, hence the bound.
+#: of gathers along short rows, which stop paying off when the rows of a block leave the cache.
 ROWS_MIN = 64
 ROWS_MAX_PHASES = 512
 #: ``2 pi i``: the tables are ``exp(2 pi i k phi)``.
@@ -71,10 +65,9 @@ def ellipsoid_candidates(c: np.ndarray, M: np.ndarray, bound: float, box: list) 
     Coordinate by coordinate (Fincke-Pohst): row i of ``M (m + c)`` involves coordinates 0..i only,
     so the sum of the squares of the first rows bounds the range of the next coordinate.  The bound
     is widened by 1e-6 relative and every range by 1e-9 of its centre and half-width: more than the
-    rounding of these sums (~1e-15 relative), so a superset of the exact test's points (callers apply
-    that test), and in practice no more: on the 13 reference bodies of the theta-function rotation
-    every candidate passes FlowTheta's test (a widening by one integer per range would give 1.5-15x
-    as many, 3.5x on near_unstable_equilibrium).
+    rounding of these sums (a few ulps relative), so a superset of the exact test's points (callers
+    apply that test), and barely more: a widening by one integer per range would give several times as
+    many.
     """
     return ellipsoid_candidates_many(np.asarray(c, float)[None, :], M, bound, [box])[0]
 
@@ -84,8 +77,7 @@ def ellipsoid_candidates_many(cs: np.ndarray, M: np.ndarray, bound: float,
     """:func:`ellipsoid_candidates` for several centres ``cs`` (S, g) and boxes at once: the points of
     all of them (n, g), grouped by centre, the centre of each (n,) and ``||M (m + c)||^2`` as summed
     row by row (n,).  The same operations per point as one centre at a time, in one pass over the
-    coordinates (FlowTheta's ten shifts: 0.17-0.4 ms a centre alone, mostly numpy calls on a few
-    thousand points)."""
+    coordinates (FlowTheta's ten shifts: one set of numpy calls instead of ten)."""
     S, g = cs.shape
     B = bound * (1 + 1e-6) + 1e-12
     bx = np.asarray(boxes, dtype=np.int64).reshape(S, g, 2)
@@ -114,7 +106,7 @@ def ellipsoid_candidates_many(cs: np.ndarray, M: np.ndarray, bound: float,
 
 def row_sums(P: np.ndarray) -> np.ndarray:
     """``P.sum(axis=1)`` bit for bit, for rows of up to 4 entries by columns (numpy's reduction over
-    short rows costs ~17 ns per row, the column additions ~2 ns): in numpy's order, left to right
+    short rows costs more per row than the column additions): in numpy's order, left to right
     (pairwise ``(p0 + p1) + (p2 + p3)`` for 4 complex entries, whose 8 floats make one pairwise block)."""
     n = P.shape[1]
     if n > 4 or n == 0:
@@ -141,10 +133,9 @@ def _surely_inside(Y: np.ndarray, bound: float) -> float:
 
     Both sums evaluate the same form of the same rounded ``d``; their relative difference is at most
     ``8 g eps (sqrt(tr Y / l) + ||Y||_F / l)`` (l the smallest eigenvalue of ``Y``: rounding of the
-    rows of ``M d``, of ``d @ Y`` and of the sums, ``|d|^2 <= d.Y.d / l``): 3e-14 .. 9e-13 on the 13
-    reference bodies, where the largest difference is 5.5e-15.  Points ``1e-6`` inside are then inside
-    for both; none of the 13 bodies' candidates lies in that shell, so the exact test is skipped
-    (near_unstable_equilibrium: 2.4 ms of its set-up).
+    rows of ``M d``, of ``d @ Y`` and of the sums, ``|d|^2 <= d.Y.d / l``), far below ``1e-6``.  Points
+    ``1e-6`` inside are then inside for both, and only the candidates in that thin shell take the exact
+    test.
     """
     g = len(Y)
     lam = float(np.linalg.eigvalsh(Y)[0])
@@ -156,7 +147,7 @@ def _quadratic_form(m: np.ndarray, tau: np.ndarray) -> np.ndarray:
     """``row_sums((m @ tau) * m)`` for real points m (n, g): the same products from two real matrix
     products (the complex product of real m has the real products as its parts, and the complex
     multiplication by real m gives ``Re * m`` and ``Im * m``), summed in the order of the complex sum,
-    without converting m to complex twice (0.6 against 1.2 ms for near_unstable_equilibrium's 57 000 terms)."""
+    without converting m to complex twice."""
     P = np.empty(m.shape, complex)
     P.real = (m @ tau.real) * m
     P.imag = (m @ tau.imag) * m
@@ -209,12 +200,11 @@ class FlowTheta:
         S = shifts.shape[0]
         self.e, keys, terms, rows = _series_terms(tau, shifts, r, tol)
         # group the terms by their first r indices (the Fourier mode), in one pass for all shifts
-        # (np.unique over rows sorts structured records, ~0.1 s here: rows coded as C-order flat indices
-        # in the box lo .. lo + span - 1 keep the same lexicographic order)
+        # (np.unique over rows sorts structured records, slowly: rows coded as C-order flat indices in the
+        # box lo .. lo + span - 1 keep the same lexicographic order)
         K = np.concatenate(keys)
         self.modes, inv = unique_rows(K)
-        # np.add.at on the flat array: ~0.1 ms for the 57 000 terms of near_unstable_equilibrium, ~1 ms
-        # with the (shift, mode) index pair
+        # np.add.at on the flat array: much cheaper than with the (shift, mode) index pair
         D = np.zeros(S * len(self.modes), complex)
         np.add.at(D, np.concatenate(rows) * len(self.modes) + inv, np.concatenate(terms))
         D = D.reshape(S, len(self.modes))
@@ -223,7 +213,6 @@ class FlowTheta:
         self.u = u
         self.r = r
         self._u_pieces = (*split_rate(u), u)
-        self._u_split = list(zip(*(c.tolist() for c in self._u_pieces), strict=True))
         self._pair(self.modes, D, self.Dd)
 
     def _pair(self, modes: np.ndarray, D: np.ndarray, Dd: np.ndarray) -> None:
@@ -285,16 +274,10 @@ class FlowTheta:
         # per table: its slice and the column of k = 0
         self._zero_cols = [(sl, int(sl.start - lo[i])) for i, sl in enumerate(self._k_slices)]
 
-    def phases(self, phi: np.ndarray, compiled: bool = True, work: np.ndarray | None = None) -> np.ndarray:
-        """``exp(2 pi i p.phi)`` (n, P) for the phases phi (n, r) reduced mod 1 (``compiled``: with the
-        numba kernel when available, :mod:`thetasol.core.jit`).  ``work``: a complex array (2, >= n, P)
-        the products of many times are formed in (and the result is a view of); :meth:`__call__` passes
-        one for all its blocks."""
-        kern = _PHASES.get() if compiled else None
-        if kern is not None:
-            out = np.empty((phi.shape[0], self.n_phases), complex)
-            kern(phi, self._lo, self._span, self._pm_rel, out)
-            return out
+    def phases(self, phi: np.ndarray, work: np.ndarray | None = None) -> np.ndarray:
+        """``exp(2 pi i p.phi)`` (n, P) for the phases phi (n, r) reduced mod 1.  ``work``: a complex array
+        (2, >= n, P) the products of many times are formed in (and the result is a view of);
+        :meth:`__call__` passes one for all its blocks."""
         tab = self.tables(phi)
         n = phi.shape[0]
         if self.r > 1 and n * self.n_phases <= FEW_PRODUCTS:
@@ -327,14 +310,11 @@ class FlowTheta:
         Powers of ``exp(2 pi i phi_i)`` outwards from ``k = 0`` (``exp(-i x) = conj(exp(i x))``): one
         exponential per phase instead of one per entry, which cost as much as the flow's matrix product.
         The powers are also the more accurate: ``exp(2 pi i fl(k phi))`` carries the rounding of its
-        argument, ~|k phi| 2 pi eps; against mpmath the powers' error is <= 4.0e-16 max(1, |k|) and
-        0.64-0.84x the direct exponentials' largest (tests/test_theta_evaluation.py).  One time
-        (``n = 1``) takes the direct exponentials: one numpy call instead of a few per table.
+        argument, about ``|k phi| 2 pi eps``, which the powers do not (tests/test_theta_evaluation.py
+        compares both with mpmath).  One time is formed as a block of one.
         """
         n = phi.shape[0]
-        if n == 1:        # one exp call on the entries: fewer numpy calls than the products of one row
-            return np.exp(TWO_PI_I * (phi.take(self._k_owner, axis=1) * self._k_all))
-        if n >= COLUMN_POWERS:     # the same products along the times (cumprod's short rows: ~7 ns an entry)
+        if n >= COLUMN_POWERS:     # the same products along the times (cumprod's rows are short)
             return self.table_rows(phi).T
         base = np.exp(TWO_PI_I * phi)                                   # (n, r)
         tab = np.empty((n, self._k_all.size), complex)
@@ -349,14 +329,10 @@ class FlowTheta:
 
     def turns(self, t: np.ndarray) -> np.ndarray:
         """``t u`` modulo 1 (n, r) in ``[-1/2, 1/2]``, exact before its last roundings for ``|t| < 2^31``
-        (:mod:`thetasol.core.turns`).  The plain product ``t u`` carries ``|t u| 1.1e-16`` into the
+        (:mod:`thetasol.core.turns`).  The plain product ``t u`` carries ``|t u| eps / 2`` into the
         phases, which the exponents of a theta quotient (reduced exactly the same way) then no longer
-        match: the first integrals of the fast-spin reference bodies drift by ~1e-12 at ``t = 1e9``
-        (tests/test_one_call.py)."""
-        if t.shape[0] == 1:
-            x = np.array([rate_turns_one(t.item(), self._u_split)])
-        else:
-            x = np.ascontiguousarray(rate_turns(t, *self._u_pieces).T)
+        match: the first integrals of the fast-spin bodies would drift far out (tests/test_one_call.py)."""
+        x = np.ascontiguousarray(rate_turns(t, *self._u_pieces).T)
         x -= np.rint(x)
         return x
 
@@ -399,7 +375,7 @@ class FlowTheta:
         blk = min(n, BLOCK_CAP, max(ROWS_MIN, 4 * BLOCK_BYTES // (16 * P)))
         out = np.empty((n, self.W.shape[1]))
         # the rows and their planes in one workspace (MBs): separate fresh arrays of that size come from
-        # mmap in a new process, and their page faults cost 0.3-0.4 us per time on the generic body
+        # mmap in a new process, and their page faults would cost more than the products
         work = np.empty(4 * P * blk)
         rows = work[:2 * P * blk].view(complex).reshape(P, blk)
         planes = work[2 * P * blk:].reshape(P, 2, blk)
@@ -413,11 +389,10 @@ class FlowTheta:
             out[a:a + m] = outT[:, :m].T
         return out
 
-    def __call__(self, t: np.ndarray, derivative: bool = True,
-                 compiled: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    def __call__(self, t: np.ndarray, derivative: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv.
 
-        Many times (:data:`ROWS_MIN`, up to :data:`ROWS_MAX_PHASES` phases, numpy path) go through
+        Many times (:data:`ROWS_MIN`, up to :data:`ROWS_MAX_PHASES` phases) go through
         :meth:`phase_rows` in blocks of up to 1024 times; otherwise the phases are gathered per time, in
         blocks of :data:`BLOCK_BYTES` of phase products.  The derivative is computed in the same product
         whether asked or not (its columns cost a quarter of the product).
@@ -426,20 +401,20 @@ class FlowTheta:
         phi = self.turns(t)
         n, S = t.shape[0], self.D.shape[0]
         blk = self._blk
-        if n >= ROWS_MIN and self.n_phases <= ROWS_MAX_PHASES and (not compiled or _PHASES.get() is None):
+        if n >= ROWS_MIN and self.n_phases <= ROWS_MAX_PHASES:
             vd = self._by_rows(phi).view(complex)
             return self.e, vd[:, :S], (vd[:, S:] if derivative else None)
         if n <= blk:
-            vd = np.matmul(self.phases(phi, compiled).view(float), self.W).view(complex)
+            vd = np.matmul(self.phases(phi).view(float), self.W).view(complex)
             return self.e, vd[:, :S], (vd[:, S:] if derivative else None)
         out = np.empty((n, 4 * S))
         # the blocks' phase products (MBs) in one workspace: fresh arrays of that size come from mmap or
         # from the heap as glibc's adaptive threshold stands after the set-up, and from mmap their page
-        # faults double the cost per time (generic body 5.0-5.2 us against 2.9)
+        # faults would cost as much as the products
         work = np.empty((2, blk, self.n_phases), complex)
         for a in range(0, n, blk):
             b = min(n, a + blk)
-            np.matmul(self.phases(phi[a:b], compiled, work).view(float), self.W, out=out[a:b])
+            np.matmul(self.phases(phi[a:b], work).view(float), self.W, out=out[a:b])
         vd = out.view(complex)
         return self.e, vd[:, :S], (vd[:, S:] if derivative else None)
 
@@ -448,7 +423,7 @@ def _runs(idx: list, pre_inv: np.ndarray | None) -> list[tuple[int, int, int, in
     """The modes (lexicographic; ``idx[i]`` their table columns of phase i, ``pre_inv`` their prefix of the
     first r - 1 phases) as runs of consecutive last columns under one prefix:
     ``(prefix, first mode, end mode, first column)``.  An ellipsoid meets a line in an interval, so there
-    are as many runs as prefixes (47 for the 288 phases of the generic body)."""
+    are as many runs as prefixes, far fewer than the modes."""
     last = idx[-1]
     new = np.ones(len(last), bool)
     new[1:] = last[1:] != last[:-1] + 1
@@ -458,32 +433,3 @@ def _runs(idx: list, pre_inv: np.ndarray | None) -> list[tuple[int, int, int, in
     ends = np.append(starts[1:], len(last))
     pre = pre_inv[starts] if pre_inv is not None else np.zeros(len(starts), np.int64)
     return list(zip(pre.tolist(), starts.tolist(), ends.tolist(), last[starts].tolist(), strict=True))
-
-
-def _phases_kernel(phi, lo, span, pm, out):  # pragma: no cover - compiled by numba (core.jit)
-    """Compiled :meth:`FlowTheta.phases`: the same tables (:meth:`FlowTheta.tables`) and products in the
-    same order, per time."""
-    n, r = phi.shape
-    tab = np.empty((r, span.max()), np.complex128)
-    for a in range(n):
-        for i in range(r):
-            x = 2.0 * math.pi * phi[a, i]
-            e = complex(math.cos(x), math.sin(x))
-            z = -lo[i]                                       # the column of k = 0 (the box holds it)
-            tab[i, z] = 1.0
-            p = e
-            for k in range(z + 1, span[i]):
-                tab[i, k] = p
-                p = p * e
-            p = e.conjugate()
-            for k in range(z - 1, -1, -1):
-                tab[i, k] = p
-                p = p * e.conjugate()
-        for p in range(pm.shape[0]):
-            z = tab[0, pm[p, 0]]
-            for i in range(1, r):
-                z = z * tab[i, pm[p, i]]
-            out[a, p] = z
-
-
-_PHASES = Kernel(_phases_kernel)
