@@ -210,7 +210,7 @@ def test_scalar_fast_path_is_the_same_algorithm():
         mc = 10 ** rng.uniform(-300, 0) if rng.random() < 0.5 else rng.uniform(0, 1)
         K = el._K(mc)
         x = rng.uniform(0, K, 12)
-        vec = el._sncndn_0K(x, 1 - mc, mc, K)  # 12 points: array path
-        sca = el._sncndn_0K(x[:5], 1 - mc, mc, K)  # 5 points: scalar path
+        vec = el.sncndn_quarter(x, 1 - mc, mc, K)  # 12 points: array path
+        sca = el.sncndn_quarter(x[:5], 1 - mc, mc, K)  # 5 points: scalar path
         for a, b in zip(vec, sca):
             assert np.array_equal(a[:5], b)

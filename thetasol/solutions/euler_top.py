@@ -65,8 +65,9 @@ from thetasol.core.attitude import (
     uniform_rotation as _uniform_rotation,
     unit_rows as _unit,
 )
+from thetasol.core.dd import two_prod, two_sum
 from thetasol.protocol import RotationSolution
-from thetasol.special import elliptic as _el
+from thetasol.special.elliptic import reduce_period, sncndn_quarter
 
 __all__ = ["EulerTopSolution", "solve_euler_top"]
 
@@ -370,17 +371,17 @@ def _momentum_float(c: _Consts, t):
     needs: ``tau`` on the separatrix, else ``(x, sn, cn, dn, sgn)`` at the reduced argument."""
     G = c.G
     Aa, Ab, Ac = c.A
-    p, e = _el._two_prod(c.lam, t)
-    hi, e2 = _el._two_sum(p, c.u0)
+    p, e = two_prod(c.lam, t)
+    hi, e2 = two_sum(p, c.u0)
     if c.kind == "separatrix":
         tau = hi + (e2 + e)
         with np.errstate(over="ignore"):
             sech = 1.0 / np.cosh(tau)
         return G * np.stack([Aa * sech, np.tanh(tau), Ac * sech], -1), tau
-    r, nper = _el._reduce(hi, e + e2, 2.0 * c.K)
+    r, nper = reduce_period(hi, e + e2, 2.0 * c.K)
     r = np.clip(r, -c.K, c.K)
     x = np.abs(r)
-    sn, cn, dn = _el._sncndn_0K(x, c.m, c.mc, c.K)
+    sn, cn, dn = sncndn_quarter(x, c.m, c.mc, c.K)
     sgn = np.where(r < 0, -1.0, 1.0)
     par = np.where(np.fmod(np.abs(nper), 2.0) == 1.0, -1.0, 1.0)
     mw = G * np.stack([Aa * par * cn, Ab * par * sgn * sn, Ac * dn], -1)

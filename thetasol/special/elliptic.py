@@ -50,9 +50,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 from scipy import special as _sp
 
-from thetasol.core.dd import two_prod, two_sum
+from thetasol.core.dd import two_prod
 
-__all__ = ["ellipj", "ellipk", "ellipe", "ellipf", "ellipeinc", "ellippi", "ellippiinc"]
+__all__ = ["ellipj", "ellipk", "ellipe", "ellipf", "ellipeinc", "ellippi", "ellippiinc", "ellipj_dd", "reduce_period",
+           "sncndn_quarter"]
 
 _EPS = np.finfo(float).eps
 
@@ -108,24 +109,20 @@ def _out(x):
 
 # -- compensated arithmetic used for argument reduction ------------------------------------
 
-# the error-free transformations are shared with the theta engine (overflow-safe two-product)
-_two_prod, _two_sum = two_prod, two_sum
-
-
-def _reduce(hi, lo, period):
+def reduce_period(hi, lo, period):
     """Remainder of ``hi + lo`` modulo ``period`` in [-period/2, period/2] and the quotient.
 
     ``hi + lo`` is a double-double; the product ``n * period`` is formed exactly, so the
     only error is the rounding of ``period`` itself.
     """
     n = np.rint(hi / period)
-    q, qe = _two_prod(n, period)
+    q, qe = two_prod(n, period)
     r = ((hi - q) - qe) + lo
     # one more correction step if rounding of hi/period put r just outside the range
     adj = np.rint(r / period)
     if np.any(adj != 0):
         n = n + adj
-        q, qe = _two_prod(adj, period)
+        q, qe = two_prod(adj, period)
         r = ((r - q) - qe)
     return r, n
 
@@ -358,8 +355,11 @@ def _sncndn_half_scalar(x, m, mc):
     return math.sqrt(s2), cc, math.sqrt(mc + m * cc * cc)
 
 
-def _sncndn_0K(x, m, mc, K):
-    """sn, cn, dn for 0 <= x <= K (arrays broadcast together); finite K required."""
+def sncndn_quarter(x, m, mc, K):
+    """sn, cn, dn for 0 <= x <= K, the quarter period (arrays broadcast together); finite K required.
+
+    For callers that reduce their own arguments (:func:`reduce_period` of a double-double phase) and
+    then fold the signs and the parity of the period count back in."""
     if np.size(x) <= 8 and np.ndim(m) == 0 and np.ndim(mc) == 0 and np.ndim(K) == 0:
         # few points (single queries, setup): the same algorithm in scalar arithmetic
         m, mc, K = float(m), float(mc), float(K)
@@ -382,15 +382,15 @@ def _sncndn_0K(x, m, mc, K):
     return sn, cn, dn
 
 
-def _ellipj_reduced(hi, lo, m, mc):
+def ellipj_dd(hi, lo, m, mc):
     """sn, cn, dn, am of the double-double argument hi + lo (arrays of equal shape)."""
     K = _K(mc)
     finite = np.isfinite(K)
     Kf = np.where(finite, K, 1.0)
-    r, n = _reduce(hi, lo, 2.0 * Kf)
+    r, n = reduce_period(hi, lo, 2.0 * Kf)
     r = np.clip(r, -Kf, Kf)
     a = np.abs(r)
-    sn, cn, dn = _sncndn_0K(a, m, mc, Kf)
+    sn, cn, dn = sncndn_quarter(a, m, mc, Kf)
     am_r = np.arctan2(sn, cn)
     odd = np.fmod(np.abs(n), 2.0) == 1.0
     sgn_r = np.where(r < 0, -1.0, 1.0)
@@ -441,7 +441,7 @@ def ellipj(u: ArrayLike, m: ArrayLike, mc: ArrayLike | None = None, *,
     m, mc = _params(m, mc)
     u, m, mc = np.broadcast_arrays(u, m, mc)
     shape = u.shape
-    sn, cn, dn, am = _ellipj_reduced(u.ravel().astype(float), np.zeros(u.size), m.ravel(), mc.ravel())
+    sn, cn, dn, am = ellipj_dd(u.ravel().astype(float), np.zeros(u.size), m.ravel(), mc.ravel())
     return tuple(_out(x.reshape(shape)) for x in (sn, cn, dn, am))
 
 

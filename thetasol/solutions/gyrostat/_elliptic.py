@@ -14,10 +14,11 @@ from thetasol.core.attitude import (
     norm3 as _norm,
     unit_rows as _unit,
 )
+from thetasol.core.dd import two_prod, two_sum
 from thetasol.core.periodic import adaptive_series
 from thetasol.solutions.gyrostat._algebra import mpq, orbit_algebra
 from thetasol.solutions.gyrostat._forms import frame_with_e3
-from thetasol.special import elliptic as _el
+from thetasol.special.elliptic import ellipj_dd
 
 __all__ = ["EllipticMotion", "reanchor", "MIN_TORSION_RATIO"]
 
@@ -59,7 +60,7 @@ class EllipticMotion:
             setattr(self, k, v)
         self.separatrix = self.mc == 0.0
         # the time origin of the formula, t_r = t_anchor - v_a, as a double-double
-        self.tr_hi, lo = _el._two_sum(self.t_anchor, -self.va)
+        self.tr_hi, lo = two_sum(self.t_anchor, -self.va)
         self.tr_lo = lo - self.va_lo
 
     def orbit_times(self, n, off=None):
@@ -235,8 +236,8 @@ class EllipticMotion:
 
     def _u(self, t):
         """The elliptic argument scale (t - t_r) as a double-double (hi, lo)."""
-        d_hi, d_lo = _el._two_sum(t, -self.tr_hi)
-        hi, lo = _el._two_prod(self.scale, d_hi)
+        d_hi, d_lo = two_sum(t, -self.tr_hi)
+        hi, lo = two_prod(self.scale, d_hi)
         return hi, lo + self.scale * (d_lo - self.tr_lo)
 
     def _dW(self, t):
@@ -245,7 +246,7 @@ class EllipticMotion:
 
     def _dW_u(self, hi, lo):
         """The state at the elliptic argument ``u = hi + lo = scale (t - t_r)``."""
-        sn, cn, dn, _ = _el._ellipj_reduced(hi, lo, np.full(hi.shape, self.m), np.full(hi.shape, self.mc))
+        sn, cn, dn, _ = ellipj_dd(hi, lo, np.full(hi.shape, self.m), np.full(hi.shape, self.mc))
         sc = self.scale
         # y = k / (wp - c) in the pencil turned by theta_r, wp = p1 + p0 / X, multiplied by X:
         # X (wp - c) = qe X + X (wp - e_top), the second term in a form free of cancellation

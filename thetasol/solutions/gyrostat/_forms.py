@@ -113,14 +113,17 @@ class Axisymmetric:
 
 
 class Delegate:
+    """Another closed form's motion (the Euler top of a negligible rotor momentum), through its public
+    calls: ``sol(t)`` and ``sol.omega(t)`` on the flat times."""
+
     def __init__(self, sol):
         self.sol = sol
 
     def evaluate(self, t):
-        return self.sol._evaluate(t)
+        return self.sol(t)
 
     def omega(self, t):
-        return self.sol._omega(t)
+        return self.sol.omega(t)
 
 
 
