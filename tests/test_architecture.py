@@ -144,3 +144,122 @@ def test_theta_set_up_imports_only_what_it_uses():
     out = subprocess.run([sys.executable, "-c", code, refs], capture_output=True, text=True, check=True,
                          timeout=300)
     assert out.stdout.strip().splitlines()[-1] == "[]"
+
+
+# -- private names and __all__ -------------------------------------------------------------------------
+
+def _is_private(name: str) -> bool:
+    return name.startswith("_") and not name.startswith("__")
+
+
+def _sources() -> dict[str, tuple[str, bool]]:
+    """Every thetasol module: dotted name -> (source, is a package)."""
+    out = {}
+    for path in sorted(PACKAGE.rglob("*.py")):
+        parts = list(path.relative_to(PACKAGE.parent).with_suffix("").parts)
+        package = parts[-1] == "__init__"
+        out[".".join(parts[:-1] if package else parts)] = (path.read_text(encoding="utf-8"), package)
+    return out
+
+
+def _declared_all(tree: ast.Module) -> set[str] | None:
+    """The names of a module's literal ``__all__``, or None without one (or with a computed one: the
+    package's lazy ``__init__``, which no module of the package imports from)."""
+    for node in tree.body:
+        targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(node, ast.AnnAssign) else []
+        if any(isinstance(t, ast.Name) and t.id == "__all__" for t in targets) and node.value is not None:
+            try:
+                return set(ast.literal_eval(node.value))
+            except ValueError:
+                return None
+    return None
+
+
+def _private_crossings(sources: dict[str, tuple[str, bool]]) -> list[str]:
+    """Imports that reach a private name outside its package, and names imported from a module whose
+    ``__all__`` does not list them.
+
+    A private module (a leading underscore anywhere in its dotted name) belongs to the package that holds
+    its first private component; a private name of a module to that module's package (the package itself
+    for an ``__init__``).  Either may be used only by modules inside that package, subpackages included:
+    ``from thetasol.x import _y``, ``import thetasol.x._m``, ``from thetasol.x._m import y`` and ``alias._y``
+    on a module bound to ``alias`` from another package are reported.  Imports under ``TYPE_CHECKING``
+    count too: they name the private thing all the same."""
+    trees = {m: (ast.parse(src), pkg) for m, (src, pkg) in sources.items()}
+    alls = {m: _declared_all(tree) for m, (tree, _) in trees.items()}
+
+    def home(module: str) -> str:
+        """The package a private module, or the private names of a module, belong to."""
+        parts = module.split(".")
+        for i, p in enumerate(parts):
+            if _is_private(p):
+                return ".".join(parts[:i])
+        return module if trees[module][1] else ".".join(parts[:-1])
+
+    def inside(importer: str, package: str) -> bool:
+        return importer == package or importer.startswith(package + ".")
+
+    found = []
+    for me, (tree, pkg) in trees.items():
+        here = me if pkg else me.rsplit(".", 1)[0]
+        aliases: dict[str, str] = {}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                for a in node.names:
+                    if a.name in trees:
+                        if not inside(me, home(a.name)) and any(_is_private(p) for p in a.name.split(".")):
+                            found.append(f"{me}:{node.lineno}: imports the private module {a.name}")
+                        aliases[a.asname or a.name] = a.name
+            elif isinstance(node, ast.ImportFrom):
+                base = here.rsplit(".", node.level - 1)[0] if node.level > 1 else here if node.level else ""
+                src = ".".join(p for p in (base, node.module) if p)
+                if src not in trees:
+                    continue
+                if not inside(me, home(src)) and any(_is_private(p) for p in src.split(".")):
+                    found.append(f"{me}:{node.lineno}: imports from the private module {src}")
+                for a in node.names:
+                    sub = f"{src}.{a.name}"
+                    if sub in trees:
+                        if _is_private(a.name) and not inside(me, home(sub)):
+                            found.append(f"{me}:{node.lineno}: imports the private module {sub}")
+                        aliases[a.asname or a.name] = sub
+                    elif _is_private(a.name):
+                        if not inside(me, home(src)):
+                            found.append(f"{me}:{node.lineno}: imports the private name {src}.{a.name}")
+                    elif a.name != "*" and alls[src] is not None and a.name not in alls[src]:
+                        found.append(f"{me}:{node.lineno}: imports {a.name}, not in the __all__ of {src}")
+        for node in ast.walk(tree):
+            if (isinstance(node, ast.Attribute) and isinstance(node.value, ast.Name) and node.value.id in aliases
+                    and _is_private(node.attr) and not inside(me, home(aliases[node.value.id]))):
+                found.append(f"{me}:{node.lineno}: reaches the private name {aliases[node.value.id]}.{node.attr}")
+    return sorted(set(found))
+
+
+def test_private_name_checker_finds_each_kind():
+    """The checker itself, on a small made-up package: each way of reaching a private name from another
+    package is reported, the same uses inside the package and public names listed in __all__ are not."""
+    src = {
+        "p": ("", True),
+        "p.a": ("", True),
+        "p.a.m": ("__all__ = ['f']\ndef f(): pass\ndef g(): pass\ndef _h(): pass\n", False),
+        "p.a._priv": ("def k(): pass\n", False),
+        "p.a.inner": ("from p.a.m import _h\nfrom p.a._priv import k\nfrom . import _priv\n", False),
+        "p.a.sub": ("", True),
+        "p.a.sub.deep": ("from p.a._priv import k\nfrom ..m import _h\n", False),
+        "p.b": ("", True),
+        "p.b.user": ("from p.a.m import f, g, _h\nfrom p.a import m as mm\nimport p.a._priv\n"
+                     "from p.a._priv import k\nx = mm._h\ny = mm.f\n", False),
+    }
+    assert _private_crossings(src) == [
+        "p.b.user:1: imports g, not in the __all__ of p.a.m",
+        "p.b.user:1: imports the private name p.a.m._h",
+        "p.b.user:3: imports the private module p.a._priv",
+        "p.b.user:4: imports from the private module p.a._priv",
+        "p.b.user:5: reaches the private name p.a.m._h",
+    ]
+
+
+def test_no_private_name_crosses_a_package():
+    """No module reaches a private name (module, function, constant) of another package, through an
+    alias or not, and every name imported from a module with ``__all__`` is listed there."""
+    assert _private_crossings(_sources()) == []

@@ -17,7 +17,7 @@ import numpy as np
 
 from thetasol.curves._poly import to_fraction_pair
 
-__all__ = []
+__all__ = ["Numerator", "expanded_sum", "parse_numerators", "cached_numerators"]
 
 
 @dataclass(frozen=True)

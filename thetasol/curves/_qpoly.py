@@ -17,7 +17,8 @@ from __future__ import annotations
 from fractions import Fraction
 from math import gcd, lcm
 
-__all__ = []
+__all__ = ["mul", "add", "integer_coefficients", "discriminant_in_y", "gcd_primitive", "has_common_factor",
+           "square_free_part"]
 
 #: A prime for the modular gcd test (2^61 - 1): a gcd of degree 0 modulo p is 1 over Q.
 _P = (1 << 61) - 1

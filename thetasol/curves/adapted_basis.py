@@ -22,7 +22,7 @@ from math import gcd, lcm
 
 import numpy as np
 
-__all__ = []
+__all__ = ["involution_matrix", "saturated_kernel", "symplectic_completion", "real_flow_basis"]
 
 
 def involution_matrix(P: np.ndarray, image: np.ndarray, what: str) -> np.ndarray:

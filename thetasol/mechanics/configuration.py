@@ -35,7 +35,7 @@ from thetasol.core.so3 import hat
 from thetasol.mechanics.bodies import Body, principal_axes
 from thetasol.mechanics.equations import inertia_from_moments
 
-__all__ = ["Joint", "EffectiveBody", "JointViolation", "Configuration", "initial_attitudes"]
+__all__ = ["CENTRAL_RTOL", "Joint", "EffectiveBody", "JointViolation", "Configuration", "initial_attitudes"]
 
 #: Default relative tolerance of :meth:`Configuration.is_central` (joint offset / body size).
 CENTRAL_RTOL = 1e-12

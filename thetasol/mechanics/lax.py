@@ -21,7 +21,7 @@ from numpy.typing import ArrayLike
 from thetasol.core.dd import cdd, cdd_add, cdd_mul, cdd_scale, cdd_sub, cdd_value, two_prod
 from thetasol.core.so3 import cross
 
-__all__ = []
+__all__ = ["lax_matrix", "right_eigenvector", "eigenvector_poles", "polish_eigenvector_poles"]
 
 
 def lax_matrix(J: np.ndarray, M: np.ndarray, u: np.ndarray, E: ArrayLike) -> np.ndarray:

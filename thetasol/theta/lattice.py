@@ -15,7 +15,8 @@ import numpy as np
 
 from thetasol.core.panels import gauss_legendre
 
-__all__: list[str] = []
+__all__ = ["MAX_GENUS", "lll_gram", "Reduction", "siegel_reduction", "dense_unique", "unique_rows", "shortest_vector",
+           "tail_bound", "radius_for", "union_set", "babai"]
 
 #: Largest genus accepted (the union sets grow like R^g; 6 is slow but works).
 MAX_GENUS = 8

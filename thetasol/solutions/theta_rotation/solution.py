@@ -33,7 +33,7 @@ from thetasol.solutions.theta_rotation.spectral_data import spectral_data
 if TYPE_CHECKING:
     from thetasol.curves.plane_curve import Place
 
-__all__ = ["ThetaRotation"]
+__all__ = ["ThetaRotation", "solve_theta_rotation"]
 
 #: |Im Phi(0, t)| at t = 1000 above which the set-up warns (accurate solutions stay well below it).
 RESIDUAL_WARN = 1e-8
