@@ -20,11 +20,13 @@ places are summed, below float64 rounding (~2^(-M/2) of the largest term).
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
 from fractions import Fraction
+from typing import Any
 
 import numpy as np
 
-from thetasol.curves._numerators import Numerator
+from thetasol.curves._numerators import Numerator, cached_numerators
 from thetasol.curves._quad import Piece
 
 # samples per turn.  The circle has radius half the distance to the next critical value, so in the
@@ -33,6 +35,43 @@ from thetasol.curves._quad import Piece
 # (at t0 itself); M = 128 puts it below float64 rounding, fewer samples would not.
 M_SITE = 128
 M_INF = 128
+
+
+@dataclass(frozen=True, eq=False)
+class CurveEngine:
+    """The numerical machinery of a plane curve that its places and samples are computed with, built
+    once by :class:`~thetasol.curves.plane_curve.PlaneCurve` (its ``engine``).
+
+    Attributes
+    ----------
+    poly : CurvePoly
+        The polynomial (:mod:`thetasol.curves._poly`).
+    sites, sites_lo : ndarray
+        The finite critical values and the low parts of their exact values (or None).
+    graph : CellGraph
+        The path graph between the critical values (:mod:`thetasol.curves._paths`).
+    exact : ExactEvaluator
+        The mpmath evaluator of the exact coefficients (:mod:`thetasol.curves._mp`).
+    tracker : Tracker
+        Sheet continuation along lines and circles (:mod:`thetasol.curves._quad`).
+    vroots : ndarray
+        The sheets' values at the graph's vertices, in label order.
+    cache : dict
+        The curve's cache of computed results (shared with the curve).
+    """
+
+    poly: Any
+    sites: np.ndarray
+    sites_lo: np.ndarray | None
+    graph: Any
+    exact: Any
+    tracker: Any
+    vroots: np.ndarray
+    cache: dict
+
+    def numerators(self, exprs) -> Any:
+        """The exact numerators of the differentials ``exprs`` (cached)."""
+        return cached_numerators(self.cache, exprs, lambda: (self.poly.x, self.poly.y))
 
 
 class LocalData:
@@ -92,9 +131,9 @@ def local_data(curve):
 
 def local_sites(curve):
     """The :class:`LocalSites` of the curve: each entry computed on first use."""
-    if "local" not in curve._cache:
-        curve._cache["local"] = LocalSites(curve)
-    return curve._cache["local"]
+    if "local" not in curve.engine.cache:
+        curve.engine.cache["local"] = LocalSites(curve)
+    return curve.engine.cache["local"]
 
 
 class LocalSites:
@@ -109,8 +148,8 @@ class LocalSites:
 
     def __init__(self, curve):
         self._curve = curve
-        G = curve._graph
-        sites = curve._sites
+        G = curve.engine.graph
+        sites = curve.engine.sites
         allsites = G.allsites
         pieces1 = []
         meta = []
@@ -122,7 +161,7 @@ class LocalSites:
             v = G.V[ref]
             r = min(0.5 * dmin, 0.5 * abs(v - b))
             x1 = b + r * (v - b) / abs(v - b)
-            pieces1.append(Piece("line", v, x1, curve._vroots[ref]))
+            pieces1.append(Piece("line", v, x1, curve.engine.vroots[ref]))
             meta.append(("critical", k, b, ref, x1, M_SITE, 1))
         # infinity: out along the ray from the box centre through the base vertex
         vb = G.V[G.base]
@@ -136,11 +175,11 @@ class LocalSites:
         disc = max(qb * qb - 4 * qa * qc, 0.0)
         lam = max(1.0, (-qb + np.sqrt(disc)) / (2 * qa))
         x1 = c + lam * d
-        pieces1.append(Piece("line", vb, x1, curve._vroots[G.base]))
+        pieces1.append(Piece("line", vb, x1, curve.engine.vroots[G.base]))
         meta.append(("infinity", -1, 0j, G.base, x1, M_INF, -1))
         self._meta = meta
         #: the approach lines, tracked together (piece p ends at the circle of entry p)
-        self.lines = curve._tracker.track(pieces1)
+        self.lines = curve.engine.tracker.track(pieces1)
         self._data = [None] * len(meta)
 
     def __len__(self):
@@ -180,7 +219,7 @@ class LocalSites:
         for p in which:
             _, _, b, _, x1, M, d = self._meta[p]
             pieces2.append(Piece("circle", x1, b, tr1.ends[p], e=d, taus=np.arange(M + 1) / M))
-        tr2 = curve._tracker.track(pieces2)
+        tr2 = curve.engine.tracker.track(pieces2)
         for q, p in enumerate(which):
             self._data[p] = _local_entry(curve, self._meta[p], p, tr1.ends[p], tr2, q)
 
@@ -203,7 +242,7 @@ def _local_entry(curve, meta, p, y1, tr2, q):
         # the FFT assumes samples exactly at b + xi_m, xi_m = xi_0 exp(2 pi i m / M), b the exact
         # critical value (float b plus its low part: the float alone is off by ~eps |b|, which a
         # close neighbour at distance d turns into errors ~eps |b| / d in the series)
-        blo = complex(curve._sites_lo[k]) if getattr(curve, "_sites_lo", None) is not None else 0j
+        blo = complex(curve.engine.sites_lo[k]) if curve.engine.sites_lo is not None else 0j
         ld.center_lo = blo
         ld.xi0 = (x1 - b) - blo
         xi = ld.xi0 * np.exp(2j * np.pi * np.arange(M) / M)
@@ -218,12 +257,12 @@ def prefetch_local(curve, targets):
     pairs) will read: the circles under critical and infinite places, and those of :func:`near_site`
     (the rule PlaneCurve._near_place uses) for a point close to a critical value or far out."""
     lds = local_sites(curve)
-    sites = curve._sites
+    sites = curve.engine.sites
     which = []
     for t in targets:
         kind = getattr(t, "kind", None)
         if kind in ("critical", "infinity"):
-            which.append(t._site if kind == "critical" else -1)
+            which.append(t.site if kind == "critical" else -1)
             continue
         k = near_site(lds, sites, t.x if kind == "regular" else t[0])
         if k is not None:
@@ -246,7 +285,7 @@ def near_site(lds, sites: np.ndarray, x0: complex) -> int | None:
 def local_of(curve, place):
     """The :class:`LocalData` of the critical value or of infinity under a (non-regular) place."""
     lds = local_sites(curve)
-    return lds[place._site] if place.kind == "critical" else lds[-1]
+    return lds[place.site] if place.kind == "critical" else lds[-1]
 
 
 def _accurate_samples(curve, xs, ys, rel, center=None, xi=None, center_lo=0j):
@@ -258,7 +297,7 @@ def _accurate_samples(curve, xs, ys, rel, center=None, xi=None, center_lo=0j):
     spurious negative powers).  Where even the compensated residual loses digits (its second-order
     error above the float64 rounding of the root), the samples are polished in mpmath.
     """
-    poly = curve._poly
+    poly = curve.engine.poly
     if center is not None:
         # (float sample positions b + xi are off by eps |b|: spurious terms ~eps |b| / |xi| in the series)
         if np.finfo(float).eps * abs(center) > 1e-15 * np.min(np.abs(xi)):
@@ -279,7 +318,7 @@ def _accurate_samples(curve, xs, ys, rel, center=None, xi=None, center_lo=0j):
     if np.max(rel) <= 1e-11:
         return ys, fys
     import mpmath
-    ev = curve._exact
+    ev = curve.engine.exact
     ys = ys.copy()
     fys = fys.copy()
     with mpmath.workdps(40):
@@ -396,7 +435,7 @@ def adjoint_subspace(curve, candidates, sites=None):
     ``sites``: the entries of :func:`local_sites` (-1: infinity) that hold every singular point of
     the curve, when the caller knows them (elsewhere the candidates are holomorphic by the Newton
     polygon, and those places only add rows of rounding noise); default all of them."""
-    P = curve._numerators(candidates)
+    P = curve.engine.numerators(candidates)
     rows = []
     if sites is None:
         lds = local_data(curve)
@@ -475,12 +514,12 @@ def _nice_number(v: float) -> Fraction | float:
 
 def regular_samples(curve, x0, y0, M=M_SITE):
     """(t, x, y, f_y) on a circle t = x - x0 around a regular point, on the sheet through y0."""
-    sites = curve._graph.allsites
+    sites = curve.engine.graph.allsites
     d = np.abs(sites - x0).min() if len(sites) else 1.0
     r = 0.5 * d
     x1 = x0 + r
-    tr1 = curve._tracker.track([Piece("line", x0, x1, [y0])])
-    tr2 = curve._tracker.track([Piece("circle", x1, x0, tr1.ends[0], e=1, taus=np.arange(M) / M)])
+    tr1 = curve.engine.tracker.track([Piece("line", x0, x1, [y0])])
+    tr2 = curve.engine.tracker.track([Piece("circle", x1, x0, tr1.ends[0], e=1, taus=np.arange(M) / M)])
     xs, ys = tr2.values(0)
     rel = tr2.rel
     ys2, fys = _accurate_samples(curve, xs, ys, rel)
@@ -497,14 +536,14 @@ def expansion(curve, place, numer, order, mode):
     """
     if place.kind == "regular":
         key = ("regsamples", place.x, place.y)
-        if key not in curve._cache:
-            curve._cache[key] = regular_samples(curve, place.x, place.y)
-        t, x, y, fy = curve._cache[key]
+        if key not in curve.engine.cache:
+            curve.engine.cache[key] = regular_samples(curve, place.x, place.y)
+        t, x, y, fy = curve.engine.cache[key]
         e = 1
     else:
         ld = local_of(curve, place)
-        t, x, y = ld.place_samples(place._cycle)
-        fy = np.concatenate([ld.fys[c] for c in place._cycle])
+        t, x, y = ld.place_samples(place.cycle)
+        fy = np.concatenate([ld.fys[c] for c in place.cycle])
         e = place.e
     if mode == "y":
         h = y

@@ -31,6 +31,7 @@ from thetasol.curves._homology import LiftedGraph, symplectic_basis
 from thetasol.curves._numerators import Numerator, cached_numerators
 from thetasol.curves._paths import CellGraph
 from thetasol.curves._places import (
+    CurveEngine,
     expansion,
     holomorphic_basis,
     laurent,
@@ -93,6 +94,17 @@ class Place:
     @property
     def is_infinite(self) -> bool:
         return self.kind == "infinity"
+
+    @property
+    def site(self) -> int:
+        """The index of the critical value under a critical place (-1 otherwise)."""
+        return self._site
+
+    @property
+    def cycle(self):
+        """The cycle of sheets around the circle under the place (indices of its local samples), None for a
+        regular place."""
+        return self._cycle
 
     def _key(self):
         if self.kind == "regular":
@@ -190,6 +202,9 @@ class PlaneCurve:
                                 exact=self._exact)
         self._setup_sheets()
         self._cache = {}
+        #: The numerical machinery the places and samples are computed with (:mod:`thetasol.curves._places`).
+        self.engine = CurveEngine(poly=self._poly, sites=self._sites, sites_lo=self._sites_lo, graph=self._graph,
+                                  exact=self._exact, tracker=self._tracker, vroots=self._vroots, cache=self._cache)
 
     # ------------------------------------------------------------------ topology
     def _setup_sheets(self):

@@ -365,11 +365,11 @@ class SpectralCurve(PlaneCurve):
                 # w / E^2 = w t^(2e) at t -> 0: the coefficient of t^(-2e) in the series of w
                 c = Fy[k == -2 * P.e][0] / t0 ** (-2 * P.e) if np.any(k == -2 * P.e) else 0.0
                 lims.append(complex(c))
-                P._limit_w_over_E2 = complex(c)
-            pl = [pl[i] for i in np.argsort(np.abs(lims), kind="stable")]
+            order = np.argsort(np.abs(lims), kind="stable")
             if not self.symmetric_body and len(pl) == 3:
                 # assign j by the nearest J2
-                pl = sorted(pl, key=lambda P: int(np.argmin(np.abs(self.J2 - P._limit_w_over_E2))))
+                order = sorted(order, key=lambda i: int(np.argmin(np.abs(self.J2 - lims[i]))))
+            pl = [pl[i] for i in order]
             self._cache["inf_sorted"] = pl
         return list(self._cache["inf_sorted"])
 
