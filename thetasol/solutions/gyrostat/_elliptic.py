@@ -1,9 +1,14 @@
 """The generic gyrostat motion: the pencil parametrization inverted by Weierstrass' formula.
 
-:class:`EllipticMotion` evaluates ``h(t)`` and the attitude of one orbit (the method is described
-in :mod:`thetasol.solutions.gyrostat`); :func:`reanchor` moves its anchor to a fast point.
+Three stages, each a frozen record built by one function (the method is described in
+:mod:`thetasol.solutions.gyrostat`): :func:`elliptic_orbit` the orbit ``h(t)`` (:class:`EllipticOrbit`),
+which :func:`reanchor` moves to a fast anchor; :func:`precession` the precession angle about a pole
+(:class:`Precession`); :func:`elliptic_motion` the attitude and the error estimates
+(:class:`EllipticMotion`, which evaluates ``omega`` and ``Q``).
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -20,7 +25,8 @@ from thetasol.solutions.gyrostat._algebra import mpq, orbit_algebra
 from thetasol.solutions.gyrostat._forms import frame_with_e3
 from thetasol.special.elliptic import ellipj_dd
 
-__all__ = ["EllipticMotion", "reanchor", "MIN_TORSION_RATIO"]
+__all__ = ["EllipticMotion", "EllipticOrbit", "OrbitConstants", "Precession", "elliptic_motion", "elliptic_orbit",
+           "precession", "reanchor", "MIN_TORSION_RATIO"]
 
 _EPS = np.finfo(float).eps
 #: An anchor whose torsion rate is below this fraction of its maximum over the orbit is degenerate.
@@ -39,29 +45,77 @@ def _cheb_nodes(n):
     return np.cos(np.pi * (np.arange(n) + 0.5) / n)
 
 
-class EllipticMotion:
-    """h(t) by the tangent-line pencil and Weierstrass' inversion based at a turning point;
-    psi by Fourier series (periodic orbit) or by a Chebyshev series in ``tanh`` (separatrix)."""
+@dataclass(frozen=True, eq=False)
+class OrbitConstants:
+    """The algebraic constants of one orbit (:func:`~._algebra.orbit_algebra`): floats (and float
+    vectors), and under ``mpc`` the same in mpmath.  ``kind`` 3 or 2 says which turning point of the
+    Weierstrass cubic the inversion is based at; ``m``, ``mc``, ``scale``, ``T`` are the elliptic
+    parameter, its complement, the rate of the elliptic argument and the period; ``va`` (+ ``va_lo``)
+    the argument at the anchor; ``k``, ``qe``, ``p0``, ``p1``, ``cr``, ``sr``, ``s0`` the pencil's
+    coefficients, turn and torsion rate at the anchor; ``polys``, ``tau``, ``e1``, ``e2`` the residual
+    quadratic and the frame of the pencil; ``g2``, ``g3`` the invariants."""
 
-    def __init__(self, Ip, n, m0, Pbody, t_anchor=0.0, m0_mp=None, dps=34, Ip_exact=None):
-        # the state is carried as m = m0 + Delta(t) (Delta the displacement of h from the
-        # anchor h(t_anchor) = m0 + N), so that omega = a m keeps its relative accuracy when
-        # |m| << |N| (fast rotors)
-        h0 = m0 + n
-        self.Ip, self.a, self.n, self.m0, self.h0 = Ip, 1.0 / Ip, n, m0, h0
-        self.P = Pbody  # principal -> body
-        self.G = _norm(h0)
-        self.t_anchor = float(t_anchor)
-        # (a re-anchoring point is passed in mpmath, so that the curve stays the data's to the
-        # working precision: rounding it would move an orbit on a separatrix off it)
-        self.Ip_exact = Ip if Ip_exact is None else Ip_exact
-        c = orbit_algebra(self.Ip_exact, n, m0 if m0_mp is None else m0_mp, dps)
-        for k, v in c.items():
-            setattr(self, k, v)
-        self.separatrix = self.mc == 0.0
-        # the time origin of the formula, t_r = t_anchor - v_a, as a double-double
-        self.tr_hi, lo = two_sum(self.t_anchor, -self.va)
-        self.tr_lo = lo - self.va_lo
+    kind: int
+    p1: float
+    p0: float
+    T: float
+    m: float
+    mc: float
+    scale: float
+    s0: float
+    k: float
+    qe: float
+    g2: float
+    g3: float
+    cr: float
+    sr: float
+    va: float
+    va_lo: float
+    polys: tuple
+    tau: np.ndarray
+    e1: np.ndarray
+    e2: np.ndarray
+    mpc: dict
+
+
+@dataclass(frozen=True, eq=False)
+class EllipticOrbit:
+    """h(t) of one orbit by the tangent-line pencil and Weierstrass' inversion based at a turning point;
+    built by :func:`elliptic_orbit`.
+
+    The state is carried as ``m = m0 + Delta(t)`` (``Delta`` the displacement of ``h`` from the anchor
+    ``h(t_anchor) = m0 + n``), so that ``omega = a m`` keeps its relative accuracy when ``|m| << |N|``
+    (fast rotors).  ``P`` maps the principal frame to the body frame; ``tr_hi + tr_lo`` is the time
+    origin of the formula, ``t_anchor - v_a``, as a double-double.
+    """
+
+    Ip: np.ndarray
+    a: np.ndarray
+    n: np.ndarray
+    m0: np.ndarray
+    h0: np.ndarray
+    P: np.ndarray
+    G: float
+    t_anchor: float
+    Ip_exact: object
+    c: OrbitConstants
+    tr_hi: float
+    tr_lo: float
+
+    @property
+    def separatrix(self) -> bool:
+        """The orbit is a separatrix (``mc = 0``: no period, the saddle approached at both ends)."""
+        return self.c.mc == 0.0
+
+    @property
+    def scale(self) -> float:
+        """The rate of the elliptic argument."""
+        return self.c.scale
+
+    @property
+    def T(self) -> float:
+        """The period (inf on a separatrix)."""
+        return self.c.T
 
     def orbit_times(self, n, off=None):
         """n times spread over the orbit: one period from the anchor, or on a separatrix
@@ -106,7 +160,7 @@ class EllipticMotion:
         decisive, and either is right to that accuracy)."""
         import mpmath as mp
 
-        c = self.mpc
+        c = self.c.mpc
         with mp.workdps(dps or c["dps"]):
             sc = c["scale"]
             u = sc * (mp.mpf(t) - mp.mpf(self.t_anchor) + c["va"])
@@ -148,8 +202,8 @@ class EllipticMotion:
                 p1 = p1 if _norm(f1 - near) <= _norm(f2 - near) else p2
             return p1 if as_mp else np.array([float(x) for x in p1])
 
-    def check_float_against_mp(self):
-        """Error of the float64 evaluation, relative to |m(0)|.
+    def float_errors(self) -> tuple[float, float]:
+        """Error of the float64 evaluation, relative to |m(0)|, and the phase error.
 
         Measured against the same closed form in mpmath at the data point and at the points
         of a dense grid over the orbit where the float64 result is least trustworthy: where it
@@ -175,33 +229,32 @@ class EllipticMotion:
         # (twice the largest: the error between sampled points is rounding noise of that size)
         # (digits enough for float64 accuracy of m, mc; an exactly degenerate orbit is set up
         # at 2000 digits, which this comparison does not need)
-        small = min(self.m, self.mc)
-        dps = min(self.mpc["dps"], 50 + (int(-2 * np.log10(small)) if small > 0 else 0))
-        self.float_error = 2 * max(_norm(mf[i] - self.momentum_mp(float(tp), near=mf[i], dps=dps))
-                                   for i, tp in enumerate(pick)) / scale
+        small = min(self.c.m, self.c.mc)
+        dps = min(self.c.mpc["dps"], 50 + (int(-2 * np.log10(small)) if small > 0 else 0))
+        float_error = 2 * max(_norm(mf[i] - self.momentum_mp(float(tp), near=mf[i], dps=dps))
+                              for i, tp in enumerate(pick)) / scale
         if self.separatrix:
             u = np.abs(sum(self._u(ts)))
-            self.phase_error = 2 * _EPS * np.max(u * hdot) / (self.scale * scale)
-        else:
-            self.phase_error = 4 * _EPS * self.T * np.max(hdot) / scale
+            return float_error, 2 * _EPS * np.max(u * hdot) / (self.scale * scale)
+        return float_error, 4 * _EPS * self.T * np.max(hdot) / scale
 
     def reanchored(self, ta):
         """The same orbit with the pencil anchored at time ``ta``, at the point this closed form
         gives there in mpmath (not rounded: the curve stays the data's to the working precision)."""
         ma = self.momentum_mp(float(ta), as_mp=True)
-        return EllipticMotion(self.Ip, self.n, np.array([float(x) for x in ma]), self.P, t_anchor=float(ta),
-                         m0_mp=ma, dps=self.mpc["dps"], Ip_exact=self.Ip_exact)
+        return elliptic_orbit(self.Ip, self.n, np.array([float(x) for x in ma]), self.P, t_anchor=float(ta),
+                              m0_mp=ma, dps=self.c.mpc["dps"], Ip_exact=self.Ip_exact)
 
     def gives_back(self, mq) -> bool:
         """m(0) in mpmath equals the exact data ``mq`` to 1e-20 min(m, mc) (an exactly degenerate
         orbit: to the working precision less 40 digits)."""
         import mpmath as mp
 
-        dps = self.mpc["dps"]
+        dps = self.c.mpc["dps"]
         with mp.workdps(dps):
             back = self.momentum_mp(0.0, as_mp=True)
             mis = max(abs(back[k] - mpq(mp, mq[k])) for k in range(3)) / max(abs(mpq(mp, x)) for x in mq)
-            small = min(self.mpc["m"], self.mpc["mc"])
+            small = min(self.c.mpc["m"], self.c.mpc["mc"])
             return mis <= (mp.mpf(10) ** -20 * small if small > 0 else mp.mpf(10) ** (40 - dps))
 
     def anchor_is_slow(self) -> bool:
@@ -213,26 +266,33 @@ class EllipticMotion:
         """|dtheta/dt| at the anchor against its maximum over the orbit (0 when a value on the
         orbit is not finite: the formula is 0/0 somewhere)."""
         W = np.abs(self._dW(self.orbit_times(64))[1])
-        return abs(self.s0) / np.max(W) if np.all(np.isfinite(W)) and np.max(W) > 0 else 0.0
+        return abs(self.c.s0) / np.max(W) if np.all(np.isfinite(W)) and np.max(W) > 0 else 0.0
 
     def anchor_is_degenerate(self) -> bool:
         """The orbit's torsion (nearly) vanishes at the anchor: dtheta_Z/dt = s0 ~ 0 there, and
         the pencil formula becomes 0/0 where the orbit meets the osculating plane again."""
         return self.torsion_ratio() < MIN_TORSION_RATIO
 
-    def finish(self):
-        self._pole()
-        if self.separatrix:
-            self._chebyshev()
-        else:
-            self._fourier()
-
     # momentum --------------------------------------------------------------------------
     def h(self, t):
+        """h(t) (principal frame) at flat times t."""
         return self.h0 + self._dW(t)[0]
 
     def momentum(self, t):
+        """m(t) = I omega (principal frame) at flat times t."""
         return self.m0 + self._dW(t)[0]
+
+    def displacement(self, t):
+        """Delta(t) = h(t) - h(t_anchor) at flat times t."""
+        return self._dW(t)[0]
+
+    def displacement_at_argument(self, u):
+        """Delta at the (float) elliptic arguments ``u = scale (t - t_r)``."""
+        return self._dW_u(u, 0 * u)[0]
+
+    def omega(self, t):
+        """Body-frame omega at flat times t."""
+        return (self.a * self.momentum(t)) @ self.P.T
 
     def _u(self, t):
         """The elliptic argument scale (t - t_r) as a double-double (hi, lo)."""
@@ -246,33 +306,34 @@ class EllipticMotion:
 
     def _dW_u(self, hi, lo):
         """The state at the elliptic argument ``u = hi + lo = scale (t - t_r)``."""
-        sn, cn, dn, _ = ellipj_dd(hi, lo, np.full(hi.shape, self.m), np.full(hi.shape, self.mc))
+        c = self.c
+        sn, cn, dn, _ = ellipj_dd(hi, lo, np.full(hi.shape, c.m), np.full(hi.shape, c.mc))
         sc = self.scale
         # y = k / (wp - c) in the pencil turned by theta_r, wp = p1 + p0 / X, multiplied by X:
         # X (wp - c) = qe X + X (wp - e_top), the second term in a form free of cancellation
         # (next to a saddle wp - e_top is small and c nearly e_top: q1 X + p0 would cancel)
-        if self.kind == 3:  # wp = e3 + (e1 - e3) / sn^2
+        if c.kind == 3:  # wp = e3 + (e1 - e3) / sn^2
             X = sn * sn
             Xd = 2 * sn * cn * dn * sc
-            Z0p = self.qe * X + self.p0 * (cn * cn)
+            Z0p = c.qe * X + c.p0 * (cn * cn)
         else:  # wp = e2 + H (1 + cn) / (1 - cn), p0 = 2 H
             with np.errstate(divide="ignore", invalid="ignore"):
                 X = np.where(cn > 0, sn * sn / (1 + cn), 1 - cn)
                 Y = np.where(cn < 0, sn * sn / (1 - cn), 1 + cn)
             Xd = sc * sn * dn
-            Z0p = self.qe * X + (0.5 * self.p0) * Y
-        Z1p = self.k * X
-        W = self.k * self.p0 * Xd  # the Wronskian Z0 Z1' - Z1 Z0' (invariant under the turn)
-        Z0 = self.cr * Z0p - self.sr * Z1p
-        Z1 = self.sr * Z0p + self.cr * Z1p
+            Z0p = c.qe * X + (0.5 * c.p0) * Y
+        Z1p = c.k * X
+        W = c.k * c.p0 * Xd  # the Wronskian Z0 Z1' - Z1 Z0' (invariant under the turn)
+        Z0 = c.cr * Z0p - c.sr * Z1p
+        Z1 = c.sr * Z0p + c.cr * Z1p
         nz = np.hypot(Z0, Z1)
         Z0, Z1, W = Z0 / nz, Z1 / nz, W / (nz * nz)
         return self._point(Z0, Z1, W), W
 
     def _point(self, Z0, Z1, W):
-        tau, e1, e2 = self.tau, self.e1, self.e2
+        tau, e1, e2 = self.c.tau, self.c.e1, self.c.e2
         mu = Z1[:, None] * e1 - Z0[:, None] * e2
-        pb, pA, pB, pC = self.polys  # ascending powers of z = Z1/Z0, homogenized below
+        pb, pA, pB, pC = self.c.polys  # ascending powers of z = Z1/Z0, homogenized below
         bS = pb[0] * Z0 + pb[1] * Z1
         gS = Z0 * Z0 + Z1 * Z1
         At = [pA[0] * Z0, pA[1] * Z1]
@@ -299,71 +360,57 @@ class EllipticMotion:
         fac = np.where(Z1 == 0, 0.0, fac)
         return fac[:, None] * ((num * den)[:, None] * tau + (den * den)[:, None] * mu)
 
-    # attitude --------------------------------------------------------------------------
-    def _pole(self):
-        """Pole p maximizing min over the orbit of 1 + p.h/G (kept away from the orbit)."""
-        ts = self.orbit_times(256)
-        hs = (self.h0 + self._dW(ts)[0]) / self.G
-        if self.separatrix:  # the saddle itself (u -> +-inf)
-            big = np.array([40.0, -40.0])
-            hs = np.concatenate([hs, (self.h0 + self._dW_u(big, 0 * big)[0]) / self.G])
-        cands = [np.eye(3)[i] * s for i in range(3) for s in (1, -1)]
-        mean = hs.mean(axis=0)
-        if np.linalg.norm(mean) > 1e-3:
-            cands.append(mean / np.linalg.norm(mean))
-        best = max(cands, key=lambda p: np.min(1 + hs @ p))
-        self.p = best
-        self.Pw = frame_with_e3(best)
+    # the separatrix in s = tanh(u) (the saddle at s = +-1), for integrals along it ----------
+    def separatrix_argument(self, t):
+        """``s = tanh(u)``, ``u = scale (t - t_r)`` the elliptic argument, at flat times t."""
+        return np.tanh(sum(self._u(t)))
 
-    def _psidot_d(self, d):
-        h = self.h0 + d
-        w = self.a * (self.m0 + d)
-        hw = np.sum(h * w, -1)
-        return (hw + self.G * (w @ self.p)) / (self.G + h @ self.p)
+    def omega_at_tanh(self, s):
+        """Body-frame omega at the points ``s = tanh(u)`` in (-1, 1) of a separatrix."""
+        u = np.arctanh(s)
+        return (self.a * (self.m0 + self._dW_u(u, 0 * u)[0])) @ self.P.T
 
-    def _fourier(self):
-        """Fourier coefficients of psi' over one period, doubling the sampling until the tail
-        reaches round-off or stops decreasing (see :func:`_adaptive_series`)."""
 
-        def coeffs(n):
-            return np.fft.rfft(self._psidot_d(self._dW(np.arange(n) * (self.T / n))[0])) / n
 
-        c, self.fourier_tail = _adaptive_series(
-            coeffs, 2 ** 17, "Fourier series", "; orbit too close to a separatrix")
-        self.nu = c[0].real
-        Om = 2 * np.pi / self.T
-        k = np.arange(1, len(c) - 1)
-        self.Om = Om
-        self.d = c[1:-1] / (1j * Om * k)  # drop the Nyquist term
-        self.d_sum = self.d.sum()
-        self.nterms = len(self.d)
+def elliptic_orbit(Ip, n, m0, Pbody, t_anchor=0.0, m0_mp=None, dps=34, Ip_exact=None) -> EllipticOrbit:
+    """The :class:`EllipticOrbit` through ``h(t_anchor) = m0 + n`` (principal frame; ``Pbody`` principal
+    -> body).  A re-anchoring point is passed in mpmath (``m0_mp``), and the exact inertia
+    (``Ip_exact``), so that the curve stays the data's to the working precision: rounding it would move
+    an orbit on a separatrix off it."""
+    h0 = m0 + n
+    Ip_exact = Ip if Ip_exact is None else Ip_exact
+    c = OrbitConstants(**orbit_algebra(Ip_exact, n, m0 if m0_mp is None else m0_mp, dps))
+    t_anchor = float(t_anchor)
+    tr_hi, lo = two_sum(t_anchor, -c.va)
+    return EllipticOrbit(Ip=Ip, a=1.0 / Ip, n=n, m0=m0, h0=h0, P=Pbody, G=_norm(h0), t_anchor=t_anchor,
+                         Ip_exact=Ip_exact, c=c, tr_hi=tr_hi, tr_lo=lo - c.va_lo)
 
-    def _chebyshev(self):
-        """On a separatrix: psi' is a rational function of s = tanh(u) (X = s^2, Xd is
-        2 scale s (1 - s^2)) equal to the saddle's rate nu at s = +-1.  psi = nu t + phi(s) with
-        phi' = (psi' - nu) / (scale (1 - s^2)): the Chebyshev interpolant of psi'(s) (to round-
-        off, adaptive), less nu and its linear part at +-1 (the rounding of psi' at the saddle),
-        is divided exactly by 1 - s^2 and integrated term by term."""
-        C = np.polynomial.chebyshev
 
-        def coeffs(n):
-            u = np.arctanh(_cheb_nodes(n))
-            return _dct2(self._psidot_d(self._dW_u(u, 0 * u)[0]))
+# -- the precession angle ----------------------------------------------------------------------
 
-        c, self.fourier_tail = _adaptive_series(coeffs, 2 ** 14, "Chebyshev series on the separatrix")
-        p1, m1 = C.chebval(1.0, c), C.chebval(-1.0, c)
-        self.nu = 0.5 * (p1 + m1)
-        c[0] -= self.nu
-        c[1] -= 0.5 * (p1 - m1)
-        q, _ = C.chebdiv(c, [0.5, 0.0, -0.5])  # 1 - s^2 = (T0 - T2) / 2
-        self.cheb = C.chebint(q) / self.scale
-        self.nterms = len(self.cheb)
+@dataclass(frozen=True, eq=False)
+class Precession:
+    """The precession angle psi about the pole ``p`` (frame ``Pw``, its third axis ``p``): ``psi = nu t``
+    plus a Fourier series in ``Om t`` (periodic orbit; coefficients ``d``, ``d_sum`` their sum) or a
+    Chebyshev series in ``s = tanh(u)`` (separatrix, ``cheb``); ``tail`` is the series' tail (relative),
+    ``nterms`` its length.  Built by :func:`precession`."""
 
-    def psi(self, t):
-        if self.separatrix:
+    p: np.ndarray
+    Pw: np.ndarray
+    nu: float
+    tail: float
+    nterms: int
+    Om: float = 0.0
+    d: np.ndarray | None = None
+    d_sum: complex = 0j
+    cheb: np.ndarray | None = None
+
+    def psi(self, orbit: EllipticOrbit, t):
+        """psi at flat times t along ``orbit``."""
+        if orbit.separatrix:
             C = np.polynomial.chebyshev
-            s = np.tanh(sum(self._u(t)))
-            s0 = np.tanh(sum(self._u(np.zeros(1))))
+            s = orbit.separatrix_argument(t)
+            s0 = orbit.separatrix_argument(np.zeros(1))
             per = C.chebval(s, self.cheb) - C.chebval(s0, self.cheb)
             return _angle_mod_2pi(self.nu, t, per)
         th = _angle_mod_2pi(self.Om, t, 0.0)
@@ -374,30 +421,141 @@ class EllipticMotion:
         per = 2.0 * (s - self.d_sum).real
         return _angle_mod_2pi(self.nu, t, per)
 
-    def setup_attitude(self, Q0p):
-        """S such that Q_p(0) = Q0p (principal -> space)."""
-        h0w = self.Pw.T @ self.h(np.zeros(1))[0]  # h(0) as the formula gives it
-        B0 = _minimal_rotation(_unit(h0w))
-        self.S = Q0p @ self.Pw @ B0.T
+
+def _pole(orbit: EllipticOrbit) -> np.ndarray:
+    """Pole p maximizing min over the orbit of 1 + p.h/G (kept away from the orbit)."""
+    ts = orbit.orbit_times(256)
+    hs = orbit.h(ts) / orbit.G
+    if orbit.separatrix:  # the saddle itself (u -> +-inf)
+        big = np.array([40.0, -40.0])
+        hs = np.concatenate([hs, (orbit.h0 + orbit.displacement_at_argument(big)) / orbit.G])
+    cands = [np.eye(3)[i] * s for i in range(3) for s in (1, -1)]
+    mean = hs.mean(axis=0)
+    if np.linalg.norm(mean) > 1e-3:
+        cands.append(mean / np.linalg.norm(mean))
+    return max(cands, key=lambda p: np.min(1 + hs @ p))
+
+
+def _psidot(orbit: EllipticOrbit, p: np.ndarray, d: np.ndarray) -> np.ndarray:
+    """psi' at the displacements ``d`` (n, 3) of ``h`` from the anchor, about the pole ``p``."""
+    h = orbit.h0 + d
+    w = orbit.a * (orbit.m0 + d)
+    hw = np.sum(h * w, -1)
+    return (hw + orbit.G * (w @ p)) / (orbit.G + h @ p)
+
+
+def _fourier(orbit: EllipticOrbit, p: np.ndarray) -> Precession:
+    """Fourier coefficients of psi' over one period, doubling the sampling until the tail
+    reaches round-off or stops decreasing (see :func:`_adaptive_series`)."""
+
+    def coeffs(n):
+        return np.fft.rfft(_psidot(orbit, p, orbit.displacement(np.arange(n) * (orbit.T / n)))) / n
+
+    c, tail = _adaptive_series(coeffs, 2 ** 17, "Fourier series", "; orbit too close to a separatrix")
+    Om = 2 * np.pi / orbit.T
+    k = np.arange(1, len(c) - 1)
+    d = c[1:-1] / (1j * Om * k)  # drop the Nyquist term
+    return Precession(p=p, Pw=frame_with_e3(p), nu=c[0].real, tail=tail, nterms=len(d), Om=Om, d=d, d_sum=d.sum())
+
+
+def _chebyshev(orbit: EllipticOrbit, p: np.ndarray) -> Precession:
+    """On a separatrix: psi' is a rational function of s = tanh(u) (X = s^2, Xd is
+    2 scale s (1 - s^2)) equal to the saddle's rate nu at s = +-1.  psi = nu t + phi(s) with
+    phi' = (psi' - nu) / (scale (1 - s^2)): the Chebyshev interpolant of psi'(s) (to round-
+    off, adaptive), less nu and its linear part at +-1 (the rounding of psi' at the saddle),
+    is divided exactly by 1 - s^2 and integrated term by term."""
+    C = np.polynomial.chebyshev
+
+    def coeffs(n):
+        u = np.arctanh(_cheb_nodes(n))
+        return _dct2(_psidot(orbit, p, orbit.displacement_at_argument(u)))
+
+    c, tail = _adaptive_series(coeffs, 2 ** 14, "Chebyshev series on the separatrix")
+    p1, m1 = C.chebval(1.0, c), C.chebval(-1.0, c)
+    nu = 0.5 * (p1 + m1)
+    c[0] -= nu
+    c[1] -= 0.5 * (p1 - m1)
+    q, _ = C.chebdiv(c, [0.5, 0.0, -0.5])  # 1 - s^2 = (T0 - T2) / 2
+    cheb = C.chebint(q) / orbit.scale
+    return Precession(p=p, Pw=frame_with_e3(p), nu=nu, tail=tail, nterms=len(cheb), cheb=cheb)
+
+
+def precession(orbit: EllipticOrbit) -> Precession:
+    """The precession angle of ``orbit`` about the pole farthest from it (:func:`_pole`)."""
+    p = _pole(orbit)
+    return _chebyshev(orbit, p) if orbit.separatrix else _fourier(orbit, p)
+
+
+# -- the motion --------------------------------------------------------------------------------
+
+@dataclass(frozen=True, eq=False)
+class EllipticMotion:
+    """The generic gyrostat motion: the orbit ``h(t)``, the precession angle about a pole and the
+    constant rotation ``S`` that puts ``Q_p(0) = Q0p``; ``float_error`` (relative, against mpmath and
+    the data) and ``phase_error`` are the error estimates of its evaluation.  Built by
+    :func:`elliptic_motion`."""
+
+    orbit: EllipticOrbit
+    prec: Precession
+    S: np.ndarray
+    float_error: float
+    phase_error: float
+
+    @property
+    def separatrix(self) -> bool:
+        return self.orbit.separatrix
+
+    @property
+    def scale(self) -> float:
+        return self.orbit.scale
+
+    @property
+    def T(self) -> float:
+        return self.orbit.T
+
+    @property
+    def nu(self) -> float:
+        """The mean precession rate."""
+        return self.prec.nu
+
+    @property
+    def fourier_tail(self) -> float:
+        """The tail of the precession's series (relative)."""
+        return self.prec.tail
+
+    def psi(self, t):
+        return self.prec.psi(self.orbit, t)
+
+    def momentum(self, t):
+        return self.orbit.momentum(t)
 
     def evaluate(self, t):
-        d = self._dW(t)[0]
-        w = self.a * (self.m0 + d)
-        Qp = _attitude(self.S, self.psi(t), (self.h0 + d) @ self.Pw, self.Pw)
-        return w @ self.P.T, Qp @ self.P.T
+        o, Pw = self.orbit, self.prec.Pw
+        d = o.displacement(t)
+        w = o.a * (o.m0 + d)
+        Qp = _attitude(self.S, self.psi(t), (o.h0 + d) @ Pw, Pw)
+        return w @ o.P.T, Qp @ o.P.T
 
     def omega(self, t):
-        return (self.a * self.momentum(t)) @ self.P.T
+        return self.orbit.omega(t)
 
-    # the separatrix in s = tanh(u) (the saddle at s = +-1), for integrals along it ----------
     def separatrix_argument(self, t):
-        """``s = tanh(u)``, ``u = scale (t - t_r)`` the elliptic argument, at flat times t."""
-        return np.tanh(sum(self._u(t)))
+        return self.orbit.separatrix_argument(t)
 
     def omega_at_tanh(self, s):
-        """Body-frame omega at the points ``s = tanh(u)`` in (-1, 1) of a separatrix."""
-        u = np.arctanh(s)
-        return (self.a * (self.m0 + self._dW_u(u, 0 * u)[0])) @ self.P.T
+        return self.orbit.omega_at_tanh(s)
+
+
+def elliptic_motion(orbit: EllipticOrbit, Q0p: np.ndarray, m_data: np.ndarray) -> EllipticMotion:
+    """The motion along ``orbit`` with ``Q_p(0) = Q0p`` (principal -> space), and its errors: the
+    float64 evaluation's against mpmath (:meth:`EllipticOrbit.float_errors`) and how far the formula's
+    ``m(0)`` is from the data ``m_data`` (re-anchoring, rounding)."""
+    prec = precession(orbit)
+    h0w = prec.Pw.T @ orbit.h(np.zeros(1))[0]  # h(0) as the formula gives it
+    S = Q0p @ prec.Pw @ _minimal_rotation(_unit(h0w)).T
+    float_error, phase_error = orbit.float_errors()
+    float_error = max(float_error, _norm(orbit.momentum(np.zeros(1))[0] - m_data) / max(_norm(m_data), 1e-300))
+    return EllipticMotion(orbit=orbit, prec=prec, S=S, float_error=float_error, phase_error=phase_error)
 
 
 def _dct2(f):
@@ -420,7 +578,7 @@ def reanchor(impl, mq):
     came from the old pencil, whose mpmath evaluation loses digits where that pencil is
     degenerate (15-20 digits), and next to a separatrix the phase amplifies an error in the
     anchor by ~1/mc: unless the new pencil gives back the data at t = 0
-    (:meth:`EllipticMotion.gives_back`), both are redone with twice the digits."""
+    (:meth:`EllipticOrbit.gives_back`), both are redone with twice the digits."""
     best, best_ratio = None, -1.0
     for ta in impl.anchor_candidates()[:6]:
         new = impl.reanchored(ta)
@@ -430,9 +588,9 @@ def reanchor(impl, mq):
             break
         if ratio > best_ratio:
             best, best_ratio = new, ratio
-    while not best.gives_back(mq) and best.mpc["dps"] <= 4000:
-        first = EllipticMotion(impl.Ip, impl.n, impl.m0, impl.P, m0_mp=mq, Ip_exact=impl.Ip_exact,
-                          dps=2 * best.mpc["dps"])
+    while not best.gives_back(mq) and best.c.mpc["dps"] <= 4000:
+        first = elliptic_orbit(impl.Ip, impl.n, impl.m0, impl.P, m0_mp=mq, Ip_exact=impl.Ip_exact,
+                               dps=2 * best.c.mpc["dps"])
         best = first.reanchored(best.t_anchor)
     return best
 

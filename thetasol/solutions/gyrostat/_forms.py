@@ -152,7 +152,7 @@ class Scaled:
         """The rate of the elliptic argument in the data's time."""
         return self.impl.scale * self.G
 
-    def __getattr__(self, name):  # expose the elliptic details (T, m, kind, ...) for inspection
+    def __getattr__(self, name):  # expose the elliptic details (orbit, T, nu, ...) for inspection
         return getattr(self.impl, name)
 
 

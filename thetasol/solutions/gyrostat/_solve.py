@@ -15,7 +15,7 @@ import numpy as np
 from thetasol.core import validate as V
 from thetasol.core.attitude import norm3 as _norm, principal_frame as _principal_frame
 from thetasol.core.threads import single_blas_thread
-from thetasol.solutions.gyrostat._elliptic import EllipticMotion, reanchor
+from thetasol.solutions.gyrostat._elliptic import elliptic_motion, elliptic_orbit, reanchor
 from thetasol.solutions.gyrostat._forms import Axisymmetric, BodyMap, Delegate, Scaled, Sphere, Steady
 from thetasol.solutions.gyrostat._rotors import RotorAngles, parse_rotors
 from thetasol.solutions.rotation import RotationSolution, solve_rotation
@@ -152,7 +152,7 @@ def _degenerate_form(d: _Data) -> _Form | None:
 
 
 def _elliptic_form(d: _Data) -> _Form:
-    """The generic motion: :class:`EllipticMotion` of the data scaled by a power of two near
+    """The generic motion: :func:`elliptic_motion` of the data scaled by a power of two near
     ``|h|``, re-anchored where the anchor is degenerate or slow, with its error estimate."""
     Jp, R = _principal_frame(d.J)
     Ip = np.array([Jp[1] + Jp[2], Jp[0] + Jp[2], Jp[0] + Jp[1]])
@@ -175,18 +175,13 @@ def _elliptic_form(d: _Data) -> _Form:
     Iq = [Fraction(float(Jp[1])) + Fraction(float(Jp[2])), Fraction(float(Jp[0])) + Fraction(float(Jp[2])),
           Fraction(float(Jp[0])) + Fraction(float(Jp[1]))]
     mq = [Iq[i] * Fraction(float(wp[i])) / Fraction(Gs) for i in range(3)]
-    impl = EllipticMotion(Ip, n, m, R, m0_mp=mq, Ip_exact=Iq)
-    if impl.anchor_is_degenerate() or impl.anchor_is_slow():
+    orbit = elliptic_orbit(Ip, n, m, R, m0_mp=mq, Ip_exact=Iq)
+    if orbit.anchor_is_degenerate() or orbit.anchor_is_slow():
         # Zero torsion at h(0) (a point on a symmetry plane of the orbit: the formula is 0/0
         # where the orbit meets the osculating plane again) or a slow h(0) (next to a saddle:
         # the pencil resolves the points around the saddle only to eps / distance).
-        impl = reanchor(impl, mq)
-    impl.finish()
-    impl.setup_attitude(d.Q0 @ R)
-    impl.check_float_against_mp()
-    # how far the formula's h(0) is from the data (re-anchoring, rounding)
-    impl.float_error = max(impl.float_error,
-                           _norm(impl.momentum(np.zeros(1))[0] - m) / max(_norm(m), 1e-300))
+        orbit = reanchor(orbit, mq)
+    impl = elliptic_motion(orbit, d.Q0 @ R, m)
     # relative error: the float64 evaluation's (measured against mpmath at the worst-
     # conditioned points of the orbit) and the Fourier tail of psi' (per period)
     err = max(8 * _EPS, impl.float_error) + impl.phase_error + impl.fourier_tail
