@@ -95,8 +95,8 @@ def test_holomorphic_differentials(name, expected):
     assert len(got) == C.genus
     # same span as the expected numerators
     exp = [sp.sympify(e) for e in expected]
-    P1 = C._numerators(got)
-    P2 = C._numerators(exp)
+    P1 = C.engine.numerators(got)
+    P2 = C.engine.numerators(exp)
     sh = (max(P1.shape[1], P2.shape[1]), max(P1.shape[2], P2.shape[2]))
     def pad(P):
         Q = np.zeros((P.shape[0],) + sh, complex)
@@ -370,7 +370,7 @@ def test_edge_integrals_summed_in_double_double():
     _, f, diffs, _ = load_ref("spectral_g4")
     C = PlaneCurve(f, x, y)
     G = C._graph
-    P = C._numerators(diffs)
+    P = C.engine.numerators(diffs)
     tr = Tracker(C._poly, G.allsites, tol=1e-24, mp_fallback=C._exact.fallback).track(
         [Piece("line", G.V[a], G.V[b], C._vroots[a]) for a, b in G.edges])
     ref = np.array([[complex(v) for v in row] for e in integrate_mp(tr, C._exact, P.exact, 22) for row in e])

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.curves._homology import LiftedGraph, symplectic_basis
-from thetasol.curves._numerators import Numerator, cached_numerators
+from thetasol.curves._numerators import Numerator
 from thetasol.curves._paths import CellGraph
 from thetasol.curves._places import (
     CurveEngine,
@@ -79,10 +79,10 @@ class Place:
         self.kind = kind
         self.x = complex(x)
         self.e = int(e)
-        self._site = site
+        self.site = site  # the index of the critical value under a critical place (-1 otherwise)
         self._ref = ref  # reference vertex of the path graph
         self._label = label  # reference sheet label at that vertex
-        self._cycle = cycle
+        self.cycle = cycle  # the cycle of sheets around that critical value or infinity (None if regular)
         self._y = y
 
     @property
@@ -95,21 +95,10 @@ class Place:
     def is_infinite(self) -> bool:
         return self.kind == "infinity"
 
-    @property
-    def site(self) -> int:
-        """The index of the critical value under a critical place (-1 otherwise)."""
-        return self._site
-
-    @property
-    def cycle(self):
-        """The cycle of sheets around the circle under the place (indices of its local samples), None for a
-        regular place."""
-        return self._cycle
-
     def _key(self):
         if self.kind == "regular":
             return ("regular", self.x, self._y)
-        return (self.kind, self._site, self._cycle)
+        return (self.kind, self.site, self.cycle)
 
     def __eq__(self, other):
         return isinstance(other, Place) and other.curve is self.curve and other._key() == self._key()
@@ -139,7 +128,7 @@ class Place:
         Returns (k, c) with g dx / f_y = sum c_k t^k dt (or g = sum c_k t^k) in the local parameter
         t of :meth:`local_parameter`; see :meth:`series`.
         """
-        P = self.curve._numerators([numerator])
+        P = self.curve.engine.numerators([numerator])
         return expansion(self.curve, self, P, int(order), "differential" if differential else "function")
 
     @property
@@ -315,9 +304,6 @@ class PlaneCurve:
     y = property(lambda self: self._poly.y, doc="The coordinate y (sympy Symbol).")
 
     # ------------------------------------------------------------------ differentials
-    def _numerators(self, exprs):
-        return cached_numerators(self._cache, exprs, lambda: (self.x, self.y))
-
     def polynomial(self) -> sympy.Expr:
         """The curve's polynomial f(x, y) as an exact sympy expression (rational coefficients)."""
         return self._poly.sympy_expr()
@@ -338,7 +324,7 @@ class PlaneCurve:
             Integrands with respect to ``x``: a quadrature rule in ``x`` applied to them integrates the
             differentials along a path on the sheet the ``y`` values follow.
         """
-        P = np.asarray(self._numerators(numerators))
+        P = np.asarray(self.engine.numerators(numerators))
         x = np.asarray(x, complex)
         y = np.asarray(y, complex)
         col = (slice(None),) + (None,) * x.ndim
@@ -421,7 +407,7 @@ class PlaneCurve:
             p = np.argmin(np.abs(tr.ends[e][:, None] - self._vroots[b][None, :]), axis=1)
             if not np.array_equal(p, self._perms[e]):
                 raise RuntimeError("the dps path found a different sheet permutation (internal error)")
-        res = integrate_mp(tr, self._exact, self._numerators(diffs).exact, dps)
+        res = integrate_mp(tr, self._exact, self.engine.numerators(diffs).exact, dps)
         A, B, _ = self._homology()
         Pm = cycle_sums_mp(res, list(A) + list(B), len(diffs), self.n, dps)
         self._cache[key] = Pm
@@ -449,7 +435,7 @@ class PlaneCurve:
         if key not in self._cache:
             diffs = self.holomorphic_numerators() if differentials is None else list(differentials)
             a, b, _ = self._homology()
-            Iv = self._edge_integrals(self._numerators(diffs))
+            Iv = self._edge_integrals(self.engine.numerators(diffs))
             PA = (a @ Iv).T
             PB = (b @ Iv).T
             self._cache[key] = np.hstack([PA, PB])
@@ -498,7 +484,7 @@ class PlaneCurve:
     def _place_limits(self, places):
         for P in places:
             ld = local_of(self, P)
-            t, xs, ys = ld.place_samples(P._cycle)
+            t, xs, ys = ld.place_samples(P.cycle)
             k, c, _ = laurent(t, ys)
             scale = np.max(np.abs(ys)) + 1e-300
             neg = np.abs(c[k < 0] * t[0] ** k[k < 0])
@@ -619,7 +605,7 @@ class PlaneCurve:
         """(k, t0, Fy, Fh) Laurent data of a critical or infinite place for numerators P."""
         ck = ("pser", key, place._key())
         if ck not in self._cache:
-            self._cache[ck] = place_series(self, local_of(self, place), place._cycle, P)
+            self._cache[ck] = place_series(self, local_of(self, place), place.cycle, P)
         return self._cache[ck]
 
     def _series_integral(self, place, P, key, t):
@@ -709,7 +695,7 @@ class PlaneCurve:
 
     def _holo_arrays(self):
         if "holoP" not in self._cache:
-            self._cache["holoP"] = self._numerators(self.holomorphic_numerators())
+            self._cache["holoP"] = self.engine.numerators(self.holomorphic_numerators())
         return self._cache["holoP"]
 
     def normalization(self) -> np.ndarray:
@@ -761,7 +747,7 @@ class PlaneCurve:
         left to the caller).  Returns (N, len(numerators)) or (len(numerators),) for a single point.
         """
         targets, weights, shape = self._parse_targets(points)
-        P = self._numerators(list(numerators))
+        P = self.engine.numerators(list(numerators))
         key = tuple(map(str, numerators))
         raw = self._abel_raw(targets, P, key)
         if base is not None:
