@@ -137,6 +137,31 @@ def _mp_constants(mu, r0, v0):
         return float(alpha), hi, lo, float(-m * alpha / 2)
 
 
+def _orbit_setup(mu: float, r0: np.ndarray, v0: np.ndarray) -> tuple[_Setup, dict, dict]:
+    """The constants of the orbit through the validated ``(r0, v0)``, its first integrals (``energy``,
+    ``h``, ``lrl``) and its diagnostics (kind and elements); radial orbits are refused."""
+    r0n = float(np.linalg.norm(r0))
+    if r0n == 0:
+        raise ValueError("r0 is the origin: the attracting centre itself")
+    h = np.cross(r0, v0)
+    hn = float(np.linalg.norm(h))
+    if hn <= 8 * _EPS * r0n * float(np.linalg.norm(v0)) or hn == 0:
+        raise ValueError("radial orbit: r0 x v0 = 0 (zero angular momentum), the body falls into "
+                         "the centre and the conic degenerates; no closed form here")
+    alpha, T_hi, T_lo, energy = _mp_constants(mu, r0, v0)
+    evec = np.cross(v0, h) / mu - r0 / r0n
+    e = float(np.linalg.norm(evec))
+    p = hn * hn / mu
+    kind = "elliptic" if alpha > 0 else "hyperbolic" if alpha < 0 else "parabolic"
+    i, raan, argp, nu0 = _elements(mu, r0, v0, h, evec)
+    n = float(np.sqrt(mu * abs(alpha) ** 3)) if alpha != 0 else 0.0
+    diag = {"kind": kind, "a": (1.0 / alpha) if alpha != 0 else np.inf, "e": e, "i": i,
+            "raan": raan, "argp": argp, "nu0": nu0, "p": p, "periapsis": p / (1.0 + e),
+            "period": T_hi, "mean_motion": n}
+    setup = _Setup(np.sqrt(mu), r0n, float(r0 @ v0) / np.sqrt(mu), alpha, T_hi, T_lo, p / (1.0 + e), e)
+    return setup, {"energy": energy, "h": h, "lrl": mu * evec}, diag
+
+
 def _elements(mu, r0, v0, h, evec):
     """Classical elements (i, RAAN, argp, nu0) by atan2 in the orbit plane; conventions where undefined."""
     hn = np.linalg.norm(h)
@@ -195,35 +220,21 @@ class KeplerOrbit(Solution):
     _s: _Setup = field(default=None, init=False, repr=False)
 
     def __post_init__(self):
+        # the inputs normalised (validated floats), and the orbit's constants, elements and first
+        # integrals from them, each field assigned once (a frozen dataclass completing itself)
         mu = V.finite_array(self.mu, "mu", ())
         if not mu > 0:
             raise ValueError(f"mu must be positive, got {float(mu)!r}")
         mu = float(mu)
         r0 = V.vector3(self.r0, "r0")
         v0 = V.vector3(self.v0, "v0")
-        r0n = float(np.linalg.norm(r0))
-        if r0n == 0:
-            raise ValueError("r0 is the origin: the attracting centre itself")
-        h = np.cross(r0, v0)
-        hn = float(np.linalg.norm(h))
-        if hn <= 8 * _EPS * r0n * float(np.linalg.norm(v0)) or hn == 0:
-            raise ValueError("radial orbit: r0 x v0 = 0 (zero angular momentum), the body falls into "
-                             "the centre and the conic degenerates; no closed form here")
-        alpha, T_hi, T_lo, energy = _mp_constants(mu, r0, v0)
-        evec = np.cross(v0, h) / mu - r0 / r0n
-        e = float(np.linalg.norm(evec))
-        p = hn * hn / mu
-        kind = "elliptic" if alpha > 0 else "hyperbolic" if alpha < 0 else "parabolic"
-        i, raan, argp, nu0 = _elements(mu, r0, v0, h, evec)
-        n = float(np.sqrt(mu * abs(alpha) ** 3)) if alpha != 0 else 0.0
-        diag = {"kind": kind, "a": (1.0 / alpha) if alpha != 0 else np.inf, "e": e, "i": i,
-                "raan": raan, "argp": argp, "nu0": nu0, "p": p, "periapsis": p / (1.0 + e),
-                "period": T_hi, "mean_motion": n}
-        inv = {"energy": energy, "h": h, "lrl": mu * evec}
-        for name, val in (("mu", mu), ("r0", r0), ("v0", v0), ("invariants", inv), ("diagnostics", diag),
-                          ("_s", _Setup(np.sqrt(mu), r0n, float(r0 @ v0) / np.sqrt(mu), alpha,
-                                        T_hi, T_lo, p / (1.0 + e), e))):
-            object.__setattr__(self, name, val)
+        setup, inv, diag = _orbit_setup(mu, r0, v0)
+        object.__setattr__(self, "mu", mu)
+        object.__setattr__(self, "r0", r0)
+        object.__setattr__(self, "v0", v0)
+        object.__setattr__(self, "invariants", inv)
+        object.__setattr__(self, "diagnostics", diag)
+        object.__setattr__(self, "_s", setup)
 
     # -- public views ------------------------------------------------------------------------
     @property
