@@ -84,10 +84,16 @@ def attitude_from_precession(S: np.ndarray, psi: np.ndarray, v: np.ndarray, P: n
     return S @ rotation_about(2, psi) @ minimal_rotation(unit_rows(v)) @ P.T
 
 
-def principal_frame(Jm: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Principal values and a right-handed principal frame R (body = R principal)."""
+def principal_frame(Jm: np.ndarray, *, ascending: bool = False) -> tuple[np.ndarray, np.ndarray]:
+    """Principal values ``Jp`` and a right-handed principal frame ``R`` with ``Jm = R diag(Jp) R^T``.
+
+    ``ascending=False``: a diagonal ``Jm`` keeps its own axes (``R = 1``, ``Jp`` in the body's order), so
+    that principal data pass through unchanged; ``ascending=True``: always the eigen-decomposition, ``Jp``
+    ascending (the order in which the theta-function and Neumann models number the axes).  Any other
+    ``Jm`` is eigen-decomposed either way, with the third axis flipped if needed to make ``det R = 1``.
+    """
     off = Jm - np.diag(np.diag(Jm))
-    if not np.any(off):
+    if not ascending and not np.any(off):
         return np.diag(Jm).copy(), np.eye(3)
     Jp, R = np.linalg.eigh(Jm)
     if np.linalg.det(R) < 0:

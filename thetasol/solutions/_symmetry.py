@@ -1,15 +1,17 @@
-"""Principal frames and the symmetry test shared by the rotation models in a potential.
+"""The symmetry test shared by the rotation models in a potential.
 
 The theta-function model and Neumann's model must agree on when a body counts as symmetric
-(two principal second moments equal to ``SNAP_TOL`` relative) and on the frame they solve in.
+(two principal second moments equal to ``SNAP_TOL`` relative) and on the frame they solve in
+(:func:`thetasol.core.attitude.principal_frame` with ascending principal values).
 """
 from __future__ import annotations
 
 import numpy as np
 
+from thetasol.core.attitude import principal_frame
 from thetasol.protocol import ClosedFormUnavailable
 
-__all__ = ["SNAP_TOL", "sorted_principal_frame", "symmetric_without_spin", "symmetry_axis"]
+__all__ = ["SNAP_TOL", "symmetric_without_spin", "symmetry_axis"]
 
 
 #: Relative size below which a near-degeneracy of the data is snapped to an exact one: 8 ulps, the
@@ -18,13 +20,6 @@ __all__ = ["SNAP_TOL", "sorted_principal_frame", "symmetric_without_spin", "symm
 #: measures it), so only gaps at the level of rounding are snapped.  Gaps above it and below the
 #: engines' own limits are refused.
 SNAP_TOL = 8 * float(np.finfo(float).eps)
-
-
-def sorted_principal_frame(J: np.ndarray):
-    """Right-handed principal frame with ascending principal values: J = P diag(Jp) P^T."""
-    Jp, P = np.linalg.eigh(J)
-    P[:, 2] *= np.sign(np.linalg.det(P))
-    return Jp, P
 
 
 def symmetry_axis(Jp: np.ndarray):
@@ -42,7 +37,7 @@ def symmetric_without_spin(J: np.ndarray, a: np.ndarray, omega0: np.ndarray):
     part (relative to ``|omega0| + sqrt|a|``, within :data:`SNAP_TOL`): Neumann's case of
     :func:`thetasol.solve_rotation`; else None.  Here, apart from the Neumann model, so that the
     dispatcher imports that model's modules only for the bodies it solves."""
-    Jp, P = sorted_principal_frame(J)
+    Jp, P = principal_frame(J, ascending=True)
     if Jp[-1] - Jp[0] <= SNAP_TOL * Jp[-1]:
         return None                                    # spherical: no torque
     axis = symmetry_axis(Jp)

@@ -36,10 +36,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.attitude import principal_frame
 from thetasol.core.threads import single_blas_thread
 from thetasol.protocol import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
-from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame, symmetric_without_spin, symmetry_axis
+from thetasol.solutions._symmetry import SNAP_TOL, symmetric_without_spin, symmetry_axis
 
 __all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]
 
@@ -93,7 +94,7 @@ MIN_A_GAP = 1e-7
 
 def _potential_kind(J: np.ndarray, a: np.ndarray) -> str:
     lam = np.linalg.eigvalsh(a)
-    if symmetry_axis(sorted_principal_frame(J)[0]) is not None:
+    if symmetry_axis(principal_frame(J, ascending=True)[0]) is not None:
         return "symmetric"
     if np.min(np.diff(lam)) <= SNAP_TOL * (lam[-1] - lam[0]):
         return "rank-one"

@@ -16,11 +16,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from thetasol.core.attitude import principal_frame
 from thetasol.core.so3 import hat
 from thetasol.curves.spectral import farthest_branch_point
 from thetasol.mechanics.equations import inertia_from_moments
 from thetasol.protocol import ClosedFormUnavailable
-from thetasol.solutions._symmetry import SNAP_TOL, sorted_principal_frame, symmetry_axis
+from thetasol.solutions._symmetry import SNAP_TOL, symmetry_axis
 
 __all__ = ["MIN_AXIAL_SPIN", "MIN_J_GAP", "MAX_FAR_BRANCH", "BodyFrame", "body_frame"]
 
@@ -109,7 +110,7 @@ def _refuse_small_gap(Jp) -> None:
 
 def body_frame(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndarray) -> BodyFrame:
     """The data in the principal frame; raises ClosedFormUnavailable for data out of reach (module doc)."""
-    Jp, P = sorted_principal_frame(J)
+    Jp, P = principal_frame(J, ascending=True)
     Q0p = Q0 @ P
     w0p = P.T @ omega0
     spin, axis = 0.0, symmetry_axis(Jp)

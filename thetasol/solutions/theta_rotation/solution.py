@@ -20,9 +20,10 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike
 
+from thetasol.core.attitude import principal_frame
 from thetasol.mechanics.equations import invariants as first_integrals
 from thetasol.protocol import ClosedFormUnavailable, RotationSolution
-from thetasol.solutions._symmetry import sorted_principal_frame, symmetry_axis
+from thetasol.solutions._symmetry import symmetry_axis
 from thetasol.solutions.theta_rotation.divisors import eigenvector_divisors
 from thetasol.solutions.theta_rotation.evaluator import FlowEvaluator, flow_evaluator
 from thetasol.solutions.theta_rotation.exponents import exponents
@@ -143,7 +144,7 @@ def solve_theta_rotation(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: n
     except (ValueError, RuntimeError, np.linalg.LinAlgError) as exc:
         # the data were validated by solve_rotation: a failure here is the curve's, not the input's
         msg = f"theta-function solution unavailable for these data: {exc}"
-        if symmetry_axis(sorted_principal_frame(J)[0]) is not None:
+        if symmetry_axis(principal_frame(J, ascending=True)[0]) is not None:
             msg += ("; a symmetric body with little spin about its symmetry axis has a spectral curve "
                     "near a tacnode over E = infinity (Neumann's problem), where the set-up fails")
         raise ClosedFormUnavailable(msg) from exc
