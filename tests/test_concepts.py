@@ -7,7 +7,6 @@ import pytest
 
 from thetasol.core.attitude import principal_frame
 
-
 # -- principal frame ---------------------------------------------------------------------------
 
 @pytest.mark.parametrize("ascending", [False, True])
