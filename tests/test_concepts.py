@@ -2,10 +2,12 @@
 classifier and the Curve protocol, checked against independent definitions."""
 from __future__ import annotations
 
+import mpmath
 import numpy as np
 import pytest
 
 from thetasol.core.attitude import principal_frame
+from thetasol.special.stumpff import stumpff, stumpff_float
 
 # -- principal frame ---------------------------------------------------------------------------
 
@@ -28,3 +30,50 @@ def test_principal_frame_of_principal_data():
     Jp, R = principal_frame(J, ascending=True)
     assert np.array_equal(Jp, [1.0, 2.0, 3.0])
     assert np.allclose(R @ np.diag(Jp) @ R.T, J, atol=1e-15) and np.linalg.det(R) == pytest.approx(1.0)
+
+
+# -- Stumpff functions -------------------------------------------------------------------------
+
+_Z = np.concatenate([-np.logspace(-20, 2.5, 60), [0.0], np.logspace(-20, 2.5, 60), [3.999, 4.0, 4.001]])
+
+
+def _closed_form(k, z):
+    """c_k(z) from cos/sin (cosh/sinh for z < 0) in mpmath, or the series' first term at z = 0."""
+    if z == 0:
+        return 1 / mpmath.factorial(k)
+    s = mpmath.sqrt(abs(z))
+    c, sn = (mpmath.cos(s), mpmath.sin(s)) if z > 0 else (mpmath.cosh(s), mpmath.sinh(s))
+    return [c, sn / s, (1 - c) / z, (s - sn) / (z * s) if z > 0 else (sn - s) / (-z * s)][k]
+
+
+def test_stumpff_against_the_series_and_the_closed_forms():
+    c = stumpff(_Z)
+    worst_series = worst_closed = 0.0
+    with mpmath.workdps(60):    # the closed forms cancel near z = 0: 60 digits keep 20 at z = 1e-20
+        for i, zz in enumerate(_Z):
+            x = mpmath.mpf(float(zz))
+            for k in range(4):
+                ref = mpmath.nsum(lambda j, x=x, k=k: (-x) ** j / mpmath.factorial(2 * j + k), [0, mpmath.inf])
+                worst_series = max(worst_series, float(abs(c[k][i] - ref) / abs(ref)))
+                worst_closed = max(worst_closed, float(abs(c[k][i] - _closed_form(k, x)) / abs(ref)))
+    assert worst_series < 1e-14
+    assert worst_closed < 1e-14
+
+
+def test_stumpff_float_is_the_same_functions():
+    c = stumpff(_Z)
+    for i, zz in enumerate(_Z):
+        f = stumpff_float(float(zz))
+        for k in range(4):
+            assert f[k] == pytest.approx(float(c[k][i]), rel=4e-16, abs=0.0)
+
+
+def test_stumpff_modes_of_a_quadratic_potential():
+    # c0, c1, c2 of z = lam t^2 are cos(x), sin(x)/x, (1 - cos x)/x^2 with x = sqrt(lam) t
+    lam, t = np.array([4.0, -4.0, 0.0, 1e-30]), 0.5
+    C, S, P, _ = stumpff(lam * t * t)
+    assert np.allclose(C, [np.cos(1), np.cosh(1), 1, 1], rtol=1e-15)
+    assert np.allclose(S, [np.sin(1), np.sinh(1), 1, 1], rtol=1e-15)
+    assert np.allclose(P, [1 - np.cos(1), np.cosh(1) - 1, 0.5, 0.5], rtol=1e-15)
+    # no cancellation in c2 for small arguments (1 - cos x loses everything at x = 1e-9)
+    assert stumpff(1e-18)[2] == 0.5

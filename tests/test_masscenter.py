@@ -12,7 +12,7 @@ from hypothesis import given, settings, strategies as st
 
 from thetasol.core.so3 import rodrigues
 from thetasol.protocol import CHUNK, Solution
-from thetasol.solutions.mass_center import MassCenterMotion, mass_center, stumpff
+from thetasol.solutions.mass_center import MassCenterMotion, mass_center
 
 
 def expm_reference(a, b, q0, v0, t, dps=40):
@@ -89,17 +89,6 @@ def test_continuous_in_the_eigenvalue():
         assert np.all(np.abs(qp - q_zero) <= 2 * d * t**4 * 3 + 1e-14)
         # the odd part in lam cancels: what is left is O(d^2) or round-off
         assert np.all(np.abs(0.5 * (qp + qm) - q_zero) <= d**2 * t**8 + 1e-14)
-
-
-def test_stumpff_functions():
-    lam = np.array([4.0, -4.0, 0.0, 1e-30])
-    C, S, P = stumpff(lam, 0.5)
-    assert np.allclose(C, [np.cos(1), np.cosh(1), 1, 1], rtol=1e-15)
-    assert np.allclose(S, [np.sin(1), np.sinh(1), 1, 1], rtol=1e-15)
-    assert np.allclose(P, [1 - np.cos(1), np.cosh(1) - 1, 0.5, 0.5], rtol=1e-15)
-    # no cancellation in P for small arguments (1 - cos x loses everything at x = 1e-9)
-    _, _, P = stumpff(1e-18, 1.0)
-    assert P == 0.5
 
 
 def test_shapes_energy_and_modes():

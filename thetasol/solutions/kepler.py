@@ -8,7 +8,8 @@ parabolic and hyperbolic orbits alike.
 Method (Battin, *An Introduction to the Mathematics and Methods of Astrodynamics*, ch. 4;
 Vallado, *Fundamentals of Astrodynamics*, alg. 8).  With ``alpha = 2/|r0| - |v0|^2/mu`` (= 1/a),
 ``sigma0 = r0.v0 / sqrt(mu)``, the universal anomaly ``chi`` and the Stumpff functions
-``c_k(z) = sum_j (-z)^j / (2j + k)!`` of ``z = alpha chi^2``, put ``U_k = chi^k c_k(z)``.  Then
+``c_k(z) = sum_j (-z)^j / (2j + k)!`` (:mod:`thetasol.special.stumpff`) of ``z = alpha chi^2``, put
+``U_k = chi^k c_k(z)``.  Then
 
     sqrt(mu) dt = |r0| U1 + sigma0 U2 + U3              (the universal Kepler equation)
     r = |r0| U0 + sigma0 U1 + U2,
@@ -44,67 +45,13 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.dd import two_prod
 from thetasol.protocol import Solution
+from thetasol.special.stumpff import stumpff, stumpff_float
 
-__all__ = ["KeplerOrbit", "stumpff_c"]
+__all__ = ["KeplerOrbit"]
 
 _EPS = np.finfo(float).eps
-_SERIES_Z = 4.0   # |z| below: Maclaurin series (c3's direct form loses bits to cancellation there)
-_SERIES_TERMS = 16
 _LAGUERRE_N = 5.0
 _MAX_ITER = 200
-
-
-def _series_coeffs(k: int) -> np.ndarray:
-    """Coefficients of c_k in powers of (-z): 1/(2j + k)!, highest first (for Horner)."""
-    c = [1.0 / float(mpmath.factorial(2 * j + k)) for j in range(_SERIES_TERMS)]
-    return np.array(c[::-1])
-
-
-_COEFFS = [_series_coeffs(k) for k in range(4)]
-
-
-def stumpff_c(z: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Stumpff's functions ``c0, c1, c2, c3`` of ``z`` (any sign), vectorized.
-
-    ``c0 = cos s``, ``c1 = sin s / s``, ``c2 = (1 - cos s)/s^2``, ``c3 = (s - sin s)/s^3`` with
-    ``s = sqrt(z)``, continued to ``z < 0`` by ``cosh``/``sinh``; the series ``sum (-z)^j/(2j+k)!``
-    below ``|z| = 4``.  Relative accuracy a few ulps (tests/test_kepler.py, against mpmath).
-    """
-    z = np.asarray(z, dtype=float)
-    small = np.abs(z) < _SERIES_Z
-    w = -np.where(small, z, 0.0)
-    ser = [np.polyval(c, w) for c in _COEFFS]
-    zb = np.where(small, 1.0, z)
-    pos = zb > 0
-    s = np.sqrt(np.abs(zb))
-    with np.errstate(over="ignore", invalid="ignore"):
-        c0 = np.where(pos, np.cos(s), np.cosh(s))
-        c1 = np.where(pos, np.sin(s), np.sinh(s)) / s
-        half = np.where(pos, np.sin(0.5 * s), np.sinh(0.5 * s))
-        c2 = 2.0 * half * half / np.abs(zb)
-        c3 = np.where(pos, s - np.sin(s), np.sinh(s) - s) / (np.abs(zb) * s)
-    out = [np.where(small, a, b) for a, b in zip(ser, (c0, c1, c2, c3), strict=True)]
-    return out[0], out[1], out[2], out[3]
-
-
-def _stumpff_scalar(z: float):
-    """:func:`stumpff_c` on one float (Python arithmetic; c0, c1 from c2, c3 in the series range)."""
-    if abs(z) < _SERIES_Z:
-        w = -z
-        c2 = c3 = 0.0
-        for a, b in _SCALAR_SERIES:
-            c2 = c2 * w + a
-            c3 = c3 * w + b
-        return 1.0 - z * c2, 1.0 - z * c3, c2, c3
-    s = math.sqrt(abs(z))
-    if z > 0:
-        h = math.sin(0.5 * s)
-        return math.cos(s), math.sin(s) / s, 2.0 * h * h / z, (s - math.sin(s)) / (z * s)
-    h = math.sinh(0.5 * s)
-    return math.cosh(s), math.sinh(s) / s, 2.0 * h * h / -z, (math.sinh(s) - s) / (-z * s)
-
-
-_SCALAR_SERIES = list(zip(_COEFFS[2].tolist(), _COEFFS[3].tolist(), strict=True))
 
 
 @dataclass(frozen=True)
@@ -265,7 +212,7 @@ class KeplerOrbit(Solution):
             p, pe = two_prod(k, s.period_hi)
             t = ((t - p) - pe) - k * s.period_lo
         chi = self._solve_chi_scalar(t)
-        c0, c1, c2, _ = _stumpff_scalar(s.alpha * chi * chi)
+        c0, c1, c2, _ = stumpff_float(s.alpha * chi * chi)
         U1, U2 = chi * c1, chi * chi * c2
         r = s.r0n * c0 + s.sigma0 * U1 + U2
         f, g = 1.0 - U2 / s.r0n, (s.r0n * U1 + s.sigma0 * U2) / s.sqrtmu
@@ -318,7 +265,7 @@ class KeplerOrbit(Solution):
         active = np.ones(dt.shape, dtype=bool)
         with np.errstate(over="ignore", invalid="ignore", divide="ignore"):
             for _ in range(_MAX_ITER):
-                c0, c1, c2, c3 = stumpff_c(s.alpha * chi * chi)
+                c0, c1, c2, c3 = stumpff(s.alpha * chi * chi)
                 U1, U2, U3 = chi * c1, chi * chi * c2, chi ** 3 * c3
                 F = s.r0n * U1 + s.sigma0 * U2 + U3 - target
                 # overflow only far out on a hyperbola, where F has the sign of chi (F increases)
@@ -357,7 +304,7 @@ class KeplerOrbit(Solution):
         chi = min(max(guess, lo), hi)
         target, n = s.sqrtmu * dt, _LAGUERRE_N
         for _ in range(_MAX_ITER):
-            c0, c1, c2, c3 = _stumpff_scalar(s.alpha * chi * chi)
+            c0, c1, c2, c3 = stumpff_float(s.alpha * chi * chi)
             U1, U2, U3 = chi * c1, chi * chi * c2, chi * chi * chi * c3
             F = s.r0n * U1 + s.sigma0 * U2 + U3 - target
             if not math.isfinite(F):
@@ -386,7 +333,7 @@ class KeplerOrbit(Solution):
         s = self._s
         dt = self._reduced(np.asarray(t, dtype=float))
         chi = self._solve_chi(dt)
-        c0, c1, c2, _ = stumpff_c(s.alpha * chi * chi)
+        c0, c1, c2, _ = stumpff(s.alpha * chi * chi)
         U1, U2 = chi * c1, chi * chi * c2
         r = s.r0n * c0 + s.sigma0 * U1 + U2
         f = 1.0 - U2 / s.r0n

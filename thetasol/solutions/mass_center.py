@@ -13,16 +13,15 @@ their ill-conditioned eigenvectors cost no accuracy) each mode ``y = V^T q`` sol
     y(t)    = C y0 + t S v0 - t^2 P beta,
     ydot(t) = -lam t S y0 + C v0 - t S beta,
 
-with the entire functions of ``z = lam t^2`` (Stumpff's functions, as in universal-variable
-Kepler solvers)
+with the entire functions of ``z = lam t^2`` (Stumpff's ``c0, c1, c2``, :mod:`thetasol.special.stumpff`,
+as in universal-variable Kepler solvers)
 
-    C = cos(sqrt z),   S = sin(sqrt z) / sqrt z,   P = (1 - cos(sqrt z)) / z = S(z / 4)^2 / 2,
+    C = cos(sqrt z),   S = sin(sqrt z) / sqrt z,   P = (1 - cos(sqrt z)) / z,
 
 continued to ``cosh``/``sinh`` for ``z < 0``.  So one formula covers the trigonometric
 (``lam > 0``), hyperbolic (``lam < 0``) and polynomial (``lam = 0``) modes and stays
-accurate as an eigenvalue passes through 0: ``sin x / x`` has no cancellation, and the
-half-angle form of ``P`` avoids the cancellation of ``1 - cos x``.  Why hand-written:
-``scipy.linalg.expm`` of the 6x6 first-order system would do (it is the test reference)
+accurate as an eigenvalue passes through 0 (a series near ``z = 0``, where ``1 - cos`` would cancel).
+Why hand-written: ``scipy.linalg.expm`` of the 6x6 first-order system would do (it is the test reference)
 but costs a dense exponential per time and cannot broadcast cheaply; here one ``eigh``
 serves all times.
 
@@ -39,48 +38,12 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.protocol import Solution
+from thetasol.special.stumpff import stumpff
 
-__all__ = ["MassCenterMotion", "mass_center", "stumpff"]
+__all__ = ["MassCenterMotion", "mass_center"]
 
 
 _KIND_ORDER = ("trigonometric", "hyperbolic", "polynomial")
-
-
-def stumpff(lam: ArrayLike, t: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The functions ``C, S, P`` of ``z = lam t^2`` (module docstring), broadcasting ``lam`` and ``t``.
-
-    Parameters
-    ----------
-    lam : array_like
-        Eigenvalues (any sign).
-    t : array_like
-        Times.
-
-    Returns
-    -------
-    C, S, P : ndarray
-        ``cos(x)``, ``sin(x)/x``, ``(1 - cos x)/x^2`` with ``x = sqrt(lam) |t|``, continued
-        analytically to ``lam <= 0``.
-    """
-    lam = np.asarray(lam, dtype=float)
-    t = np.asarray(t, dtype=float)
-    x = np.sqrt(np.abs(lam)) * np.abs(t)
-    pos = lam >= 0
-    with np.errstate(over="ignore", invalid="ignore"):
-        C = np.where(pos, np.cos(x), np.cosh(x))
-        S = _sinc(x, pos)
-        P = 0.5 * _sinc(0.5 * x, pos) ** 2
-    return C, S, P
-
-
-def _sinc(x: np.ndarray, pos: np.ndarray) -> np.ndarray:
-    """``sin x / x`` where ``pos`` else ``sinh x / x``, with the value 1 at x = 0."""
-    xs = np.where(x == 0, 1.0, x)
-    with np.errstate(over="ignore", invalid="ignore"):
-        r = np.where(pos, np.sin(xs), np.sinh(xs)) / xs
-    # Below 1e-8 the series 1 -+ x^2/6 is exact in float64 and sidesteps x == 0.
-    small = x < 1e-8
-    return np.where(small, 1.0 - np.where(pos, 1.0, -1.0) * x * x / 6.0, r)
 
 
 def _symmetry_axes(lam: np.ndarray, Vec: np.ndarray, beta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -215,7 +178,7 @@ class MassCenterMotion(Solution):
         lam, Vec = self.eigenvalues, self.axes
         y0, w0, beta = Vec.T @ self.q0, Vec.T @ self.v0, 0.5 * (Vec.T @ self.b)
         tc = tt[..., None]
-        C, S, P = stumpff(lam, tc)
+        C, S, P, _ = stumpff(lam * (tc * tc))
         with np.errstate(over="ignore", invalid="ignore"):
             y = C * y0 + tc * S * w0 - tc * tc * P * beta
             yd = -lam * tc * S * y0 + C * w0 - tc * S * beta
