@@ -7,6 +7,9 @@ import numpy as np
 import pytest
 
 from thetasol.core.attitude import principal_frame
+from thetasol.core.so3 import rodrigues
+from thetasol.curves.spectral import spectral_curve
+from thetasol.mechanics.potential import potential_kind
 from thetasol.special.stumpff import stumpff, stumpff_float
 
 # -- principal frame ---------------------------------------------------------------------------
@@ -77,3 +80,39 @@ def test_stumpff_modes_of_a_quadratic_potential():
     assert np.allclose(P, [1 - np.cos(1), np.cosh(1) - 1, 0.5, 0.5], rtol=1e-15)
     # no cancellation in c2 for small arguments (1 - cos x loses everything at x = 1e-9)
     assert stumpff(1e-18)[2] == 0.5
+
+
+# -- the potential classifier ------------------------------------------------------------------
+
+def _turned(d):
+    """``Q diag(d) Q^T`` for a generic rotation: the kind must survive the rounding of the rotation."""
+    Q = rodrigues(np.array([0.3, -0.5, 0.8]))
+    return Q @ np.diag(d) @ Q.T
+
+
+@pytest.mark.parametrize("a, kind", [
+    (np.zeros((3, 3)), "isotropic"),
+    (2.0 * np.eye(3), "isotropic"),
+    (_turned([-5.0, -5.0, -5.0]), "isotropic"),
+    (3.0 * np.outer([0.6, 0.0, 0.8], [0.6, 0.0, 0.8]), "rank-one"),
+    (_turned([1.0, 1.0, 3.0]), "rank-one"),
+    (_turned([1e6, 1e6, 1e6 + 1.0]), "rank-one"),     # a large isotropic part does not hide the pair
+    (np.diag([1.0, 2.0, 3.0]), "generic"),
+    (_turned([1.0, 1.0 + 1e-12, 3.0]), "generic"),
+])
+def test_potential_kind(a, kind):
+    assert potential_kind(a) == kind
+
+
+@pytest.mark.parametrize("d, genus", [([1.0, 1.0, 3.0], 3), ([1.0, 2.0, 3.5], 4)])
+def test_potential_kind_agrees_with_the_genus_of_the_spectral_curve(d, genus):
+    # (4.12): a rank-one potential gives a nodal curve of geometric genus 3, a generic one genus 4
+    a = _turned(d)
+    C = spectral_curve([1.0, 1.7, 2.4], [0.3, -0.2, 0.5], -a)
+    assert C.genus == genus
+    assert potential_kind(a) == ("rank-one" if genus == 3 else "generic")
+
+
+def test_potential_kind_refuses_what_is_not_a_matrix():
+    with pytest.raises(ValueError, match="3x3"):
+        potential_kind(np.ones(3))

@@ -39,6 +39,7 @@ from thetasol.integrators.rotation import numerical_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import invariants as rotation_invariants
+from thetasol.mechanics.potential import potential_kind
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import ClosedFormUnavailable, Solution
 from thetasol.solutions.mass_center import MassCenterMotion
@@ -51,17 +52,12 @@ def rotation_kind(a: ArrayLike) -> str:
     """Which closed form the rotation of a body in ``1/2 x^T a x`` needs (Sections 4 I and II).
 
     ``"elliptic"`` when ``a`` is isotropic (``a = c 1`` exerts no torque: the Euler top),
-    ``"theta (rank-one a, genus-3 nodal curve)"`` for ``a`` of rank one, else ``"theta"``
-    (the generic genus-4 spectral curve (4.12), Prym variety of dimension 3).
+    ``"theta (rank-one a, genus-3 nodal curve)"`` for two equal eigenvalues (``a = c 1`` plus a
+    rank-one matrix), else ``"theta"`` (the generic genus-4 spectral curve (4.12), Prym variety of
+    dimension 3); the kinds of :func:`thetasol.mechanics.potential.potential_kind`.
     """
-    a = V.symmetric_matrix(a, "a")
-    ev = np.linalg.eigvalsh(a)
-    scale = max(np.max(np.abs(ev)), np.finfo(float).tiny)
-    if ev[-1] - ev[0] <= 1e-14 * scale:
-        return "elliptic"
-    if np.sum(np.abs(ev) > 1e-14 * scale) == 1:
-        return "theta (rank-one a, genus-3 nodal curve)"
-    return "theta"
+    kind = potential_kind(V.symmetric_matrix(a, "a"))
+    return {"isotropic": "elliptic", "rank-one": "theta (rank-one a, genus-3 nodal curve)"}.get(kind, "theta")
 
 
 def closed_form_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike) -> tuple[Any, str]:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from thetasol.core.attitude import principal_frame
+from thetasol.mechanics.potential import potential_kind
 from thetasol.protocol import ClosedFormUnavailable
 
 __all__ = ["SNAP_TOL", "symmetric_without_spin", "symmetry_axis"]
@@ -43,9 +44,9 @@ def symmetric_without_spin(J: np.ndarray, a: np.ndarray, omega0: np.ndarray):
     axis = symmetry_axis(Jp)
     if axis is None:
         return None
+    if potential_kind(a) == "isotropic":
+        return None                                    # no torque
     ev = np.linalg.eigvalsh(a)
-    if ev[-1] - ev[0] <= SNAP_TOL * np.abs(ev).max():
-        return None                                    # isotropic a: no torque
     w0p = P.T @ omega0
     scale = np.linalg.norm(w0p) + np.sqrt(np.abs(ev).max())
     if abs(w0p[axis]) > SNAP_TOL * scale:

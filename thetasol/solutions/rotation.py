@@ -38,6 +38,7 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.attitude import principal_frame
 from thetasol.core.threads import single_blas_thread
+from thetasol.mechanics.potential import potential_kind
 from thetasol.protocol import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
 from thetasol.solutions._symmetry import SNAP_TOL, symmetric_without_spin, symmetry_axis
@@ -47,16 +48,9 @@ __all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]
 
 # -- dispatcher --------------------------------------------------------------------------------
 
-def _isotropic(a: np.ndarray) -> bool:
-    """``a = c 1`` up to a few ulps of ``c`` (no torque on any body)."""
-    c = np.trace(a) / 3.0
-    dev = np.max(np.abs(a - c * np.eye(3)))
-    return bool(dev <= 8 * np.finfo(float).eps * abs(c))
-
-
 def _free_branch(J, a, Q0, omega0, dps):
-    # a spherical body feels no torque either ([u, J] = 0)
-    if not (_isotropic(a) or _isotropic(J)):
+    # a spherical body feels no torque either ([u, J] = 0): the same eigenvalue test on J
+    if not (potential_kind(a) == "isotropic" or potential_kind(J) == "isotropic"):
         return None
     from thetasol.solutions.euler_top import solve_euler_top
 
@@ -92,13 +86,11 @@ MIN_POTENTIAL = {"generic": 1e-10, "rank-one": 1e-5, "symmetric": 1e-6}
 MIN_A_GAP = 1e-7
 
 
-def _potential_kind(J: np.ndarray, a: np.ndarray) -> str:
-    lam = np.linalg.eigvalsh(a)
+def _body_kind(J: np.ndarray, a: np.ndarray) -> str:
+    """The key of :data:`MIN_POTENTIAL`: a symmetric body, else the kind of ``a`` (not isotropic here)."""
     if symmetry_axis(principal_frame(J, ascending=True)[0]) is not None:
         return "symmetric"
-    if np.min(np.diff(lam)) <= SNAP_TOL * (lam[-1] - lam[0]):
-        return "rank-one"
-    return "generic"
+    return potential_kind(a)
 
 
 def _check_potential_size(J, a, omega0):
@@ -107,15 +99,13 @@ def _check_potential_size(J, a, omega0):
     dev = float(np.abs(lam).max())
     rel = dev / (float(omega0 @ omega0) + dev)
     full = np.linalg.eigvalsh(a)
-    gap, spread = float(np.min(np.diff(full))), float(full[-1] - full[0])
-    snapped = gap <= SNAP_TOL * max(spread, float(np.abs(full).max()))   # as the spectral curve snaps it
-    gap /= spread
-    if not snapped and gap < MIN_A_GAP:
+    gap = float(np.min(np.diff(full))) / float(full[-1] - full[0])
+    if potential_kind(a) != "rank-one" and gap < MIN_A_GAP:     # rank-one: snapped by the spectral curve
         raise ClosedFormUnavailable(
             f"nearly rank-one potential (two eigenvalues of a {gap:.1e} apart relative to their spread, "
             f"above the snapping tolerance {SNAP_TOL:g} and below {MIN_A_GAP:g}): the spectral curve is near "
             "the node of the rank-one case, out of the curve engine's reach; use thetasol.integrate_rotation")
-    kind = _potential_kind(J, a)
+    kind = _body_kind(J, a)
     if rel < MIN_POTENTIAL[kind]:
         raise ClosedFormUnavailable(
             f"the potential is weak against the spin (|a - c 1| = {rel:.1e} of |omega0|^2; below {MIN_POTENTIAL[kind]:g} for a {kind} body): its spectral curve is within "
@@ -203,7 +193,7 @@ def solve_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike,
     if dps is not None and (not isinstance(dps, (int, np.integer)) or dps < 15):
         raise ValueError(f"dps must be an integer >= 15, got {dps!r}")
     # no torque from an isotropic a: its units are those of the Euler top (J and omega0 only)
-    am_solve = np.zeros((3, 3)) if _isotropic(am) else am
+    am_solve = np.zeros((3, 3)) if potential_kind(am) == "isotropic" else am
     sc = choose_scales(Jm, am_solve, w0)
     if sc.trivial:
         return _dispatch(Jm, am, Q0m, w0, dps)
