@@ -8,6 +8,9 @@ import pytest
 
 from thetasol.core.attitude import principal_frame
 from thetasol.core.so3 import rodrigues
+from thetasol.curves.hyperelliptic import HyperellipticCurve
+from thetasol.curves.protocol import Curve
+from thetasol.curves.riemann_constant import theta_normalized_abs
 from thetasol.curves.spectral import spectral_curve
 from thetasol.mechanics.potential import potential_kind
 from thetasol.special.stumpff import stumpff, stumpff_float
@@ -116,3 +119,57 @@ def test_potential_kind_agrees_with_the_genus_of_the_spectral_curve(d, genus):
 def test_potential_kind_refuses_what_is_not_a_matrix():
     with pytest.raises(ValueError, match="3x3"):
         potential_kind(np.ones(3))
+
+
+# -- one Curve protocol ------------------------------------------------------------------------
+
+_J2 = np.block([[np.zeros((2, 2)), np.eye(2)], [-np.eye(2), np.zeros((2, 2))]])
+
+
+def _protocol_checks(C, pts: np.ndarray) -> None:
+    """The same code for any Curve: shapes, tau, Jacobi inversion with K, another base point, divisors."""
+    assert isinstance(C, Curve)
+    g = C.genus
+    P, tau = C.period_matrix(), C.riemann_matrix()
+    assert P.shape == (g, 2 * g) and len(C.holomorphic_numerators()) == g
+    assert np.allclose(tau, np.linalg.solve(P[:, :g], P[:, g:]), rtol=0, atol=1e-13 * np.abs(tau).max())
+    assert np.array_equal(tau, tau.T) and np.min(np.linalg.eigvalsh(tau.imag)) > 0
+    assert np.allclose(C.normalization() @ P[:, :g], np.eye(g), atol=1e-13)
+    D = pts[:g]
+    A = C.abel_map(D)
+    assert A.shape == (g, g) and C.abel_map(tuple(D[0])).shape == (g,)
+    assert C.abel_map(np.stack([D, D])).shape == (2, g, g)
+    assert np.allclose(C.abel_map({tuple(p): 1 for p in D}), A.sum(axis=0), atol=1e-13)
+    # theta(A(P) - A(D) - K) vanishes at the g points of D (Riemann's vanishing theorem) and not elsewhere
+    K = C.riemann_constant()
+    assert theta_normalized_abs(A - A.sum(axis=0) - K, tau).max() < 1e-9
+    assert theta_normalized_abs(C.abel_map(pts[g:]) - A.sum(axis=0) - K, tau).min() > 1e-4
+    # the same from another base point Q: K_Q = K + (g - 1) A(Q)
+    Q = tuple(pts[-1])
+    AQ = C.abel_map(D, base=Q)
+    assert theta_normalized_abs(AQ - AQ.sum(axis=0) - C.riemann_constant(base=Q), tau).max() < 1e-9
+
+
+def test_both_curve_classes_satisfy_one_protocol():
+    """y^2 = f(x) of genus 2 written as a PlaneCurve and as a HyperellipticCurve: the same code runs on
+    both, the lattices agree up to an integer symplectic change of basis (PlaneCurve's differentials
+    x^i dx / f_y are half of x^i dx / y), and the numerators differ by that factor 2."""
+    sympy = pytest.importorskip("sympy")
+    from thetasol.curves.plane_curve import PlaneCurve
+
+    coef = np.real(-2.0 * np.poly([-2.1, -0.6, 0.4, 1.3, 2.7]))
+    X, Y = sympy.symbols("x y")
+    pc = PlaneCurve(Y ** 2 - sum(sympy.Float(float(c), 30) * X ** (5 - i) for i, c in enumerate(coef)), X, Y)
+    hc = HyperellipticCurve.from_coefficients(coef)
+    x = np.array([0.3 + 0.8j, -1.2 + 0.4j, 1.9 - 0.7j, -0.4 - 1.1j, 0.9 + 1.5j])
+    pts = np.stack([x, np.sqrt(hc.f(x)) * np.array([1, -1, 1, 1, -1])], axis=-1)
+    for C in (pc, hc):
+        _protocol_checks(C, pts)
+    S = np.linalg.solve(np.vstack([hc.period_matrix().real, hc.period_matrix().imag]),
+                        np.vstack([2 * pc.period_matrix().real, 2 * pc.period_matrix().imag]))
+    assert np.max(np.abs(S - np.rint(S))) < 1e-10
+    S = np.rint(S)
+    assert np.array_equal(S.T @ _J2 @ S, _J2)
+    for i, (n_pc, n_hc) in enumerate(zip(pc.holomorphic_numerators(), hc.holomorphic_numerators(), strict=True)):
+        assert n_pc.monomials == n_hc.monomials == [(i, 0)]
+        assert n_hc.coefficient(i, 0) == 2 * n_pc.coefficient(i, 0)

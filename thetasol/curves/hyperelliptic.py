@@ -32,11 +32,9 @@ evaluations of a product, and no path graph, sympy or sheet matching (as in Plan
   integrand is analytic in ``s`` (Gauss-Legendre, tanh-sinh past 64 nodes); the branch ends at ``Y``.
   The images of the branch points from infinity are half periods: the chain gives their
   differences and ``div y = sum e_j - (2g + 1) inf`` gives ``sum_j A(e_j) = 0``, hence ``A(e_1)``.
-* **Riemann constant** (base infinity): a half period;  the one of the 4^g candidates with ``theta(K) = 0``
-  and ``theta(K + A(D')) = 0`` at three random effective divisors of degree ``g - 1`` (Riemann's
-  vanishing theorem), one theta call for all.  In genus 2 the parities decide it without theta: ``K`` and
-  every ``K + A(e_j)`` are odd half periods (the same ``K`` as the theta test on 150 random genus-2 curves and
-  the 40 tops of benchmarks/bench_heavy_top.py).
+* **Riemann constant** (base infinity, a Weierstrass point: ``div(dx / y) = (2g - 2) inf``, so ``K`` is a half
+  period): the library's one rule (:func:`thetasol.curves.riemann_constant.riemann_constant_vector`) on the
+  effective divisors ``(g - 1) inf`` and three of the fixed table of test points, one theta call for all.
 
 Everything is built from differences of branch points, so nothing depends on the units of ``x``.
 Checked in tests/test_hyperelliptic.py: periods against mpmath ``quad`` at 30 digits, also with close
@@ -48,13 +46,18 @@ small fraction of a PlaneCurve's on the same curve (benchmarks/bench_curves.py, 
 """
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
+from fractions import Fraction
 from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core.panels import gauss_legendre
+from thetasol.curves._numerators import Numerator
+from thetasol.curves.protocol import riemann_matrix_from_periods
+from thetasol.curves.riemann_constant import riemann_constant_vector, test_abscissae
 from thetasol.theta.lattice import lll_gram
 from thetasol.theta.riemann import RiemannTheta
 
@@ -254,18 +257,10 @@ class HyperellipticCurve:
         return self.chain_periods @ self.cycles.T
 
     def riemann_matrix(self) -> np.ndarray:
-        """``tau = A^-1 B``: symmetric (checked to 1e-10 relative) with ``Im tau`` positive definite (checked)."""
+        """``tau = A^-1 B``, symmetric with ``Im tau`` positive definite (checked:
+        :func:`thetasol.curves.protocol.riemann_matrix_from_periods`)."""
         if "tau" not in self._cache:
-            g = self.genus
-            P = self.period_matrix()
-            tau = np.linalg.solve(P[:, :g], P[:, g:])
-            asym = np.max(np.abs(tau - tau.T)) / np.max(np.abs(tau))
-            if asym > 1e-10:
-                raise RuntimeError(f"tau is not symmetric (relative asymmetry {asym:.2g}): inaccurate periods")
-            tau = 0.5 * (tau + tau.T)
-            if np.min(np.linalg.eigvalsh(tau.imag)) <= 0:
-                raise RuntimeError("Im tau is not positive definite (internal error in the intersection signs)")
-            self._cache["tau"] = tau
+            self._cache["tau"] = riemann_matrix_from_periods(self.period_matrix())
         return self._cache["tau"].copy()
 
     def normalization(self) -> np.ndarray:
@@ -276,7 +271,38 @@ class HyperellipticCurve:
         """Abel images from infinity of :attr:`branch_points` (half periods), shape (2g + 1, g)."""
         return self._branch_raw @ self.normalization().T if normalized else self._branch_raw.copy()
 
-    def abel_map(self, x: ArrayLike, y: ArrayLike, normalized: bool = True) -> np.ndarray:
+    def holomorphic_numerators(self) -> tuple[Numerator, ...]:
+        """The numerators ``2 x^i`` (``i < g``) of the basis ``x^i dx / y = 2 x^i dx / f_y`` of holomorphic
+        differentials, ``f = y^2 - lead prod (x - e_j)`` (:class:`~thetasol.curves.protocol.Curve`)."""
+        return tuple(Numerator.from_terms([(i, 0, Fraction(2), Fraction(0))]) for i in range(self.genus))
+
+    def abel_map(self, points: ArrayLike | Mapping, base: ArrayLike | None = None, *,
+                 normalized: bool = True) -> np.ndarray:
+        """Abel map from ``base`` (default: the place at infinity) of points ``(x, y)`` on the curve.
+
+        ``points``: one pair ``(x, y)`` (result shape (g,)), an array of pairs of shape ``(..., 2)`` (result
+        ``(..., g)``), or a divisor ``{(x, y): multiplicity}`` (result (g,)); ``base`` a pair ``(x, y)``.
+        Signature of :class:`~thetasol.curves.protocol.Curve`.
+
+        Raises
+        ------
+        ValueError
+            A point is not on the curve, or ``points`` is not made of pairs.
+        """
+        if isinstance(points, Mapping):
+            pts = np.array([[complex(p[0]), complex(p[1])] for p in points], complex).reshape(-1, 2)
+            weights = np.array([float(m) for m in points.values()])
+            out = weights @ self._abel_xy(pts[:, 0], pts[:, 1], normalized)
+        else:
+            pts = np.asarray(points, complex)
+            if pts.ndim == 0 or pts.shape[-1] != 2:
+                raise ValueError(f"points must be (x, y) pairs (an array of shape (..., 2)), got shape {pts.shape}")
+            out = self._abel_xy(pts[..., 0], pts[..., 1], normalized)
+        if base is not None:
+            out = out - self.abel_map(base, normalized=normalized)
+        return out
+
+    def _abel_xy(self, x: ArrayLike, y: ArrayLike, normalized: bool) -> np.ndarray:
         """Abel map from the place at infinity of the finite points ``(x, y)`` (broadcast), shape ``x.shape + (g,)``.
 
         The path runs from the branch point nearest to ``x`` along the straight segment, on the sheet
@@ -332,63 +358,30 @@ class HyperellipticCurve:
         out = raw @ self.normalization().T if normalized else raw
         return out.reshape(shape + (g,))
 
-    def _odd_riemann_constant(self) -> np.ndarray | None:
-        """Genus 2: ``K`` from parities alone.  With the base at a branch point, ``theta(K + A(P))`` vanishes on
-        the curve, so ``K`` and every ``K + A(e_j)`` are half periods where theta vanishes, i.e. odd ones (a
-        genus-2 curve has no vanishing even theta constant); the candidate with that property, if it is the
-        only one (else None).  Parity of ``(a + tau b)/2`` (``a, b`` integers): ``a.b mod 2``."""
-        tau = self.riemann_matrix()
-        A = self.branch_images()
-        bn = np.linalg.solve(tau.imag, A.imag.T).T                                  # (5, 2)
-        am = A.real - bn @ tau.real.T
-        half = 2 * np.concatenate([am, bn], 1)
-        if np.max(np.abs(half - np.rint(half))) > 1e-6:
-            return None
-        half = np.rint(half).astype(np.int64)
-        bits = (np.arange(16)[:, None] >> np.arange(4)[None, :]) & 1                  # (a1, a2, b1, b2)
-        tot = bits[:, None, :] + np.concatenate([np.zeros((1, 4), np.int64), half])[None]   # (16, 6, 4)
-        odd = np.all(np.sum(tot[..., :2] * tot[..., 2:], -1) % 2 == 1, 1)
-        if np.count_nonzero(odd) != 1:
-            return None
-        c = bits[np.argmax(odd)]
-        return 0.5 * c[:2] + 0.5 * c[2:] @ tau.T
+    def riemann_constant(self, base: ArrayLike | None = None, *, theta: RiemannTheta | None = None) -> np.ndarray:
+        """Vector of Riemann constants (normalized coordinates) with base at infinity, or at ``base``
+        (a pair ``(x, y)``: ``K + (g - 1) A(base)``).
 
-    def riemann_constant(self, theta: RiemannTheta | None = None) -> np.ndarray:
-        """Vector of Riemann constants with base at infinity (normalized coordinates).
-
-        The half period ``K = (a + tau b)/2``, ``a, b`` in ``{0, 1}^g``, with ``theta(K + A(D')) = 0`` for the
-        effective divisors ``D'`` of degree ``g - 1`` (Riemann's vanishing theorem; tested at
-        ``D' = (g - 1) inf`` and three random divisors, all 4^g candidates in one theta call; in genus 2 the
-        one odd half period ``K`` with every ``K + A(e_j)`` odd, when the branch images are half periods to
-        1e-6 and it is unique).  With it
-        ``theta(A(P) - A(D) - K)`` vanishes exactly at the points of a generic effective divisor ``D`` of
-        degree g.  ``theta``: a :class:`~thetasol.theta.riemann.RiemannTheta` of :meth:`riemann_matrix`
-        to reuse (its set-up is most of the cost).
+        A half period (module docstring), chosen by the library's one rule
+        (:func:`thetasol.curves.riemann_constant.riemann_constant_vector`).  With it ``theta(A(P) - A(D) - K)``
+        vanishes exactly at the points of a generic effective divisor ``D`` of degree g.  ``theta``: a
+        :class:`~thetasol.theta.riemann.RiemannTheta` of :meth:`riemann_matrix` to reuse (its set-up is
+        most of the cost).
 
         Raises
         ------
         RuntimeError
-            No candidate makes theta vanish to 1e-8 while the next is 10 times larger (nearly degenerate curve).
+            No candidate makes theta vanish unambiguously (nearly degenerate curve).
         """
-        if "K" not in self._cache and self.genus == 2:
-            K = self._odd_riemann_constant()
-            if K is not None:
-                self._cache["K"] = K
+        g = self.genus
         if "K" not in self._cache:
-            g, e = self.genus, self.branch_points
-            tau = self.riemann_matrix()
-            theta = RiemannTheta(tau) if theta is None else theta
-            rng = np.random.default_rng(12345)
-            center, spread = np.mean(e), np.max(np.abs(e - np.mean(e)))
-            x = center + spread * (rng.uniform(-1, 1, (3, g - 1)) + 1j * rng.uniform(-1, 1, (3, g - 1)))
-            D = np.concatenate([np.zeros((1, g), complex), self.abel_map(x, np.sqrt(self.f(x))).sum(axis=1)])
-            bits = (np.arange(4 ** g)[:, None] >> np.arange(2 * g)[None, :]) & 1
-            cand = 0.5 * bits[:, :g] + 0.5 * bits[:, g:] @ tau.T
-            score = np.max(np.abs(theta.separated(cand[None, :, :] + D[:, None, :])[1]), axis=0)
-            order = np.argsort(score)
-            best, second = score[order[0]], score[order[1]]
-            if not (best < 1e-8 and second > 10 * best):
-                raise RuntimeError(f"Riemann constant: no half period makes theta vanish unambiguously (best "
-                                   f"{best:.2g}, next {second:.2g}); nearly degenerate curve?")
-            self._cache["K"] = cand[order[0]]
-        return self._cache["K"].copy()
+            e = self.branch_points
+            center = np.mean(e)
+            x, sheet = test_abscissae(center, float(np.max(np.abs(e - center))), g - 1)
+            y = np.sqrt(self.f(x)) * np.where(sheet % 2 == 1, -1.0, 1.0)
+            D = np.concatenate([np.zeros((1, g), complex), self._abel_xy(x, y, True).sum(axis=1)])
+            self._cache["K"] = riemann_constant_vector(self.riemann_matrix(), np.zeros(g, complex), D, theta=theta)
+        K = self._cache["K"].copy()
+        if base is not None:
+            K = K + (g - 1) * self.abel_map(base)
+        return K

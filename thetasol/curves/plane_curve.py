@@ -48,10 +48,13 @@ from thetasol.curves._places import (
 )
 from thetasol.curves._poly import CurvePoly, polynomial_roots, root_corrections
 from thetasol.curves._quad import Piece, Tracker, shaped_integrals
+from thetasol.curves.protocol import riemann_matrix_from_periods
 
 if TYPE_CHECKING:
     import mpmath
     import sympy
+
+    from thetasol.theta.riemann import RiemannTheta
 
 __all__ = ["Numerator", "PlaneCurve", "Place"]
 
@@ -442,7 +445,8 @@ class PlaneCurve:
         return self._cache[key].copy()
 
     def riemann_matrix(self, dps: int | None = None) -> np.ndarray | mpmath.matrix:
-        """tau = A^-1 B for the default holomorphic differentials; symmetric with Im tau > 0.
+        """tau = A^-1 B for the default holomorphic differentials; symmetric with Im tau > 0 (checked:
+        :func:`thetasol.curves.protocol.riemann_matrix_from_periods`).
 
         With ``dps``: an ``mpmath.matrix`` at that precision.
         """
@@ -457,17 +461,7 @@ class PlaneCurve:
                 tau = (tau + tau.T) / 2
             return tau
         if "tau" not in self._cache:
-            g = self.genus
-            P = self.period_matrix()
-            A, B = P[:, :g], P[:, g:]
-            tau = np.linalg.solve(A, B)
-            asym = np.max(np.abs(tau - tau.T)) / max(np.max(np.abs(tau)), 1e-300) if g else 0.0
-            if asym > 1e-6:
-                raise RuntimeError(f"tau is not symmetric (relative asymmetry {asym:.2g}): inaccurate periods")
-            tau = 0.5 * (tau + tau.T)
-            if g and np.min(np.linalg.eigvalsh(tau.imag)) <= 0:
-                raise RuntimeError("Im tau is not positive definite (internal error)")
-            self._cache["tau"] = tau
+            self._cache["tau"] = riemann_matrix_from_periods(self.period_matrix())
         return self._cache["tau"].copy()
 
     # ------------------------------------------------------------------ places
@@ -710,8 +704,8 @@ class PlaneCurve:
 
         Parameters
         ----------
-        points : Place, (x, y) pair, sequence of these, or dict {point or place: multiplicity}
-            Finite points are (x, y) pairs on the curve; places over critical values and infinity come
+        points : Place, (x, y) pair, sequence of these (or an array of pairs, shape (..., 2)), or dict
+            {point or place: multiplicity}.  Finite points are (x, y) pairs on the curve; places over critical values and infinity come
             from :meth:`places_over` / :meth:`places_at_infinity` (an (x, y) pair at a critical value
             is accepted when it determines the place).
         base : Place or (x, y), optional
@@ -723,10 +717,14 @@ class PlaneCurve:
 
         Returns
         -------
-        (g,) for one point or a divisor (sum of multiplicity * image), (N, g) for a sequence.
+        (g,) for one point or a divisor (sum of multiplicity * image), (N, g) for a sequence, ``(..., g)``
+        for an array of pairs (the signature of :class:`~thetasol.curves.protocol.Curve`).
         Values are path integrals along the documented paths (docs/curves.md); they are defined modulo
         the lattice: another path adds a lattice vector.
         """
+        if isinstance(points, np.ndarray) and points.ndim > 2 and points.shape[-1] == 2:    # pairs of any shape
+            flat = self.abel_map(points.reshape(-1, 2), base, normalized=normalized)
+            return flat.reshape(points.shape[:-1] + (self.genus,))
         targets, weights, shape = self._parse_targets(points)
         P = self._holo_arrays()
         raw = self._abel_raw(targets, P, "holo")
@@ -762,37 +760,40 @@ class PlaneCurve:
             D[P] = D.get(P, 0) - (P.e + 1)
         return D
 
-    def generic_points(self, count: int, rng: np.random.Generator) -> list:
-        """``count`` random finite points ``(x, y)`` inside the path graph's box, away from the
-        critical values (for divisors in general position)."""
-        G = self._graph
+    def _test_divisor_images(self) -> np.ndarray:
+        """Abel images of the three test divisors of degree g - 1, shape (3, g): the table's points in the path
+        graph's box (:func:`~thetasol.curves.riemann_constant.test_abscissae`), off the critical values."""
+        from thetasol.curves.riemann_constant import test_abscissae
+        G, g = self._graph, self.genus
+        xs, sheets = test_abscissae(G.center, 0.7 * G.H, g - 1)
         pts = []
-        for _ in range(count):
-            x0 = G.center + 0.7 * G.H * (rng.uniform(-1, 1) + 1j * rng.uniform(-1, 1))
+        for x0, k in zip(xs.ravel(), sheets.ravel(), strict=True):
             if self._site_index(x0, rtol=1e-3) >= 0:
                 x0 += 0.01 * G.H
             R, _ = self._poly.roots(np.array([x0]))
-            pts.append((x0, R[0, rng.integers(self.n)]))
-        return pts
+            pts.append((complex(x0), complex(R[0, k % self.n])))
+        return self.abel_map(pts).reshape(3, g - 1, g).sum(axis=1)
 
-    def riemann_constant(self, base: Place | tuple[complex, complex] | None = None) -> np.ndarray:
-        """Vector of Riemann constants K (normalized coordinates, same base and paths as abel_map).
+    def riemann_constant(self, base: Place | tuple[complex, complex] | None = None, *,
+                         theta: RiemannTheta | None = None) -> np.ndarray:
+        """Vector of Riemann constants K (normalized coordinates, same base and paths as abel_map): for a generic
+        effective divisor D of degree g, theta(A(P) - A(D) - K) vanishes exactly at the points of D.
 
-        For a generic effective divisor D of degree g, theta(A(P) - A(D) - K) vanishes exactly at
-        the points of D.  Computed as in the literature: 2K = -A(div dx) fixes K up to a half period,
-        and the half period is the one with theta(K + A(D')) = 0 for effective D' of degree g - 1
-        (D' = (g - 1) base point and random D'): :mod:`thetasol.curves.riemann_constant`.
+        ``2K = -A(div dx)``; the half period by the library's one rule (:mod:`thetasol.curves.riemann_constant`)
+        on ``(g - 1)`` times the base point and three divisors of the table of test points.  ``base``: another
+        base point ``Q``, ``K_Q = K + (g - 1) A(Q)``; ``theta``: a RiemannTheta of :meth:`riemann_matrix` to reuse.
         """
-        from thetasol.curves.riemann_constant import choose_riemann_constant
+        from thetasol.curves.riemann_constant import riemann_constant_vector
         g = self.genus
         if g == 0:
             return np.zeros(0, complex)
         if "K" not in self._cache:
             tau = self.riemann_matrix()
             AC = self.abel_map(self.canonical_divisor())
-            rng = np.random.default_rng(12345)
-            ADs = [self.abel_map(self.generic_points(g - 1, rng)).sum(axis=0) for _ in range(3)] if g > 1 else []
-            self._cache["K"] = choose_riemann_constant(tau, AC, ADs)
+            ADs = np.zeros((1, g), complex)
+            if g > 1:
+                ADs = np.concatenate([ADs, self._test_divisor_images()])
+            self._cache["K"] = riemann_constant_vector(tau, AC, ADs, theta=theta)
         K = self._cache["K"].copy()
         if base is not None:
             K = K + (g - 1) * self.abel_map(base)

@@ -1,54 +1,84 @@
-"""The vector of Riemann constants: the half-period scan that picks it among its 2^(2g) candidates.
+"""The vector of Riemann constants: the one rule that picks it among its 2^(2g) candidates.
 
-2K = -A(div dx) fixes K up to a half period (:meth:`PlaneCurve.canonical_divisor`); the half period
-is the one with theta(K + A(D')) = 0 for effective divisors D' of degree g - 1
-(:func:`choose_riemann_constant`).
+``2K = -A(C)`` for a canonical divisor ``C`` fixes ``K`` up to a half period; the half period is the one
+with ``theta(K + A(D)) = 0`` for every effective divisor ``D`` of degree ``g - 1`` (Riemann's vanishing
+theorem; the algorithm of Deconinck and van Hoeij, Physica D 152-153 (2001) 28-46, as in abelfunctions'
+``RiemannConstantVector``).  :func:`riemann_constant_vector` applies it for every curve of the library
+(:class:`~thetasol.curves.plane_curve.PlaneCurve`, :class:`~thetasol.curves.hyperelliptic.HyperellipticCurve`
+and the spectral curves of the theta-function rotation) with one acceptance rule, on test divisors built
+from one fixed table of points (:data:`TEST_POINTS`, :func:`test_abscissae`): no random generator, so
+the choice is the same in every run and on every machine.
 
-:func:`half_period_scan` evaluates |theta| at all 4^g half periods around one point with one lattice
-sum per b (a tailored trick the general evaluator does not offer): Im(tau) is LLL-reduced by a
-unimodular change of the summation lattice (which leaves theta unchanged), and the sum runs over the
-ellipsoid pi (n + c)^T Y (n + c) <= R^2.  The zero tests on single points use the library's theta
-(:mod:`thetasol.theta.riemann`) through :func:`theta_normalized_abs`.
+The rule.  A candidate's score is the largest ``|theta(K + A(D))| exp(-pi y^T (Im tau)^-1 y)`` over the
+test divisors (the exponent-separated size: lattice periodic and bounded).  The smallest score wins
+when it is below :data:`VANISH` and the runner-up's is above both :data:`VANISH` and
+:data:`SEPARATION` times it (the runner-up does not vanish by the test that makes the winner vanish).
+When no set of test divisors decides, the smallest of the last set is taken if the runner-up vanishes
+too: on a nearly pinched cycle two candidates differ by ``exp(-pi Im tau_jj / 4)`` and both vanish to
+the accuracy of the Abel images.  Anything else is a ``RuntimeError`` (a nearly degenerate curve).
 """
 from __future__ import annotations
+
+from collections.abc import Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from thetasol.theta.lattice import lll_gram
-from thetasol.theta.riemann import riemann_theta_separated
+from thetasol.theta.riemann import RiemannTheta, riemann_theta_separated
+
+__all__ = ["PRUNE", "SEPARATION", "TEST_POINTS", "VANISH", "half_period_candidates", "riemann_constant_vector",
+           "test_abscissae", "theta_normalized_abs"]
+
+#: theta at the right candidate vanishes to the accuracy of the Abel images: the rounding level, 1e-10..1e-9
+#: on nearly degenerate curves; a score below this vanishes.
+VANISH = 1e-8
+#: A runner-up at least this many times the best score does not vanish by the same test.
+SEPARATION = 10.0
+#: Candidates scoring above this at the first test divisor can be neither chosen nor the runner-up that
+#: decides (both need a score below VANISH or above SEPARATION x the best): the other divisors skip them.
+PRUNE = 1e-7
+
+#: The points of the test divisors, one per row, for up to three divisors of degree g - 1 <= 7:
+#: ``(radius fraction, turn, sheet index)`` (uniform, uniform, one of three: pseudo-random draws kept as
+#: data, so that the choice does not depend on numpy's generator streams).
+TEST_POINTS = (
+    (0.625095466604667, 0.8972138009695755, 1),
+    (0.22520718999059186, 0.30016628491122543, 2),
+    (0.8735534453962619, 0.005265304565574724, 1),
+    (0.7970694287520462, 0.4679349528437208, 2),
+    (0.3030324268193135, 0.2784256121007733, 2),
+    (0.4450763058826466, 0.5045482589579533, 0),
+    (0.5534973520744925, 0.9955002834343927, 2),
+    (0.6221792294411627, 0.9889601476818849, 2),
+    (0.21530869823559895, 0.16021203385784455, 2),
+    (0.04394200796138337, 0.03568027877359614, 1),
+    (0.5148888202713703, 0.4662060253252891, 2),
+    (0.6292262544910104, 0.5141176465995139, 2),
+    (0.49687343539350426, 0.24751492202733083, 2),
+    (0.19240214398531064, 0.6920321208818392, 0),
+    (0.2006067239869952, 0.3695363106022067, 1),
+    (0.8300477298017456, 0.15446108106143985, 0),
+    (0.26759930456378545, 0.8803321539808286, 0),
+    (0.8471502463658693, 0.6397171669425262, 1),
+    (0.7417709473618571, 0.09149560506304566, 0),
+    (0.50777223630035, 0.8713393766928806, 1),
+    (0.3612640590141576, 0.5981840672072131, 0),
+)
 
 
-def ellipsoid_points(Y: np.ndarray, center: np.ndarray, R2: float) -> np.ndarray:
-    """Integer points n with (n + center)^T Y (n + center) <= R2 (Fincke-Pohst, breadth first).
+def test_abscissae(center: complex, radius: float, degree: int) -> tuple[np.ndarray, np.ndarray]:
+    """The points of three test divisors of the given degree from :data:`TEST_POINTS`.
 
-    Y symmetric positive definite (g x g); returns an int array (K, g).
+    Returns ``x`` (complex, shape (3, degree)) on the annulus ``0.3 <= |x - center| / radius <= 0.8`` and
+    the sheet index of each point (shape (3, degree), 0..2; callers with ``n`` sheets take it modulo
+    ``n``).  The caller lifts each ``x`` to the curve on that sheet.
     """
-    g = Y.shape[0]
-    L = np.linalg.cholesky(Y)  # Y = L L^T; use the upper factor U = L^T
-    U = L.T
-    c = np.asarray(center, dtype=float)
-    # work from the last coordinate: q = sum_i (U_ii (n_i + c_i) + sum_{j>i} U_ij (n_j + c_j))^2
-    pts = np.zeros((1, 0), dtype=np.int64)
-    rem = np.array([R2])
-    acc = np.zeros((1, g))  # partial sums sum_{j>i} U_ij (n_j + c_j) for each row i
-    for i in range(g - 1, -1, -1):
-        uii = U[i, i]
-        shift = acc[:, i] / uii + c[i]  # (n_i + shift) * uii squared is the new term
-        half = np.sqrt(np.maximum(rem, 0.0)) / uii
-        lo = np.ceil(-half - shift).astype(np.int64)
-        hi = np.floor(half - shift).astype(np.int64)
-        cnt = np.maximum(hi - lo + 1, 0)
-        if cnt.sum() == 0:
-            return np.zeros((0, g), dtype=np.int64)
-        rep = np.repeat(np.arange(len(cnt)), cnt)
-        offs = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-        ni = lo[rep] + offs
-        term = (uii * (ni + shift[rep])) ** 2
-        rem = rem[rep] - term
-        acc = acc[rep] + np.outer(ni + c[i], U[:, i])
-        pts = np.concatenate([ni[:, None], pts[rep]], axis=1)
-    return pts
+    if 3 * degree > len(TEST_POINTS):
+        raise ValueError(f"the table of test points covers divisors of degree <= {len(TEST_POINTS) // 3}, "
+                         f"got {degree}")
+    rows = TEST_POINTS[:3 * degree]
+    x = [center + radius * (0.3 + 0.5 * r) * np.exp(2j * np.pi * turn) for r, turn, _ in rows]
+    return np.array(x, complex).reshape(3, degree), np.array([k for *_, k in rows], int).reshape(3, degree)
 
 
 def theta_normalized_abs(z: ArrayLike, tau: np.ndarray, tol: float = 1e-14) -> np.ndarray:
@@ -58,94 +88,68 @@ def theta_normalized_abs(z: ArrayLike, tau: np.ndarray, tol: float = 1e-14) -> n
                                           tol=tol)[1])
 
 
-def half_period_scan(z0: np.ndarray, tau: np.ndarray, tol: float = 1e-9) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """|theta| exp(-pi y^T Y^-1 y) at all 4^g points z0 + (a + tau b)/2, a, b in {0, 1}^g.
-
-    One lattice sum per b (grouped by n mod 2, then a sign transform over a) instead of 4^g sums.
-    Returns (values (4^g,), a (4^g, g), b (4^g, g)) with a, b integer arrays.
-    """
-    z0 = np.asarray(z0, dtype=complex).ravel()
-    tau = np.asarray(tau, dtype=complex)
-    tau = 0.5 * (tau + tau.T)
-    g = len(z0)
-    U = lll_gram(tau.imag, delta=0.75).T  # columns: the reduced basis
-    Uinv = np.rint(np.linalg.inv(U)).astype(np.int64)
-    taup = U.T @ tau @ U
-    zp = U.T @ z0
-    Y, X = taup.imag, taup.real
-    Yinv = np.linalg.inv(Y)
-    m = np.rint(Yinv @ zp.imag)
-    zp = zp - taup @ m  # lattice shift: same candidate set modulo the lattice
-    c = Yinv @ zp.imag
-    x0 = zp.real
-    R2 = np.log(1.0 / tol) + 2.0 + g
-    bits = np.array([[(i >> k) & 1 for k in range(g)] for i in range(2 ** g)], dtype=np.int64)
-    sign = 1 - 2 * (np.mod(bits @ bits.T, 2))  # (-1)^{class . a}, indexed [class, a]
-    vals = np.zeros((2 ** g, 2 ** g))  # [b, a]
-    for ib, b in enumerate(bits):
-        n = ellipsoid_points(Y, 0.5 * b + c, R2 / np.pi)
-        par = np.mod(n, 2) @ (1 << np.arange(g))  # class of n mod 2
-        nf = n.astype(float)
-        mm = nf + 0.5 * b  # m_n = n + b/2
-        ww = mm + c
-        qq = ((ww @ Y) * ww).sum(axis=1)
-        phase = np.pi * ((mm @ X) * mm).sum(axis=1) + 2 * np.pi * (nf @ x0)
-        T = np.exp(1j * phase - np.pi * qq)
-        S = np.bincount(par, weights=T.real, minlength=2 ** g) + 1j * np.bincount(
-            par, weights=T.imag, minlength=2 ** g)
-        vals[ib] = np.abs(S @ sign)
-    # back to the original (a, b): a = U^-T a' (mod 2), b = U b' (mod 2)
-    A_out, B_out, V_out = [], [], []
-    for ib, bp in enumerate(bits):
-        for ia, ap in enumerate(bits):
-            A_out.append(np.mod(Uinv.T @ ap, 2))
-            B_out.append(np.mod(U @ bp, 2))
-            V_out.append(vals[ib, ia])
-    return np.array(V_out), np.array(A_out, dtype=np.int64), np.array(B_out, dtype=np.int64)
+def half_period_candidates(canonical_image: ArrayLike, tau: np.ndarray) -> np.ndarray:
+    """The 4^g half-period translates ``-A(C)/2 + (a + tau b)/2``, ``a, b`` in ``{0, 1}^g``, shape (4^g, g)."""
+    AC = np.asarray(canonical_image, complex)
+    g = len(AC)
+    bits = (np.arange(2 ** g)[:, None] >> np.arange(g)[None, :]) & 1
+    a_, b_ = np.repeat(bits, 2 ** g, axis=0), np.tile(bits, (2 ** g, 1))
+    return -0.5 * AC + 0.5 * a_ + 0.5 * (b_ @ tau.T)
 
 
-def choose_riemann_constant(tau: np.ndarray, AC: np.ndarray, ADs: list) -> np.ndarray:
-    """The Riemann constant K (normalized coordinates) from ``2K = -AC`` and the zero test.
+def _scores(theta: RiemannTheta, cands: np.ndarray, ADs: np.ndarray) -> np.ndarray:
+    """max over the test divisors of the separated |theta(cand + A(D))|: every candidate at the first
+    divisor, the candidates within :data:`PRUNE` at the others (in one call)."""
+    score = np.abs(theta.separated(cands + ADs[0][None, :])[1])
+    live = np.flatnonzero(score <= PRUNE)
+    if len(ADs) > 1 and len(live):
+        z = (cands[live][None, :, :] + ADs[1:, None, :]).reshape(-1, cands.shape[1])
+        v = np.abs(theta.separated(z)[1]).reshape(len(ADs) - 1, len(live))
+        score[live] = np.maximum(score[live], v.max(axis=0))
+    return score
+
+
+def riemann_constant_vector(tau: np.ndarray, canonical_image: ArrayLike, divisor_images: Sequence[ArrayLike] | np.ndarray,
+                            *, theta: RiemannTheta | None = None, final: bool = True) -> np.ndarray | None:
+    """The vector of Riemann constants by the rule of the module docstring.
 
     Parameters
     ----------
     tau : ndarray, shape (g, g)
         Riemann matrix.
-    AC : ndarray, shape (g,)
-        Abel image of a canonical divisor (the divisor of dx).
-    ADs : list of ndarray, shape (g,)
-        Abel images of random effective divisors D' of degree g - 1 (empty for genus 1).
+    canonical_image : array_like, shape (g,)
+        Abel image ``A(C)`` of a canonical divisor (normalized coordinates, the base of ``K``).
+    divisor_images : array_like, shape (n, g)
+        Abel images of ``n >= 1`` effective divisors of degree ``g - 1`` (same base; ``(g - 1)`` times
+        the base point has image 0).
+    theta : RiemannTheta, optional
+        A theta of ``tau`` to reuse (its set-up is most of the cost).
+    final : bool
+        False: return None instead of accepting a near tie or raising, so that the caller can test
+        other divisors.
 
     Returns
     -------
-    ndarray, shape (g,)
-        The half-period translate of ``-AC / 2`` at which theta vanishes at ``(g - 1)`` times the
-        base point and at every ``D'``.
+    ndarray, shape (g,), or None
+        ``K`` in normalized coordinates.
 
     Raises
     ------
     RuntimeError
-        No candidate makes theta vanish unambiguously (a nearly degenerate curve).
+        (``final``) No candidate makes theta vanish unambiguously (a nearly degenerate curve).
     """
-    g = tau.shape[0]
-    K0 = -0.5 * AC
-    vals, a_bits, b_bits = half_period_scan(K0, tau, tol=1e-12)
-    cands = K0[None, :] + 0.5 * a_bits + 0.5 * (b_bits @ tau.T)
-    # D' = (g - 1) * base point: theta(K) = 0; keep the few smallest, then the random D'
-    keep = np.argsort(vals)[:min(len(vals), 8)]
-    cands = cands[keep]
-    score = vals[keep]
-    if ADs:
-        z = cands[None, :, :] + np.array(ADs)[:, None, :]  # one theta set-up for all D'
-        score = np.maximum(score, theta_normalized_abs(z.reshape(-1, g), tau, tol=1e-15)
-                           .reshape(len(ADs), -1).max(axis=0))
+    tau = np.asarray(tau, complex)
+    theta = RiemannTheta(tau) if theta is None else theta
+    ADs = np.atleast_2d(np.asarray(divisor_images, complex))
+    cands = half_period_candidates(canonical_image, tau)
+    score = _scores(theta, cands, ADs)
     order = np.argsort(score)
-    best, second = score[order[0]], score[order[1]] if len(order) > 1 else np.inf
-    # theta at the right candidate vanishes to rounding level; on a nearly degenerate curve
-    # (a nearly pinched cycle, Im tau_ii large) a wrong candidate can be small too, but not
-    # at rounding level
-    if not (best < 1e-8 and second > 10 * best):
-        raise RuntimeError(f"Riemann constant: no half-period candidate makes theta vanish "
-                           f"unambiguously (best {best:.2g}, next {second:.2g}); nearly "
-                           f"degenerate curve?")
-    return cands[order[0]]
+    best, second = score[order[0]], score[order[1]]
+    if best < VANISH and second > max(VANISH, SEPARATION * best):
+        return cands[order[0]]
+    if not final:
+        return None
+    if best < VANISH and second < VANISH:
+        return cands[order[0]]
+    raise RuntimeError(f"Riemann constant: no half-period candidate makes theta vanish unambiguously "
+                       f"(best {best:.2g}, next {second:.2g}); nearly degenerate curve?")

@@ -197,10 +197,10 @@ def _curve_setup(I, center, Q0, omega0, mass, gravity) -> _CurveSetup:
     y2 = -d2 * np.sign(s1 - s2) * np.sqrt(max(np.polyval(coef, s2), 0.0))
     curve = HyperellipticCurve.from_roots(roots, -4.0)
     theta = RiemannTheta(curve.riemann_matrix())
-    z0 = curve.abel_map([s1, s2], [y1, y2]).sum(axis=0)
+    z0 = curve.abel_map([(s1, y1), (s2, y2)]).sum(axis=0)
     # the curve's differentials are s^i ds / y = 2 s^i ds / f_y: V_i = N[:, i] / 2 in PlaneCurve's terms
     return _CurveSetup(frame, (s1, s2), l1, l, k, curve, theta, z0, curve.normalization(),
-                       curve.riemann_constant(theta))
+                       curve.riemann_constant(theta=theta))
 
 
 def kovalevskaya_separated_flow(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, mass: float,

@@ -1,5 +1,6 @@
 """Fixed "random" data of the set-up: directions for the normalization vectors of the eigenvector
-divisors (stage 2) and the points of the Riemann constant's fallback test divisors (stage 3).
+divisors (stage 2; the points of the Riemann constant's test divisors are the curves' table,
+:data:`thetasol.curves.riemann_constant.TEST_POINTS`).
 
 Any data in general position serve: these are pseudo-random draws, kept as data so that the set-up
 does not depend on numpy's generator, whose streams may change between numpy versions (NEP 19), and
@@ -76,18 +77,4 @@ DIVISOR_CANDIDATES = (
     (-0.011981242530931552, 0.5151227322381382, 0.7934773811652625),
     (-0.4856877130482538, 0.6229805355770958, 0.4687472299686931),
     (1.1137403552888805, 0.5786591653700742, 0.08888822501054082),
-)
-
-#: Points of :func:`.riemann._fallback_divisor_constant`, one per row for up to three divisors of degree
-#: g - 1 <= 3: ``(radius fraction, turn, eigenvalue index)`` (uniform, uniform, one of three).
-DIVISOR_POINTS = (
-    (0.625095466604667, 0.8972138009695755, 1),
-    (0.22520718999059186, 0.30016628491122543, 2),
-    (0.8735534453962619, 0.005265304565574724, 1),
-    (0.7970694287520462, 0.4679349528437208, 2),
-    (0.3030324268193135, 0.2784256121007733, 2),
-    (0.4450763058826466, 0.5045482589579533, 0),
-    (0.5534973520744925, 0.9955002834343927, 2),
-    (0.6221792294411627, 0.9889601476818849, 2),
-    (0.21530869823559895, 0.16021203385784455, 2),
 )

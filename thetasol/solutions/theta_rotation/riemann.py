@@ -10,7 +10,8 @@ sit in a cluster of branch points): ``div(psi_k)`` gives ``e_k = A(Z_k) + K`` an
 sum_j inf_j`` gives ``d_k = sum_s A(P_s) - A(D0) - K``.  ``K`` comes from a canonical divisor made of
 regular places: ``2 (P_1 + P_2 + P_3)``, the divisor of ``E^2 dE / f_w``, when there is no node, else
 that of ``E dE / f_w`` (the regular places over ``E = 0`` and the places at infinity), with Riemann's
-vanishing theorem choosing among the half-period candidates.
+vanishing theorem choosing among the half-period candidates (the library's one rule,
+:mod:`thetasol.curves.riemann_constant`).
 """
 from __future__ import annotations
 
@@ -20,8 +21,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from thetasol.curves.plane_curve import Numerator
+from thetasol.curves.riemann_constant import riemann_constant_vector, test_abscissae
 from thetasol.mechanics.lax import lax_matrix
-from thetasol.solutions.theta_rotation._directions import DIVISOR_POINTS
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.lattice import reduce_lattice
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
@@ -30,16 +31,6 @@ if TYPE_CHECKING:
     from thetasol.curves.plane_curve import Place
 
 __all__ = ["ThetaShifts", "theta_shifts"]
-
-#: Riemann constant: half-period candidates whose theta exceeds this at one divisor are dropped
-#: (the choice needs the best score below 1e-8 and the runner-up above 10 x that or below 1e-8).
-PRUNE = 1e-7
-#: Riemann constant from the divisors of stage 2: accepted when the runner-up's theta exceeds this
-#: and 100 x the best, i.e. does not vanish by the test that makes the best vanish (runner-ups on the
-#: 13 reference bodies: 1.1e-7 nearly_symmetric, 3.9e-7 near_unstable_equilibrium, 1e-2 generic); a
-#: closer call, such as the near tie of a nearly pinched cycle, goes to three fixed divisors
-CLEAR = 1e-8
-
 
 @dataclass(frozen=True, eq=False)
 class ThetaShifts:
@@ -101,82 +92,44 @@ def canonical_divisor(sd: SpectralData) -> dict:
     return {Pl: m for Pl, m in canon.items() if m != 0}
 
 
-def _candidates(AC: np.ndarray, tau: np.ndarray) -> np.ndarray:
-    """The 4^g half-period translates of ``-AC / 2``, shape (4^g, g)."""
-    g = len(AC)
-    bits = (np.arange(2 ** g)[:, None] >> np.arange(g)[None, :]) & 1
-    a_, b_ = np.repeat(bits, 2 ** g, axis=0), np.tile(bits, (2 ** g, 1))
-    return -0.5 * AC + 0.5 * a_ + 0.5 * (b_ @ tau.T)
-
-
-def _scores(th, cands: np.ndarray, ADs: np.ndarray) -> np.ndarray:
-    """max over the divisors D' of |theta(cand + A(D'))| (separated): every candidate at the first
-    divisor, the candidates within PRUNE at the others in one call (a call costs ~1.2 ms set-up)."""
-    score = np.abs(th(cands + ADs[0][None, :], separated=True)[1])
-    # a candidate scoring above PRUNE can be neither the choice nor the runner-up that decides
-    # the test of the callers (both need a score < 1e-8 or 10 x the best): the later divisors skip it
-    live = np.flatnonzero(score <= PRUNE)
-    if len(ADs) > 1 and len(live):
-        z = (cands[live][None, :, :] + ADs[1:, None, :]).reshape(-1, cands.shape[1])
-        v = np.abs(th(z, separated=True)[1]).reshape(len(ADs) - 1, len(live))
-        score[live] = np.maximum(score[live], v.max(axis=0))
-    return score
-
-
 def riemann_constant(sd: SpectralData, canon: dict, dv: EigenvectorDivisors | None = None) -> np.ndarray:
     """Vector of Riemann constants K in the adapted normalized coordinates, the curve's base point.
 
-    2K = -A(C) for the canonical divisor C (``canon``, place -> order, :func:`canonical_divisor`).
-    Of the 4^g candidates the one with theta(K + A(D')) = 0 for effective D' of degree g - 1 is
-    taken (Riemann's vanishing theorem).  With ``dv`` the D' are made of the points of stage 2 (the
-    poles ``D0`` and zeros ``Z_k``, whose Abel images are known) and the places over ``E = 0`` reuse
-    stage 2's images; unless that choice is clear-cut (best < 1e-8, runner-up > ``CLEAR`` and
-    100 x best), three fixed divisors decide (:func:`_fallback_divisor_constant`).  Only regular places are involved, so
-    clustered branch points do not matter.
+    2K = -A(C) for the canonical divisor C (``canon``, place -> order, :func:`canonical_divisor`), and the
+    half period by the rule of :func:`thetasol.curves.riemann_constant.riemann_constant_vector`.  With
+    ``dv`` the test divisors are first made of the points of stage 2 (the poles ``D0`` and zeros ``Z_k``,
+    whose Abel images are known) and the places over ``E = 0`` reuse stage 2's images; when they do not
+    decide, three divisors of the fixed table of test points do (:func:`_table_divisor_constant`).  Only
+    regular places are involved, so clustered branch points do not matter.
     """
     g = sd.genus
     if dv is None or g < 2 or len(dv.A_points) < 2 * (g - 1):
-        return _fallback_divisor_constant(sd, canon)
+        return _table_divisor_constant(sd, canon)
     known = {Pl: i for i, Pl in enumerate(sd.P0)}
     rest = [Pl for Pl in canon if Pl not in known]
     A_rest = iter(sd.abel(rest)) if rest else iter(())
     rows = np.array([dv.AP0_raw[known[Pl]] if Pl in known else next(A_rest) for Pl in canon])
     AC = np.array([canon[P] for P in canon], float) @ rows
-    cands = _candidates(AC, sd.theta.tau)
     n = min(3, len(dv.A_points) // (g - 1))
-    score = _scores(sd.theta, cands, dv.A_points[:n * (g - 1)].reshape(n, g - 1, g).sum(axis=1))
-    order = np.argsort(score)
-    if score[order[0]] < 1e-8 and score[order[1]] > max(CLEAR, 100.0 * score[order[0]]):
-        return cands[order[0]]
-    return _fallback_divisor_constant(sd, canon)
+    K = riemann_constant_vector(sd.theta.tau, AC, dv.A_points[:n * (g - 1)].reshape(n, g - 1, g).sum(axis=1),
+                                theta=sd.theta, final=False)
+    return _table_divisor_constant(sd, canon) if K is None else K
 
 
-def _fallback_divisor_constant(sd: SpectralData, canon: dict) -> np.ndarray:
+def _table_divisor_constant(sd: SpectralData, canon: dict) -> np.ndarray:
     """:func:`riemann_constant` tested on three effective divisors of degree g - 1 in general position
-    (fixed points, :mod:`._directions`)."""
+    (:func:`thetasol.curves.riemann_constant.test_abscissae`, each ``E`` lifted to the eigenvalue ``w`` of
+    the listed index)."""
     th, curve = sd.theta, sd.curve
     Jp, M, u = sd.frame.Jp, curve.M, curve.u
     g = th.g
     places = list(canon)
     scale = float(np.abs(np.asarray(curve.branch_points)).max())
-    pts = []
-    for r, turn, k in DIVISOR_POINTS[:3 * (g - 1)]:     # three effective divisors of degree g - 1
-        E = scale * (0.3 + 0.5 * r) * np.exp(2j * np.pi * turn)
-        pts.append((E, np.linalg.eigvals(lax_matrix(Jp, M, u, E))[k]))
+    E, sheet = test_abscissae(0.0, scale, g - 1)
+    pts = [(e, np.linalg.eigvals(lax_matrix(Jp, M, u, e))[k]) for e, k in zip(E.ravel(), sheet.ravel(), strict=True)]
     A_all = sd.abel(places + pts)                       # one call: the paths are planned together
     AC = np.array([canon[P] for P in places], float) @ A_all[:len(places)]
-    cands = _candidates(AC, th.tau)
-    score = _scores(th, cands, A_all[len(places):].reshape(3, g - 1, g).sum(axis=1))
-    order = np.argsort(score)
-    # Near a pinched cycle two candidates differ only by exp(-pi Im tau_jj / 4) and give theta
-    # functions equal to that size: the smallest is taken when both vanish to the accuracy of the
-    # Abel images (1e-10..1e-9 on nearly degenerate curves).  A wrong choice would show in the
-    # consistency checks of the set-up (imaginary exponents, size of the shift correction).
-    best, nxt = score[order[0]], score[order[1]]
-    if not (best < 1e-8 and (best < 0.1 * nxt or nxt < 1e-8)):
-        raise RuntimeError(f"Riemann constant: no half-period candidate makes theta vanish "
-                           f"(best {score[order[0]]:.2g}, next {score[order[1]]:.2g})")
-    return cands[order[0]]
+    return riemann_constant_vector(th.tau, AC, A_all[len(places):].reshape(3, g - 1, g).sum(axis=1), theta=th)
 
 
 def theta_shifts(sd: SpectralData, dv: EigenvectorDivisors) -> ThetaShifts:
