@@ -67,6 +67,7 @@ _group("thetasol.theta.riemann", "RiemannTheta", "riemann_theta", "riemann_theta
 _group("thetasol.theta.grid", "theta_grid", "ThetaGrid")
 _group("thetasol.curves.plane_curve", "Numerator", "PlaneCurve", "Place")
 _group("thetasol.curves.hyperelliptic", "HyperellipticCurve")
+_group("thetasol.curves.protocol", "Curve")
 _group("thetasol.curves.spectral", "SpectralCurve", "spectral_curve")
 
 __all__ = sorted(_API) + ["reference", "__version__"]
@@ -93,6 +94,7 @@ if TYPE_CHECKING:
     from thetasol import reference
     from thetasol.curves.hyperelliptic import HyperellipticCurve
     from thetasol.curves.plane_curve import Numerator, Place, PlaneCurve
+    from thetasol.curves.protocol import Curve
     from thetasol.curves.spectral import SpectralCurve, spectral_curve
     from thetasol.ensembles import solve_many
     from thetasol.integrators.fixed_point import integrate_fixed_point
