@@ -89,8 +89,9 @@ def principal_frame(Jm: np.ndarray, *, ascending: bool = False) -> tuple[np.ndar
 
     ``ascending=False``: a diagonal ``Jm`` keeps its own axes (``R = 1``, ``Jp`` in the body's order), so
     that principal data pass through unchanged; ``ascending=True``: always the eigen-decomposition, ``Jp``
-    ascending (the order in which the theta-function and Neumann models number the axes).  Any other
-    ``Jm`` is eigen-decomposed either way, with the third axis flipped if needed to make ``det R = 1``.
+    ascending (for models that number the axes by size).  Any other ``Jm`` (any symmetric matrix: second
+    moments, a potential) is eigen-decomposed either way, with the third axis flipped if needed to make
+    ``det R = 1``.
     """
     off = Jm - np.diag(np.diag(Jm))
     if not ascending and not np.any(off):

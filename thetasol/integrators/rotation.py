@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.attitude import principal_frame
 from thetasol.core.so3 import polar_orthonormalize
 from thetasol.core.threads import single_blas_thread
 from thetasol.integrators._common import both_ways, extended_inertia, heyoka_and_type, solve_ivp_mQ
@@ -193,8 +194,7 @@ def _yoshida_weights(order: int) -> list[float]:
 
 def _splitting(Jm, am, Q0, m0, tgrid, rtol, step, w0):
     # Work in the principal frame: J = P diag(Jp) P^T, Q' = Q P, m' = P^T m.
-    Jp, P = np.linalg.eigh(Jm)
-    P[:, 2] *= np.sign(np.linalg.det(P))  # a right-handed principal frame: the flows use cross products
+    Jp, P = principal_frame(Jm, ascending=True)  # right-handed: the flows use cross products
     Ip = Jp.sum() - Jp
     Qp = Q0 @ P
     mp = P.T @ m0

@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from thetasol.core.attitude import principal_frame
 from thetasol.core.periodic import eval_series, integrated, powers, refined_fft, sum_series
 from thetasol.mechanics.equations import invariants as _invariants
 from thetasol.protocol import ClosedFormUnavailable, RotationSolution
@@ -342,8 +343,7 @@ def _reduce(Jp, P, ax, a, Q0, omega0) -> _Reduced:
     gamma0 = Q0p[:, ax]
     gdot0 = Q0p @ np.cross(w0p, e_ax)
     K = (j3 - j) / I1 * a
-    k, V = np.linalg.eigh(K)
-    V[:, 2] *= np.sign(np.linalg.det(V))
+    k, V = principal_frame(K, ascending=True)
     x0 = V.T @ gamma0
     y0 = V.T @ gdot0
     x0 = x0 / np.linalg.norm(x0)

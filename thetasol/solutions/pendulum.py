@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from thetasol.core.attitude import principal_frame
 from thetasol.core.so3 import rotation_about
 from thetasol.mechanics.equations import invariants as _invariants
 from thetasol.protocol import RotationSolution
@@ -50,8 +51,7 @@ class PendulumRotation(RotationSolution):
 
 def _axis_of(J, a, Q0, omega0):
     """The principal axis index i (in the principal frame) if the pendulum case applies, else None."""
-    Jp, P = np.linalg.eigh(J)
-    P[:, 2] *= np.sign(np.linalg.det(P))
+    Jp, P = principal_frame(J, ascending=True)
     wp = P.T @ omega0
     Qp = Q0 @ P
     B = Qp.T @ a @ Qp
