@@ -25,6 +25,7 @@ import numpy as np
 from _common import best_of, machine_info
 
 from thetasol import integrate_rotation, solve_rotation
+from thetasol.mechanics.equations import inertia
 
 Z = np.zeros((3, 3))
 
@@ -66,22 +67,22 @@ def dense(name, data, quick):
     cost, out = best_of(lambda: solve_rotation(J, Z, Q0, w0)(t), repeat=5)
     rows.append(("thetasol closed form (float64)", cost, err(out, ref)))
     for rtol in ([1e-6, 1e-9] if quick else [1e-6, 1e-9, 1e-12, 1e-13]):
-        cost, out = best_of(lambda: integrate_rotation(J, Z, Q0, w0, t, rtol=rtol, atol=1e-3 * rtol),
+        cost, out = best_of(lambda: integrate_rotation(inertia(J), Z, Q0, w0, rtol=rtol, atol=1e-3 * rtol)(t),
                             repeat=1)
         rows.append((f"DOP853 rtol={rtol:g}", cost, err(out, ref)))
     for rtol in ([1e-6] if quick else [1e-6, 1e-9, 1e-12]):
-        cost, out = best_of(lambda: integrate_rotation(J, Z, Q0, w0, t, rtol=rtol, method="splitting"),
+        cost, out = best_of(lambda: integrate_rotation(inertia(J), Z, Q0, w0, rtol=rtol, method="splitting")(t),
                             repeat=1)
         rows.append((f"splitting (order 6), rtol={rtol:g}", cost, err(out, ref)))
     try:
         import heyoka  # noqa: F401
 
-        for dtype, tol in (("dbl", 1e-16), ("ldbl", 1e-19)):
+        for label, fp, tol in (("dbl", float, 1e-16), ("ldbl", np.longdouble, 1e-19)):
             # the first call compiles; report the second
-            integrate_rotation(J, Z, Q0, w0, t[:3], rtol=tol, method="heyoka", dtype=dtype)
-            cost, out = best_of(lambda: integrate_rotation(J, Z, Q0, w0, t, rtol=tol, method="heyoka",
-                                                           dtype=dtype), repeat=1)
-            rows.append((f"heyoka {dtype} tol={tol:g} (2nd call, compiled code cached)", cost, err(out, ref)))
+            integrate_rotation(inertia(J), Z, Q0, w0, rtol=tol, method="heyoka", fp_type=fp)(t[:3])
+            cost, out = best_of(lambda: integrate_rotation(inertia(J), Z, Q0, w0, rtol=tol, method="heyoka",  # noqa: B023
+                                                           fp_type=fp)(t), repeat=1)  # noqa: B023
+            rows.append((f"heyoka {label} tol={tol:g} (2nd call, compiled code cached)", cost, err(out, ref)))
     except ImportError:
         rows.append(("heyoka", np.nan, np.nan))
     print("| method | wall time [s] | max error (omega, Q) |\n|---|---|---|")
@@ -106,13 +107,13 @@ def far(name, data, quick):
         cost, out = best_of(lambda: sol(tt), repeat=5, number=200)
         e = err(out, ref)
         if T <= 1e3 and not (quick and T > 1):
-            cd, od = best_of(lambda: integrate_rotation(J, Z, Q0, w0, tt, rtol=1e-13, atol=1e-16), repeat=1)
+            cd, od = best_of(lambda: integrate_rotation(inertia(J), Z, Q0, w0, rtol=1e-13, atol=1e-16)(tt), repeat=1)
             dcol = f"{cd:.3g} | {err(od, ref):.1e}"
         else:
             dcol = "(~2 s per 1000 time units) | -"
         if has_hy and not (quick and T > 1e3):
-            integrate_rotation(J, Z, Q0, w0, np.array([1e-3]), rtol=1e-16, method="heyoka")
-            ch, oh = best_of(lambda: integrate_rotation(J, Z, Q0, w0, tt, rtol=1e-16, method="heyoka"),
+            integrate_rotation(inertia(J), Z, Q0, w0, rtol=1e-16, method="heyoka")(np.array([1e-3]))
+            ch, oh = best_of(lambda: integrate_rotation(inertia(J), Z, Q0, w0, rtol=1e-16, method="heyoka")(tt),
                              repeat=1)
             hcol = f"{ch:.3g} | {err(oh, ref):.1e}"
         else:
@@ -160,13 +161,13 @@ def conditioning(name, data, quick):
 
 def heyoka_check(data):
     try:
-        import heyoka  # noqa: F401
+        import heyoka as hy
     except ImportError:
         return
     J, Q0, w0 = data
     t = np.array([10.0, 100.0])
     r = reference(data, t)
-    h = integrate_rotation(J, Z, Q0, w0, t, rtol=1e-32, method="heyoka", dtype="f128")
+    h = integrate_rotation(inertia(J), Z, Q0, w0, rtol=1e-32, method="heyoka", fp_type=hy.real128)(t)
     print(f"\nreference check: mpmath closed form vs heyoka float128 (tol 1e-32) at t = 10, 100: "
           f"{err(r, h):.1e} (float64 rounding of both)")
 

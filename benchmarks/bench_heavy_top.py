@@ -75,10 +75,10 @@ def _method_rows(case, t, ref, quick, repeat, warm):
     cost, out = best_of(lambda: solve_heavy_top(I, c, Q0, w0, **kw)(t), repeat=repeat)
     rows = [("closed form (set-up + evaluation)", cost, err(out, ref))]
     for rtol in ([1e-9] if quick else [1e-9, 1e-12]):
-        cost, out = best_of(lambda rtol=rtol: integrate_heavy_top(I, c, Q0, w0, t, rtol=rtol, **kw), repeat=1)
+        cost, out = best_of(lambda rtol=rtol: integrate_heavy_top(I, c, Q0, w0, rtol=rtol, **kw)(t), repeat=1)
         rows.append((f"DOP853 rtol={rtol:g}", cost, err(out, ref)))
-    integrate_heavy_top(I, c, Q0, w0, warm, method="heyoka", rtol=1e-16, **kw)
-    cost, out = best_of(lambda: integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", rtol=1e-16, **kw), repeat=1)
+    integrate_heavy_top(I, c, Q0, w0, method="heyoka", rtol=1e-16, **kw)(warm)
+    cost, out = best_of(lambda: integrate_heavy_top(I, c, Q0, w0, method="heyoka", rtol=1e-16, **kw)(t), repeat=1)
     rows.append(("heyoka float64 tol=1e-16", cost, err(out, ref)))
     return rows
 
@@ -87,7 +87,7 @@ def dense(name, case, T, quick):
     I, c, Q0, w0, kw = case
     t = np.linspace(0.0, T, 1001)
     t0 = time.perf_counter()
-    ref = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **kw)
+    ref = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **kw)(t)
     tref = time.perf_counter() - t0
     print(f"\n## {name}: 1001 points on [0, {T:g}]  (reference: heyoka 80-bit, tol 1e-19, {tref:.2f} s "
           "including compilation)")
@@ -103,7 +103,7 @@ def far(name, case, T, quick):
     """The state at the single time ``T``: every method integrates (or evaluates) once."""
     I, c, Q0, w0, kw = case
     t = np.array([T])
-    ref = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **kw)
+    ref = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **kw)(t)
     rows = _method_rows(case, t, ref, quick, repeat=3, warm=t[:1] * 1e-3)
     print(f"| {name.split(' (')[0]} | " + " | ".join(f"{r[1]:.3g} s, {r[2]:.1e}" for r in rows) + " |")
 

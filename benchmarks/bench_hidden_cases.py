@@ -16,6 +16,7 @@ from _common import machine_info
 
 import thetasol as ts
 from thetasol.core.so3 import rodrigues
+from thetasol.mechanics.equations import inertia
 
 T = np.array([0.7, 3.1, 17.3, 102.0, 997.0, 4002.0])
 KINDS = ["generic", "saddle", "fast", "slow", "nearly-symmetric", "rank-one", "near-eq", "symmetric",
@@ -87,7 +88,7 @@ def main(seed: int = 2026, count: int = 45, f128: bool = False) -> None:
                 print(f"{i:3d} {kind:19s} refused: {exc}")
                 continue
         w, Q = sol(T)
-        wr, Qr = ts.integrate_rotation(J, a, Q0, w0, T, method="heyoka", dtype="ldbl", rtol=1e-19)
+        wr, Qr = ts.integrate_rotation(inertia(J), a, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19)(T)
         err = np.maximum(np.abs(w - wr).max(axis=1), np.abs(Q - Qr).max(axis=(1, 2)))
         rows.append((err.max(), i, kind, J, a, Q0, w0))
         worst[kind] = max(worst.get(kind, 0.0), err.max())
@@ -95,9 +96,11 @@ def main(seed: int = 2026, count: int = 45, f128: bool = False) -> None:
               + " ".join(f"{e:.1e}" for e in err), flush=True)
     print("worst per kind against 80-bit heyoka: " + ", ".join(f"{k} {v:.1e}" for k, v in worst.items()))
     if f128 and rows:
+        import heyoka as hy
+
         e, i, kind, J, a, Q0, w0 = max(rows, key=lambda r: r[0])
         w, Q = ts.solve_rotation(J, a, Q0, w0)(T)
-        wr, Qr = ts.integrate_rotation(J, a, Q0, w0, T, method="heyoka", dtype="f128", rtol=1e-32)
+        wr, Qr = ts.integrate_rotation(inertia(J), a, Q0, w0, method="heyoka", fp_type=hy.real128, rtol=1e-32)(T)
         err = np.maximum(np.abs(w - wr).max(axis=1), np.abs(Q - Qr).max(axis=(1, 2)))
         print(f"worst body ({i}, {kind}) against quadruple-precision heyoka: " + " ".join(f"{x:.1e}" for x in err))
 

@@ -30,6 +30,7 @@ from test_neumann import CASES, T_FAR  # noqa: E402
 from test_neumann_point import CASES as POINT_CASES, _data, _errors, _scales  # noqa: E402
 
 from thetasol import integrate_rotation, solve_rotation  # noqa: E402
+from thetasol.mechanics.equations import inertia
 from thetasol.solutions.neumann import solve_neumann  # noqa: E402
 
 T_POINT = np.array([0.7, 3.1, 17.3, 102.0, 1000.0])
@@ -56,7 +57,7 @@ def rotation():
         errs = ["-"] * len(T_FAR)
         if have:
             w, Q = sol(T_FAR)
-            wr, Qr = integrate_rotation(J, a, Q0, w0, T_FAR, method="heyoka", dtype="ldbl", rtol=1e-19)
+            wr, Qr = integrate_rotation(inertia(J), a, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19)(T_FAR)
             e = np.maximum(np.abs(w - wr).max(-1), np.abs(Q - Qr).max((-1, -2)))
             errs = [f"{x:.1e}" for x in e]
         print(f"| {label} | {sol.method} | {setup:.3f} | {ev:.1f} | {cpu:.1f} | " + " | ".join(errs) + " |")

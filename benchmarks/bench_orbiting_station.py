@@ -22,6 +22,7 @@ from _common import best_of, machine_info  # noqa: E402
 from thetasol.core.so3 import rodrigues  # noqa: E402
 from thetasol.integrators.multibody_gravity import integrate_multibody_gravity  # noqa: E402
 from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation  # noqa: E402
+from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.gravity_gradient import orbit_frame  # noqa: E402
 from thetasol.scenes.format import load_scene  # noqa: E402
 from thetasol.solutions.kepler import KeplerOrbit  # noqa: E402
@@ -76,10 +77,10 @@ def rotation_table():
         else:
             Q0, w0 = F0 @ rodrigues([0.4, 1.1, -0.3]), np.array([3.0, -7.0, 5.0]) * n
         ts = np.linspace(0, 20 * orb.period, 6)[1:]
-        args = (J_SAT, orb, Q0, w0, ts)
-        t_h, (wr, Qr) = best_of(lambda a=args: integrate_orbiting_rotation(*a, method="heyoka", dtype="ldbl",
-                                                                           rtol=1e-19), repeat=1, clock=CPU)
-        t_d, (w, Q) = best_of(lambda a=args: integrate_orbiting_rotation(*a), repeat=1, clock=CPU)
+        args = (inertia(J_SAT), orb, Q0, w0)
+        t_h, (wr, Qr) = best_of(lambda a=args: integrate_orbiting_rotation(*a, method="heyoka", fp_type=np.longdouble,
+                                                                           rtol=1e-19)(ts), repeat=1, clock=CPU)
+        t_d, (w, Q) = best_of(lambda a=args: integrate_orbiting_rotation(*a)(ts), repeat=1, clock=CPU)
         err = max(np.abs(Q - Qr).max(), np.abs(w - wr).max() / np.abs(wr).max())
         print(f"| e = {e}, {kind} | DOP853 | {t_d:.2f} | {err:.1e} |")
         print(f"| e = {e}, {kind} | heyoka 80-bit (reference) | {t_h:.2f} | - |")
@@ -92,7 +93,7 @@ def rotation_table():
         w0 = np.array([0.0, 0.0, n * (1 + thd)])
         sol = solve_orbiting_rotation(J_SAT, orb, Q0, w0)
         ts = np.linspace(0, 20 * orb.period, 6)[1:]
-        wr, Qr = integrate_orbiting_rotation(J_SAT, orb, Q0, w0, ts, method="heyoka", dtype="ldbl", rtol=1e-19)
+        wr, Qr = integrate_orbiting_rotation(inertia(J_SAT), orb, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19)(ts)
         w, Q = sol(ts)
         err = max(np.abs(Q - Qr).max(), np.abs(w - wr).max() / np.abs(wr).max())
         many = np.linspace(0, 1e6 * orb.period, 100000)
@@ -119,8 +120,7 @@ def station_table(orbits: int = 2):
     t_all, _ = best_of(lambda: sol(t), clock=CPU)
     print(f"| the whole split, bodies placed | - | {t_all * 1e3:.1f} ms |")
     o = sol.orbit
-    t_mb, mb = best_of(lambda: integrate_multibody_gravity(scene.config, o.mu, o.r0, o.v0, scene.Q0, scene.omega0, t,
-                                                           points=scene.orbit.points), repeat=1, clock=CPU)
+    t_mb, mb = best_of(lambda: integrate_multibody_gravity(scene.config, KeplerOrbit(o.mu, o.r0, o.v0), scene.Q0, scene.omega0, t, points=scene.orbit.points), repeat=1, clock=CPU)
     print(f"| unsplit station, exact 1/r field (rtol 1e-12) | maximal coordinates, {mb.info['nfev']} right-hand "
           f"sides | {t_mb:.2f} s |")
 

@@ -260,7 +260,7 @@ def group_rotation_extra(rec, refs):
     J, a, Q0, w0 = np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"])
 
     def integ():
-        w, Q = integrate_rotation(J, a, Q0, w0, np.array([0.0, 0.7, 3.1, 17.3]), rtol=1e-12)
+        w, Q = integrate_rotation(thetasol.inertia(J), a, Q0, w0, rtol=1e-12)(np.array([0.0, 0.7, 3.1, 17.3]))
         rec.num("integrate_rotation/generic/omega", w)
         rec.num("integrate_rotation/generic/Q", Q)
     rec.guard("integrate_rotation/generic", integ)

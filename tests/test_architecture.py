@@ -87,6 +87,27 @@ def test_no_import_cycles():
     assert _cycles(edges) == []
 
 
+def test_numerical_references_do_not_import_the_closed_forms():
+    """The references check the closed forms, so no chain of imports (function-level ones included) leads
+    from thetasol.integrators to thetasol.solutions; the reverse would make a closed form depend on what checks it."""
+    edges = _import_graph()
+
+    def reaches(start: str, target: str) -> list[str]:
+        seen, todo = set(), [m for m in edges if m == start or m.startswith(start + ".")]
+        while todo:
+            m = todo.pop()
+            if m.startswith(target):
+                return [m]
+            if m not in seen:
+                seen.add(m)
+                todo.extend(edges.get(m, ()))
+        return []
+
+    assert reaches("thetasol.integrators", "thetasol.solutions") == []
+    assert reaches("thetasol.solutions", "thetasol.integrators") == []
+    assert reaches("thetasol.scenes", "thetasol.integrators")      # the walk sees a chain where there is one
+
+
 def _sizes():
     """(relative path, lines) of every module and (relative path::qualified name, lines) of every function."""
     modules, functions = {}, {}

@@ -16,7 +16,7 @@ import pytest
 
 from thetasol.core.so3 import rodrigues
 from thetasol.integrators.multibody import integrate_multibody
-from thetasol.integrators.neumann import NumericalNeumann, integrate_neumann, numerical_neumann
+from thetasol.integrators.neumann import NumericalNeumann, integrate_neumann
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.mechanics.constraints import Sphere
@@ -233,19 +233,19 @@ def test_integrate_neumann_converges_to_the_closed_form():
     q, v = solve_neumann(sc.a, sc.q0, sc.v0)(t)
     gaps = []
     for rtol in (1e-10, 1e-13):
-        qn, vn = integrate_neumann(sc.a, sc.q0, sc.v0, t, rtol=rtol)
+        qn, vn = integrate_neumann(sc.a, sc.q0, sc.v0, rtol=rtol)(t)
         gaps.append(max(np.max(np.abs(q - qn)), np.max(np.abs(v - vn))))
         assert np.max(np.abs(np.linalg.norm(qn, axis=1) - 2.0)) < 4e-15  # measured 4.4e-16 (projected)
     assert gaps[1] < 1e-11  # measured 1.7e-12
     assert gaps[0] / gaps[1] > 100  # measured 6.1e-9 / 1.7e-12
-    sol = numerical_neumann(sc.a, sc.q0, sc.v0, rtol=1e-13)
+    sol = integrate_neumann(sc.a, sc.q0, sc.v0, rtol=1e-13)
     qs, vs = sol(t[1:].reshape(3, -1)[:, ::-1])  # any shape, any order
     assert qs.shape == (3, 80, 3) and np.allclose(qs, q[1:].reshape(3, -1, 3)[:, ::-1], atol=1e-11, rtol=0)
 
 
 def test_fallback_matches_the_unsplit_system():
     """The mass centre started 1e-9 (relative) off the great circle of the two lower eigen-axes of a: the
-    torus is 1e-18 thin, solve_neumann refuses the data, the split uses numerical_neumann and still
+    torus is 1e-18 thin, solve_neumann refuses the data, the split uses integrate_neumann and still
     agrees with the constrained multibody system."""
     cfg, a, b, s = make_system(7)
     axes = np.linalg.eigh(a)[1]

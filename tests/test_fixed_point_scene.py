@@ -18,6 +18,7 @@ from thetasol.integrators.multibody import integrate_multibody
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.mechanics.constraints import Pivot
+from thetasol.mechanics.equations import inertia
 from thetasol.scenes.fixed_point import pivoted_body, solve_fixed_point
 from thetasol.scenes.format import load_scene
 from thetasol.scenes.report import run
@@ -207,12 +208,12 @@ def test_integrate_fixed_point_reduces_to_the_heavy_top_and_conserves_energy():
     Q0, w0 = rodrigues(rng.normal(size=3)), rng.normal(size=3)
     t = np.linspace(0.0, 10.0, 21)
     c, g = np.array([0.1, 0.2, 0.5]), np.array([0.3, -0.2, -G])
-    w1, Q1 = integrate_fixed_point(J, 2 * c, np.zeros((3, 3)), -2 * g, Q0, w0, t, rtol=1e-13)
-    w2, Q2 = integrate_heavy_top(np.trace(J) * np.eye(3) - J, c, Q0, w0, t, mass=2.0, gravity=g, rtol=1e-13)
+    w1, Q1 = integrate_fixed_point(inertia(J), 2 * c, np.zeros((3, 3)), -2 * g, Q0, w0, rtol=1e-13)(t)
+    w2, Q2 = integrate_heavy_top(np.trace(J) * np.eye(3) - J, c, Q0, w0, mass=2.0, gravity=g, rtol=1e-13)(t)
     assert np.max(np.abs(Q1 - Q2)) < 1e-12 and np.max(np.abs(w1 - w2)) < 1e-12  # measured 0, 0
     a = np.diag([1.0, -0.5, 0.3])
-    w, Q = integrate_fixed_point(J, 2 * c, a, -2 * g, Q0, w0, t, rtol=1e-13)
-    E = fixed_point_energy(J, 2 * c, a, -2 * g, Q, w)
+    w, Q = integrate_fixed_point(inertia(J), 2 * c, a, -2 * g, Q0, w0, rtol=1e-13)(t)
+    E = fixed_point_energy(inertia(J), 2 * c, a, -2 * g, Q, w)
     assert np.max(np.abs(E - E[0])) < 1e-12 * abs(E[0])  # measured 1.1e-13 relative
 
 
@@ -228,7 +229,7 @@ def test_multibody_pivot_alone_is_the_heavy_top():
                              {"solo": w0}, t, rtol=1e-12, constraint=pivot)
     d = body.center - pivot.point
     I = np.trace(body.J) * np.eye(3) - body.J + body.mass * (d @ d * np.eye(3) - np.outer(d, d))
-    w, Q = integrate_heavy_top(I, d, Q0, w0, t, mass=body.mass, gravity=[0, 0, -G], rtol=1e-13)
+    w, Q = integrate_heavy_top(I, d, Q0, w0, mass=body.mass, gravity=[0, 0, -G], rtol=1e-13)(t)
     assert np.max(np.abs(mb.attitude[0] - Q)) < 1e-10  # measured 1.4e-11
     assert np.max(np.abs(mb.omega[0] - w)) < 2e-10  # measured 3.0e-11
     assert mb.info["pivot_residual"] < 1e-11  # measured 2.3e-12

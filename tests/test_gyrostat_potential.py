@@ -9,6 +9,7 @@ import pytest
 from conftest import rand_Q
 
 from thetasol.integrators.gyrostat import integrate_gyrostat, integrate_heavy_gyrostat
+from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.rotors import gyrostat_energy
 from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions.gyrostat import solve_gyrostat
@@ -31,7 +32,7 @@ def test_free_reference_matches_closed_form_with_rotor_angles():
     Q0, w0 = rand_Q(rng), np.array([0.3, -0.5, 0.9])
     t = np.linspace(-50.0, 100.0, 16).reshape(4, 4)   # both directions, any shape
     sol = solve_gyrostat(J0, None, Q0, w0, rotors=ROTORS)
-    w, Q, ang = integrate_gyrostat(J0, None, Q0, w0, t, rotors=ROTORS, rtol=1e-13)
+    w, Q, ang = integrate_gyrostat(inertia(J0), None, Q0, w0, rotors=ROTORS, rtol=1e-13).evaluate_with_angles(t)
     # measured 8.7e-15, 7.4e-13, 2.3e-13
     assert np.max(np.abs(w - sol.omega(t))) < 1e-12
     assert np.max(np.abs(Q - sol.Q(t))) < 5e-12
@@ -43,9 +44,8 @@ def test_potential_reference_against_80bit_heyoka_and_energy():
     rng = np.random.default_rng(2)
     Q0, w0 = rand_Q(rng), np.array([0.3, -0.5, 0.9])
     t = np.linspace(0.0, 100.0, 21)
-    w, Q, ang = integrate_gyrostat(J0, None, Q0, w0, t, rotors=ROTORS, a=A_POT, rtol=1e-13)
-    wh, Qh, angh = integrate_gyrostat(J0, None, Q0, w0, t, rotors=ROTORS, a=A_POT, rtol=1e-19, method="heyoka",
-                                      dtype="ldbl")
+    w, Q, ang = integrate_gyrostat(inertia(J0), None, Q0, w0, rotors=ROTORS, a=A_POT, rtol=1e-13).evaluate_with_angles(t)
+    wh, Qh, angh = integrate_gyrostat(inertia(J0), None, Q0, w0, rotors=ROTORS, a=A_POT, rtol=1e-19, method="heyoka", fp_type=np.longdouble).evaluate_with_angles(t)
     # measured 4.1e-13, 1.3e-12, 5.2e-12 at rtol 1e-13
     assert np.max(np.abs(w - wh)) < 5e-12
     assert np.max(np.abs(Q - Qh)) < 1e-11
@@ -54,7 +54,7 @@ def test_potential_reference_against_80bit_heyoka_and_energy():
     assert np.max(np.abs(E - E[0])) < 5e-15 * abs(E[0])   # measured 5.4e-16 relative
     # the rotor momenta are data of the reduced system; its N is sum p l (8.33)
     with pytest.raises(ValueError, match="8.33"):
-        integrate_gyrostat(J0, [1.0, 0, 0], Q0, w0, t, rotors=ROTORS, a=A_POT)
+        integrate_gyrostat(inertia(J0), [1.0, 0, 0], Q0, w0, rotors=ROTORS, a=A_POT).evaluate_with_angles(t)
 
 
 def test_axial_moments_act_in_the_potential():
@@ -63,8 +63,8 @@ def test_axial_moments_act_in_the_potential():
     Q0, w0 = rand_Q(rng), np.array([0.3, -0.5, 0.9])
     t = np.array([0.0, 20.0])
     N = sum(r["p"] * np.array(r["axis"]) for r in ROTORS)
-    w1, _, _ = integrate_gyrostat(J0, None, Q0, w0, t, rotors=ROTORS, a=A_POT)
-    w2, _, _ = integrate_gyrostat(J0, N, Q0, w0, t, a=A_POT)
+    w1, _, _ = integrate_gyrostat(inertia(J0), None, Q0, w0, rotors=ROTORS, a=A_POT).evaluate_with_angles(t)
+    w2, _, _ = integrate_gyrostat(inertia(J0), N, Q0, w0, a=A_POT).evaluate_with_angles(t)
     assert np.max(np.abs(w1 - w2)) > 1e-3
 
 
@@ -76,7 +76,7 @@ def test_circular_orbit_jacobi_integral_838():
     Q0, w0 = rand_Q(rng), np.array([0.02, -0.05, 0.09])
     rot = [{"axis": [0.0, 0.0, 1.0], "A": 0.05, "p": 0.02}, {"axis": [1.0, 0.0, 0.0], "A": 0.02, "p": -0.01}]
     t = np.linspace(0.0, 2 * 2 * math.pi / n, 41)
-    w, Q, _ = integrate_gyrostat(J0, None, Q0, w0, t, rotors=rot, orbit=orbit, rtol=1e-12)
+    w, Q, _ = integrate_gyrostat(inertia(J0), None, Q0, w0, rotors=rot, orbit=orbit, rtol=1e-12).evaluate_with_angles(t)
     Jf = _full(J0, rot)
     If = np.trace(Jf) * np.eye(3) - Jf
     Ig = np.trace(J0) * np.eye(3) - J0
@@ -112,11 +112,11 @@ def test_lagrange_gyrostat_against_80bit_heyoka(k):
     assert sol.method == "lagrange-gyrostat/elliptic"
     t = np.linspace(0.0, 100.0, 201)
     w, Q = sol(t)
-    wh, Qh = integrate_heavy_gyrostat(I, c, N, Q0, w0, t, mass=2.0, rtol=1e-19, method="heyoka", dtype="ldbl")
+    wh, Qh = integrate_heavy_gyrostat(I, c, Q0, w0, N=N, mass=2.0, rtol=1e-19, method="heyoka", fp_type=np.longdouble)(t)
     # measured 1.9e-13 .. 3.3e-13 (omega), 3e-14 .. 1e-13 (Q)
     assert np.max(np.abs(w - wh)) < 2e-12 * max(1.0, np.max(np.abs(wh)))
     assert np.max(np.abs(Q - Qh)) < 1e-12
-    wd, Qd = integrate_heavy_gyrostat(I, c, N, Q0, w0, t[:21], mass=2.0, rtol=1e-13)
+    wd, Qd = integrate_heavy_gyrostat(I, c, Q0, w0, N=N, mass=2.0, rtol=1e-13)(t[:21])
     assert np.max(np.abs(Qd - Qh[:21])) < 1e-11
 
 
@@ -148,16 +148,14 @@ def test_lagrange_gyrostat_refusals_and_limits():
 
 
 def test_numerical_gyrostat_protocol():
-    from thetasol.integrators.gyrostat import numerical_gyrostat
-
     rng = np.random.default_rng(7)
     Q0, w0 = rand_Q(rng), np.array([0.3, -0.5, 0.9])
-    sol = numerical_gyrostat(J0, None, Q0, w0, rotors=ROTORS, a=A_POT, rtol=1e-12)
-    assert sol.method == "numerical-gyrostat/DOP853"
+    sol = integrate_gyrostat(inertia(J0), None, Q0, w0, rotors=ROTORS, a=A_POT, rtol=1e-12)
+    assert sol.model == "gyrostat" and sol.method == "numerical/DOP853" and sol.diagnostics["error_estimate"] == 1e-12
     t = np.array([[0.0, 3.0], [-2.0, 7.0]])
     w, Q = sol(t)
     assert w.shape == (2, 2, 3) and Q.shape == (2, 2, 3, 3) and sol.rotor_angles(t).shape == (2, 2, 2)
-    w2, Q2, ang = integrate_gyrostat(J0, None, Q0, w0, t, rotors=ROTORS, a=A_POT, rtol=1e-12)
+    w2, Q2, ang = sol.evaluate_with_angles(t)
     assert np.array_equal(w, w2) and np.array_equal(sol.rotor_angles(t), ang)
     E = gyrostat_energy(_full(J0, ROTORS), J0, A_POT, Q, w)
     assert np.max(np.abs(E - sol.invariants["energy"])) < 1e-11 * abs(sol.invariants["energy"])

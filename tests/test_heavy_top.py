@@ -2,7 +2,7 @@
 far times, the poles, the recognition of the integrable cases and the refusals.
 
 The reference is heyoka's Taylor integrator in 80-bit extended precision at tolerance 1e-19
-(``integrate_heavy_top(..., method="heyoka", dtype="ldbl")``).  Errors are max-norm errors in
+(``integrate_heavy_top(..., method="heyoka", fp_type=numpy.longdouble)``).  Errors are max-norm errors in
 ``omega`` (relative to ``max(1, |omega|)``) and in the entries of ``Q``; the conditioning ``cond``
 is the largest change of the closed form under four random relative perturbations of 2.2e-16 of
 ``omega0``, ``Q0``, ``center`` and ``I`` (what float64 data cannot resolve: a tensor rotated in
@@ -59,7 +59,7 @@ def _conditioning(case, t, sol):
 def _against_heyoka(case, t):
     I, c, Q0, w0, kw = case
     sol = solve_heavy_top(I, c, Q0, w0, **kw)
-    wr, Qr = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **kw)
+    wr, Qr = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **kw)(t)
     w, Q = sol(t)
     return sol, _errors(w, Q, wr, Qr), _conditioning(case, t, sol)
 
@@ -100,7 +100,7 @@ def test_bruls_cardona_passes_next_to_hanging():
     t = np.linspace(0.0, T, 41)[1:]
     t = np.sort(np.concatenate([t, T / 2 + np.linspace(-1e-3, 1e-3, 21) * T]))
     I, c, Q0, w0, kw = BRULS_CARDONA
-    wr, Qr = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **kw)
+    wr, Qr = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **kw)(t)
     w, Q = sol(t)
     err = _errors(w, Q, wr, Qr)
     assert err.max() < 5e-14, err.max()   # measured 1.6e-14
@@ -309,7 +309,7 @@ def test_euler_top_delegation():
         sol = solve_heavy_top(I, c, Q0, w0, gravity=g)
         assert sol.method.startswith("euler-top")
         w, Q = sol(t)
-        wr, Qr = integrate_heavy_top(I, c, Q0, w0, t, gravity=g, method="heyoka", dtype="ldbl", rtol=1e-19)
+        wr, Qr = integrate_heavy_top(I, c, Q0, w0, gravity=g, method="heyoka", fp_type=np.longdouble, rtol=1e-19)(t)
         assert np.max(_errors(w, Q, wr, Qr)) < 1e-14   # measured 1.7e-15
 
 
@@ -360,7 +360,7 @@ def test_bad_data(bad, match):
     with pytest.raises(ValueError, match=match):
         solve_heavy_top(args["I"], args["center"], args["Q0"], args["omega0"], **kw)
     with pytest.raises(ValueError, match=match):
-        integrate_heavy_top(args["I"], args["center"], args["Q0"], args["omega0"], [1.0], **kw)
+        integrate_heavy_top(args["I"], args["center"], args["Q0"], args["omega0"], **kw)([1.0])
 
 
 def test_dop853_reference_accuracy():
@@ -370,8 +370,8 @@ def test_dop853_reference_accuracy():
     for case, tmax in ((SIMO_WONG, 10.0), (_random_top("slow", 0), 100.0), (_random_top("hanging", 0), 100.0)):
         I, c, Q0, w0, kw = case
         t = np.array([1.0, tmax])
-        w, Q = integrate_heavy_top(I, c, Q0, w0, t, **kw)
-        wr, Qr = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **kw)
+        w, Q = integrate_heavy_top(I, c, Q0, w0, **kw)(t)
+        wr, Qr = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **kw)(t)
         worst = max(worst, np.max(_errors(w, Q, wr, Qr)))
     assert worst < 1e-10, worst
 
@@ -392,7 +392,7 @@ def test_kovalevskaya_integral_along_the_reference(ratio, conserved):
         with pytest.raises(ClosedFormUnavailable, match="integrate_heavy_top"):
             solve_heavy_top(I, c, Q0, w0, **G)
     t = np.linspace(0, 20, 41)
-    w, Q = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **G)
+    w, Q = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **G)(t)
     k2 = kovalevskaya_integral(I, c, 1.0, G["gravity"], w, Q)
     drift = np.max(np.abs(k2 - k2[0])) / k2[0]
     assert (drift < 1e-14) if conserved else (drift > 1e-2), drift
@@ -414,7 +414,7 @@ def test_kovalevskaya_separating_variables():
     Q0, w0 = _random_rotation(rng), rng.normal(size=3)
     h, tc = 2e-3, np.linspace(0.3, 5.0, 12)
     t = np.concatenate([tc + d for d in (-h, -h / 2, 0.0, h / 2, h)])
-    w, Q = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **G)
+    w, Q = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **G)(t)
     frame = kovalevskaya_frame(I, c, 1.0, G["gravity"])
     s1, s2, l1, l, k = kovalevskaya_variables(frame, G["gravity"], w, Q)
     assert max(np.ptp(l1), np.ptp(l), np.ptp(k)) < 1e-13
@@ -447,7 +447,7 @@ def test_kovalevskaya_separated_flow_against_heyoka():
     Q0, w0 = _random_rotation(rng), rng.normal(size=3)
     flow = kovalevskaya_separated_flow(I, c, Q0, w0, 1.0, G["gravity"])
     t = TS[:5]
-    w, Q = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **G)
+    w, Q = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **G)(t)
     s1r, s2r, *_ = kovalevskaya_variables(kovalevskaya_frame(I, c, 1.0, G["gravity"]), G["gravity"], w, Q)
     s1, s2 = flow(t)
     err = np.maximum(np.abs(s1 / s1r - 1), np.abs(s2 / s2r - 1))

@@ -47,7 +47,7 @@ def _sdot(frame, I, c, Q0, w0, h=1e-6):
     """``s1', s2'`` at t = 0 by a central difference of the numerical flow (signs of y only)."""
     from thetasol.integrators.heavy_top import integrate_heavy_top
 
-    w, Q = integrate_heavy_top(I, c, Q0, w0, np.array([-h, h]), rtol=1e-12, **G)
+    w, Q = integrate_heavy_top(I, c, Q0, w0, rtol=1e-12, **G)(np.array([-h, h]))
     s = kovalevskaya_variables(frame, G["gravity"], w, Q)
     return (s[0][1] - s[0][0]) / (2 * h), (s[1][1] - s[1][0]) / (2 * h)
 

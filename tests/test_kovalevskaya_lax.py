@@ -93,7 +93,7 @@ def test_lax_equation_along_heyoka(seed):
     frame = kovalevskaya_frame(I, c, G["mass"], G["gravity"])
     h = 1e-3
     tt = (np.array([0.3, 1.7, 5.0])[:, None] + h * np.arange(-2, 3)).ravel()
-    w, Q = integrate_heavy_top(I, c, Q0, w0, tt, method="heyoka", dtype="ldbl", rtol=1e-19, **G)
+    w, Q = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **G)(tt)
     M, g = memoir_state(frame, w, Q)
     for lam in (0.7, 1.3 + 0.4j):
         L = lax_L(M, g, frame.c0, lam).reshape(3, 5, 5, 5)

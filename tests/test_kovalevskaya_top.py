@@ -2,7 +2,7 @@
 quotients with half-period characteristics (thetasol.solutions.kovalevskaya_top.kovalevskaya_motion) against
 80-bit heyoka, and its integrals at far times.
 
-Reference: ``integrate_heavy_top(..., method="heyoka", dtype="ldbl", rtol=1e-19)``.  Errors are max-norm
+Reference: ``integrate_heavy_top(..., method="heyoka", fp_type=numpy.longdouble, rtol=1e-19)``.  Errors are max-norm
 errors in ``omega`` relative to ``max(1, |omega|)`` and in ``gamma`` (the upward vertical in the body frame).
 """
 from __future__ import annotations
@@ -55,7 +55,7 @@ def test_state_against_heyoka(seed):
     nreal, bound = CASES[seed]
     assert _real_roots(I, c, Q0, w0) == nreal
     m = kovalevskaya_motion(I, c, Q0, w0, **G)
-    w, Q = integrate_heavy_top(I, c, Q0, w0, TS, method="heyoka", dtype="ldbl", rtol=1e-19, **G)
+    w, Q = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **G)(TS)
     om, ga = m(TS)
     ew = np.abs(om - w).max(-1) / np.maximum(1.0, np.abs(w).max(-1))
     eg = np.abs(ga - np.einsum("tji,j->ti", Q, [0.0, 0.0, 1.0])).max(-1)
@@ -98,7 +98,7 @@ def test_solve_heavy_top_against_heyoka(seed, bound):
     I, c, Q0, w0 = _top(seed)
     sol = solve_heavy_top(I, c, Q0, w0, **G)
     assert sol.method == "kovalevskaya/genus-2" and sol.diagnostics["phase_tail"] < 1e-15
-    w, Q = integrate_heavy_top(I, c, Q0, w0, TS, method="heyoka", dtype="ldbl", rtol=1e-19, **G)
+    w, Q = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **G)(TS)
     om, QQ = sol(TS)
     err = np.maximum(np.abs(om - w).max(-1) / np.maximum(1.0, np.abs(w).max(-1)), np.abs(QQ - Q).max((-1, -2)))
     assert np.all(err < bound), err
@@ -143,7 +143,7 @@ def test_solve_heavy_top_divisor_next_to_infinity():
     I, c, Q0, w0 = _top(19)
     sol = solve_heavy_top(I, c, Q0, w0, **G)
     assert sol.method == "kovalevskaya/genus-2" and sol.diagnostics["fit_residual"] < 3e-12
-    w, Q = integrate_heavy_top(I, c, Q0, w0, TS, method="heyoka", dtype="ldbl", rtol=1e-19, **G)
+    w, Q = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **G)(TS)
     om, QQ = sol(TS)
     err = np.maximum(np.abs(om - w).max(-1) / np.maximum(1.0, np.abs(w).max(-1)), np.abs(QQ - Q).max((-1, -2)))
     assert np.all(err < 5e-13), err
@@ -163,7 +163,7 @@ def test_phase_reference_where_axes_and_momentum_pass_near_the_vertical(seed, bo
     I, c, Q0, w0 = _top(seed)
     sol = solve_heavy_top(I, c, Q0, w0, **G)
     assert sol.diagnostics["phase_tail"] < 1e-15 and max(sol.diagnostics["phase_grid"]) <= 256
-    w, Q = integrate_heavy_top(I, c, Q0, w0, TS, method="heyoka", dtype="ldbl", rtol=1e-19, **G)
+    w, Q = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **G)(TS)
     om, QQ = sol(TS)
     err = np.maximum(np.abs(om - w).max(-1) / np.maximum(1.0, np.abs(w).max(-1)), np.abs(QQ - Q).max((-1, -2)))
     assert np.all(err < bound), err
@@ -213,7 +213,7 @@ def test_forty_random_tops_against_heyoka():
     for seed in range(40):
         I, c, Q0, w0 = _top(seed)
         sol = solve_heavy_top(I, c, Q0, w0, **G)
-        w, Q = integrate_heavy_top(I, c, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19, **G)
+        w, Q = integrate_heavy_top(I, c, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19, **G)(t)
         om, QQ = sol(t)
         err = np.maximum(np.abs(om - w).max(-1) / np.maximum(1.0, np.abs(w).max(-1)), np.abs(QQ - Q).max((-1, -2)))
         assert np.all(err[:-1] < 5e-11) and err[-1] < 3e-10, (seed, err)

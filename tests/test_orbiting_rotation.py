@@ -56,8 +56,8 @@ def test_dop853_against_heyoka_80bit_20_orbits(e, kind):
     orb = _orbit(e)
     Q0, w0 = _initial(orb, kind, e)
     ts = np.linspace(0.0, 20 * orb.period, 6)[1:]
-    w, Q = integrate_orbiting_rotation(J_SAT, orb, Q0, w0, ts)
-    wr, Qr = integrate_orbiting_rotation(J_SAT, orb, Q0, w0, ts, method="heyoka", dtype="ldbl", rtol=1e-19)
+    w, Q = integrate_orbiting_rotation(inertia(J_SAT), orb, Q0, w0)(ts)
+    wr, Qr = integrate_orbiting_rotation(inertia(J_SAT), orb, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19)(ts)
     # the data's own conditioning: 1e-14 on omega0 moves the reference by <= 1.5e-11 here (e = 0.3
     # librating is chaotic, 1e-14 grows to 1e-2 in 20 orbits, so it is not a test case)
     dQ, dw = np.abs(Q - Qr).max(), np.abs(w - wr).max() / np.abs(wr).max()
@@ -70,7 +70,7 @@ def test_jacobi_integral_circular(kind):
     orb = _orbit(0.0)
     Q0, w0 = _initial(orb, kind)
     ts = np.linspace(0.0, 5 * orb.period, 51)
-    w, Q = integrate_orbiting_rotation(J_SAT, orb, Q0, w0, ts)
+    w, Q = integrate_orbiting_rotation(inertia(J_SAT), orb, Q0, w0)(ts)
     H = _jacobi(I_SAT, orb, ts, Q, w)
     scale = np.abs(0.5 * np.sum(w * w * I_SAT, -1)).max()
     # measured 1.3e-13 (librating) / 4.7e-14 (tumbling) relative to the kinetic energy
@@ -118,7 +118,7 @@ def test_point_mass_body_differs_by_size_squared(e):
     diffs = []
     for s in (1e-2, 1e-3):
         pts, ms, J = _point_mass_body(s)
-        w, Q = integrate_orbiting_rotation(J, orb, Q0, w0, ts, rtol=1e-13)
+        w, Q = integrate_orbiting_rotation(inertia(J), orb, Q0, w0, rtol=1e-13)(ts)
         wp, Qp = _integrate_point_masses(pts, ms, 1.0, orb.r0, orb.v0, Q0, w0, ts)
         diffs.append(max(np.abs(Q - Qp).max(), np.abs(w - wp).max() / np.abs(wp).max()))
     ratio = diffs[0] / diffs[1]
@@ -130,29 +130,30 @@ def test_point_mass_body_differs_by_size_squared(e):
 def test_bad_data():
     orb = _orbit(0.0)
     with pytest.raises(TypeError, match="KeplerOrbit"):
-        integrate_orbiting_rotation(J_SAT, (orb.r0, orb.v0), np.eye(3), np.zeros(3), [1.0])
+        integrate_orbiting_rotation(inertia(J_SAT), (orb.r0, orb.v0), np.eye(3), np.zeros(3))([1.0])
     with pytest.raises(ValueError, match="Q0"):
-        integrate_orbiting_rotation(J_SAT, orb, 2 * np.eye(3), np.zeros(3), [1.0])
+        integrate_orbiting_rotation(inertia(J_SAT), orb, 2 * np.eye(3), np.zeros(3))([1.0])
     with pytest.raises(ValueError, match="J"):
-        integrate_orbiting_rotation([1.0, -1.0, 1.0], orb, np.eye(3), np.zeros(3), [1.0])
+        integrate_orbiting_rotation(inertia([1.0, -1.0, 1.0]), orb, np.eye(3), np.zeros(3))([1.0])
 
 
 def test_shapes_and_negative_times():
     orb = _orbit(0.1)
     Q0, w0 = _initial(orb, "tumbling")
     t = np.array([[-300.0, 0.0], [250.0, -300.0]])
-    w, Q = integrate_orbiting_rotation(J_SAT, orb, Q0, w0, t)
+    w, Q = integrate_orbiting_rotation(inertia(J_SAT), orb, Q0, w0)(t)
     assert w.shape == (2, 2, 3) and Q.shape == (2, 2, 3, 3)
     assert np.array_equal(Q[0, 0], Q[1, 1]) and np.allclose(Q[0, 1], Q0, atol=1e-15)
     # backward, then forward on the orbit restarted at t = -300, returns to the start
     orb2 = KeplerOrbit(MU, *orb(-300.0))
-    w1, Q1 = integrate_orbiting_rotation(J_SAT, orb2, Q[0, 0], w[0, 0], [300.0])
+    w1, Q1 = integrate_orbiting_rotation(inertia(J_SAT), orb2, Q[0, 0], w[0, 0])([300.0])
     # measured 1.0e-14 / 4.6e-16
     assert np.abs(Q1[0] - Q0).max() < 1e-13 and np.abs(w1[0] - w0).max() < 1e-13 * np.abs(w0).max()
 
 
 # -- closed forms --------------------------------------------------------------------------------
 
+from thetasol.mechanics.equations import inertia
 from thetasol.protocol import ClosedFormUnavailable  # noqa: E402
 from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation  # noqa: E402
 
@@ -177,16 +178,16 @@ def _errors(sol, J, orb, Q0, w0, ts, rel_pert=1e-12, dop=False):
     """Closed form against 80-bit heyoka (and DOP853 at rtol 1e-13 when ``dop``); the reference's
     conditioning: its change per 1e-16 of omega0 (in and off the plane) and of a tilt of Q0."""
     w, Q = sol(ts)
-    wr, Qr = integrate_orbiting_rotation(J, orb, Q0, w0, ts, method="heyoka", dtype="ldbl", rtol=1e-19)
+    wr, Qr = integrate_orbiting_rotation(inertia(J), orb, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19)(ts)
     pert = (np.array([0.3, -0.5, 0.7]) * np.linalg.norm(w0) + w0) * rel_pert
     Qt = Q0 @ rodrigues([0.6 * rel_pert, -0.8 * rel_pert, 0.0])
-    wp, Qp = integrate_orbiting_rotation(J, orb, Qt, w0 + pert, ts, method="heyoka", dtype="ldbl", rtol=1e-19)
+    wp, Qp = integrate_orbiting_rotation(inertia(J), orb, Qt, w0 + pert, method="heyoka", fp_type=np.longdouble, rtol=1e-19)(ts)
     wmax = np.abs(wr).max()
     err = max(np.abs(Q - Qr).max(), np.abs(w - wr).max() / wmax)
     cond = max(np.abs(Qp - Qr).max(), np.abs(wp - wr).max() / wmax) * (1e-16 / rel_pert)
     if not dop:
         return err, cond
-    wd, Qd = integrate_orbiting_rotation(J, orb, Q0, w0, ts, rtol=1e-13)
+    wd, Qd = integrate_orbiting_rotation(inertia(J), orb, Q0, w0, rtol=1e-13)(ts)
     return err, cond, max(np.abs(Q - Qd).max(), np.abs(w - wd).max() / wmax)
 
 
@@ -289,7 +290,7 @@ def test_relative_equilibria(perm):
         st = sol.diagnostics["stability"]
         lagrange = I_SAT[perm[0]] < I_SAT[perm[1]] < I_SAT[perm[2]]
         assert (st == "lagrange") == lagrange
-        wr, Qr = integrate_orbiting_rotation(J_SAT, orb, B, w0, ts, rtol=1e-13)
+        wr, Qr = integrate_orbiting_rotation(inertia(J_SAT), orb, B, w0, rtol=1e-13)(ts)
         # measured 9.9e-14 (stable) and 4.0e-12 (unstable: rounding grows like exp(rate t))
         assert np.abs(Q - Qr).max() < (5e-13 if sol.diagnostics["stable"] else 4e-11)
 
@@ -323,7 +324,7 @@ def test_spherical_body_on_an_eccentric_orbit():
     assert sol.method == "free/spherical"
     ts = np.array([1.0, 3.0]) * orb.period
     w, Q = sol(ts)
-    wr, Qr = integrate_orbiting_rotation(Js, orb, Q0, w0, ts, rtol=1e-13)
+    wr, Qr = integrate_orbiting_rotation(inertia(Js), orb, Q0, w0, rtol=1e-13)(ts)
     assert np.abs(Q - Qr).max() < 1e-11 and np.abs(w - wr).max() < 1e-15
 
 

@@ -13,7 +13,7 @@ from test_scene import SMALL
 
 from thetasol.integrators.multibody import initial_state
 from thetasol.integrators.rotation import NumericalRotation, integrate_rotation
-from thetasol.mechanics.equations import invariants
+from thetasol.mechanics.equations import inertia, invariants
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import Solution
 from thetasol.scenes.format import Scene
@@ -118,7 +118,7 @@ def test_numerical_rotations_on_demand(numerical, scene):
         assert isinstance(rot, NumericalRotation) and rot.method == "numerical/DOP853"
         e = scene.config.effective_body(n)
         w1, Q1 = rot(t)
-        w2, Q2 = integrate_rotation(e.J, scene.a, scene.Q0[n], scene.omega0[n], t, rtol=1e-13)
+        w2, Q2 = integrate_rotation(inertia(e.J), scene.a, scene.Q0[n], scene.omega0[n], rtol=1e-13)(t)
         # measured 0 (root, tip) and 5.4e-15 (arm: its Q0 from the scene is projected onto SO(3) once more)
         assert max(np.max(np.abs(w1 - w2)), np.max(np.abs(Q1 - Q2))) < 3e-14
         inv = invariants(e.J, scene.a, Q1, w1)

@@ -6,6 +6,7 @@ import pytest
 
 from thetasol import RotationSolution, integrate_rotation, solve_rotation
 from thetasol.core.so3 import hat, vee
+from thetasol.mechanics.equations import inertia
 
 Z = np.zeros((3, 3))
 J = np.array([0.7, 1.1, 1.9])
@@ -23,7 +24,7 @@ def test_spherical_body_in_a_potential_feels_no_torque():
     sol = solve_rotation([0.8, 0.8, 0.8], a, np.eye(3), W0)
     assert sol.method.startswith("euler-top/")
     w, Q = sol(np.array([3.0, 17.0]))
-    wr, Qr = integrate_rotation([0.8, 0.8, 0.8], a, np.eye(3), W0, np.array([3.0, 17.0]), rtol=1e-13)
+    wr, Qr = integrate_rotation(inertia([0.8, 0.8, 0.8]), a, np.eye(3), W0, rtol=1e-13)(np.array([3.0, 17.0]))
     assert np.abs(w - wr).max() <= 1e-12 and np.abs(Q - Qr).max() <= 1e-11
 
 
@@ -87,7 +88,7 @@ def test_same_conventions_as_integrate_rotation():
     w0 = rng.normal(size=3)
     t = np.array([-2.0, 0.0, 1.0, 3.0])
     w, Q = solve_rotation(Jt, Z, Q0, w0)(t)
-    wr, Qr = integrate_rotation(Jt, Z, Q0, w0, t, rtol=1e-13, atol=1e-16)
+    wr, Qr = integrate_rotation(inertia(Jt), Z, Q0, w0, rtol=1e-13, atol=1e-16)(t)
     assert np.max(np.abs(w - wr)) < 1e-11 and np.max(np.abs(Q - Qr)) < 1e-11
 
 

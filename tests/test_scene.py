@@ -9,6 +9,7 @@ import pytest
 
 from thetasol import integrate_rotation
 from thetasol.integrators.multibody import initial_state
+from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.trajectories import Trajectories, write_trajectories
 from thetasol.scenes.format import Scene, demo_scene_path, load_scene
 from thetasol.scenes.pipeline import rotation_kind
@@ -125,7 +126,7 @@ def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
 
         def __call__(self, t):
             calls.append(1)
-            return integrate_rotation(*self.args, t, rtol=1e-13)
+            return integrate_rotation(inertia(self.args[0]), *self.args[1:], rtol=1e-13)(t)
 
     def solve_rotation(J, a, Q0, w0):
         if not np.allclose(a, a[0, 0] * np.eye(3)):

@@ -2,8 +2,8 @@
 
 The carrier of an effective gyrostat (Theorem 5) with the constant rotor momentum ``N = sum p_k l_k``
 (8.33) obeys, in the conventions of :func:`thetasol.integrators.rotation.integrate_rotation`
-(``m = I omega`` with ``I = tr(J) 1 - J`` the inertia WITHOUT the rotors' axial moments, as
-:func:`thetasol.solve_gyrostat` takes it),
+(``m = I omega`` with ``I`` the inertia WITHOUT the rotors' axial moments, ``J = tr(I)/2 1 - I`` its
+second moments),
 
     mdot = (m + N) x omega + tau,     Qdot = Q hat(omega),     Phidot = omega,
 
@@ -15,7 +15,8 @@ restores the rotors' axial moments: the potential acts on the whole mass distrib
 are ``phi_k = (p_k / A_k) t - l_k . Phi`` with no further quadrature.
 
 Methods as for :func:`integrate_rotation`: ``"DOP853"`` (any explicit ``solve_ivp`` method) and
-``"heyoka"`` (``dtype="ldbl"`` or ``"f128"`` for extended precision; potential and pivot only).
+``"heyoka"`` (``fp_type=numpy.longdouble`` or ``heyoka.real128`` for extended precision; potential and
+pivot only).
 First integrals (tests/test_gyrostat_potential.py): (8.34) ``1/2 omega . I omega + 1/2 tr(Q^T a Q J_full)``,
 on a circular orbit (8.38) ``1/2 m . omega + (a0/2) gamma . I_full gamma - Omega (m + N) . n``, on a
 pivot the energy, the vertical momentum ``(m + N) . gamma`` and, for a Lagrange gyrostat, ``(m + N) . e3``.
@@ -23,7 +24,8 @@ pivot the energy, the vertical momentum ``(m + N) . gamma`` and, for a Lagrange 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -31,14 +33,14 @@ from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize, vee
-from thetasol.core.threads import single_blas_thread
-from thetasol.integrators._common import extended_inertia, heyoka_and_type
-from thetasol.mechanics.heavy_top import heavy_top_data
+from thetasol.integrators._common import Settings, body_inertia, extended_inertia, heyoka_and_type, heyoka_tol, settings
+from thetasol.mechanics.equations import inertia_from_moments, second_moments
+from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
+from thetasol.mechanics.orbit import Orbit, check_orbit
 from thetasol.protocol import RotationSolution
-from thetasol.solutions.kepler import KeplerOrbit
 
 __all__ = ["integrate_gyrostat", "integrate_heavy_gyrostat", "gyrostat_rotor_data", "NumericalGyrostat",
-           "numerical_gyrostat"]
+           "NumericalHeavyGyrostat"]
 
 
 def gyrostat_rotor_data(rotors: Sequence[Mapping] | None, N: ArrayLike | None
@@ -115,176 +117,205 @@ def _scipy_run(rhs, y0, rtol, atol, method):
     return run
 
 
-@single_blas_thread
-def integrate_gyrostat(J: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, *,
-                       rotors: Sequence[Mapping] | None = None, a: ArrayLike | None = None,
-                       orbit: KeplerOrbit | None = None, rtol: float = 1e-12, atol: float | None = None,
-                       method: str = "DOP853", dtype: str = "dbl") -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Integrate a gyrostat's carrier in ``1/2 x^T a x`` (8.32) or on a Kepler orbit (8.35)-(8.37).
+def integrate_gyrostat(I: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0: ArrayLike, *,  # noqa: E741
+                       rotors: Sequence[Mapping] | None = None, a: ArrayLike | None = None, orbit: Orbit | None = None,
+                       method: str = "DOP853", rtol: float = 1e-12, atol: float | None = None,
+                       fp_type: Any = float) -> NumericalGyrostat:
+    """A gyrostat's carrier in ``1/2 x^T a x`` (8.32) or on an orbit (8.35)-(8.37), integrated numerically.
 
     Parameters
     ----------
-    J : array_like, shape (3,) or (3, 3)
-        Second moments of the carrier with the rotors' masses and transverse moments, WITHOUT their
-        axial moments (as for :func:`thetasol.solve_gyrostat`): ``I = tr(J) 1 - J``, ``m = I omega``.
+    I : array_like, shape (3,) or (3, 3)
+        Inertia of the carrier with the rotors' masses and transverse moments, WITHOUT their axial
+        moments (as :func:`thetasol.solve_gyrostat` takes it): ``m = I omega``.
     N : array_like (3,) or None
         Constant rotor momentum ``sum p_k l_k`` (8.33), body frame (None: from ``rotors``).
     Q0, omega0 : array_like
         Initial attitude (body to space) and body angular velocity of the carrier.
-    t : array_like
-        Output times, any shape and order, negative allowed.
     rotors : sequence of mappings, optional
         ``axis``, ``A``, ``p`` (and ``B``, ignored) per rotor, as for :func:`thetasol.solve_gyrostat`;
-        their axial moments join ``J`` in the potential, and their angles are returned.
+        their axial moments join the body in the potential, and their angles are returned.
     a : array_like (3, 3), optional
         Symmetric potential matrix (default 0: the free gyrostat (8.39)).
-    orbit : KeplerOrbit, optional
-        Instead of ``a``: the gravity-gradient torque of (8.37) along this orbit (``a`` must be None).
-    rtol, atol, method, dtype
-        As for :func:`thetasol.integrate_rotation` (heyoka not offered with ``orbit``).
+    orbit : Orbit, optional
+        Instead of ``a``: the gravity-gradient torque of (8.37) along this orbit of the mass centre
+        (:class:`thetasol.KeplerOrbit` or any :class:`thetasol.mechanics.orbit.Orbit`; ``a`` must be None).
+    method, rtol, atol, fp_type
+        As for :func:`thetasol.integrate_rotation` (``"DOP853"``, any solve_ivp method, or ``"heyoka"``,
+        which is not offered with ``orbit``; ``atol`` defaults to ``1e-3 rtol (|m0| + |N|)``).
 
     Returns
     -------
-    omega : ndarray ``t.shape + (3,)``
-    Q : ndarray ``t.shape + (3, 3)``
-    angles : ndarray ``t.shape + (n_rotors,)``
-        Rotor angles ``phi_k(t) = (p_k / A_k) t - l_k . int_0^t omega`` ((8.28) corrected), ``phi_k(0) = 0``.
+    NumericalGyrostat
+        ``sol(t) -> (omega, Q)``, ``sol.rotor_angles(t)`` and ``sol.evaluate_with_angles(t)`` for any
+        shape of ``t``, one integration from ``t = 0`` per call; rotor angles
+        ``phi_k(t) = (p_k / A_k) t - l_k . int_0^t omega`` ((8.28) corrected), ``phi_k(0) = 0``.
+        ``model`` is ``"gyrostat"``, ``method`` ``"numerical/<method>"``; ``invariants`` the
+        ``rotor_momenta`` (the ``p_k``) and, in a potential, the ``energy`` ((8.34) as a physical energy,
+        with the rotors' axial moments in the potential); ``diagnostics`` the integrator settings and
+        ``error_estimate`` (its ``rtol``).
     """
-    Jm = V.second_moments(J, "J")
+    Im, Jm = body_inertia(I)
     axes, A, p, Nv = gyrostat_rotor_data(rotors, N)
     Q0m = V.rotation_matrix(Q0, "Q0")
     w0 = V.vector3(omega0, "omega0")
-    tt = V.times(t, "t")
-    if not (0 < rtol < 1):
-        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
+    opts = settings(method, rtol, atol, fp_type)
     if orbit is not None and a is not None:
         raise ValueError("give the potential a or the orbit, not both")
-    Jfull = Jm + sum((0.5 * Ak * (np.eye(3) - 2 * np.outer(l, l)) for l, Ak in zip(axes, A, strict=True)),
-                     np.zeros((3, 3)))
-    Im = np.trace(Jm) * np.eye(3) - Jm
-    m0 = Im @ w0
-    scale = max(np.linalg.norm(m0) + np.linalg.norm(Nv), np.finfo(float).tiny)
-    atol = 1e-3 * rtol * scale if atol is None else float(atol)
-    y0 = np.concatenate([m0, Q0m.ravel(), np.zeros(3)])
-    if orbit is not None:
-        if not isinstance(orbit, KeplerOrbit):
-            raise TypeError(f"orbit must be a KeplerOrbit, got {type(orbit).__name__}")
-        If = np.trace(Jfull) * np.eye(3) - Jfull
-        mu3 = 3.0 * float(orbit.mu)
-
-        def torque(time, Q):
-            r = np.array(orbit.state_at(time)[0])
-            g = Q.T @ r
-            return mu3 / (r @ r) ** 2.5 * cross(g, If @ g)
-    else:
+    if orbit is not None and opts.method == "heyoka":
+        raise ValueError("method='heyoka' is not offered with an orbit; use DOP853")
+    inv = {"rotor_momenta": p.copy()}
+    if orbit is None:
         am = np.zeros((3, 3)) if a is None else V.symmetric_matrix(a, "a")
-
-        def torque(_time, Q):
-            ap = Q.T @ am @ Q
-            return vee(Jfull @ ap - ap @ Jfull)
-    if method == "heyoka":
-        if orbit is not None:
-            raise ValueError("method='heyoka' is not offered with an orbit; use DOP853")
-        run = _heyoka_run(Jm, w0, Nv, Q0m, rtol, dtype, ("quadratic", Jfull, am))
+        Jfull = _with_rotors(Jm, axes, A)
+        inv["energy"] = float(0.5 * w0 @ Im @ w0 + 0.5 * np.trace(Q0m.T @ am @ Q0m @ Jfull))
     else:
-        run = _scipy_run(_rhs_factory(Im, Nv, torque), y0, rtol, atol, method)
-    Y, inv = _grid(tt, run, y0)
-    return _finish(Y, inv, tt, Im, axes, A, p)
+        orbit = check_orbit(orbit)
+        r = np.asarray(orbit.r0, dtype=float)
+        rn = float(np.linalg.norm(r))
+        am = -3.0 * orbit.mu / rn ** 3 * np.outer(r, r) / rn ** 2     # the tidal matrix (7.11) at t = 0
+    return NumericalGyrostat(J=Jm, a=am, Q0=Q0m, omega0=w0, method=f"numerical/{opts.method}", invariants=inv,
+                             diagnostics=opts.diagnostics(), I=Im, N=Nv, axes=axes, A=A, p=p, orbit=orbit,
+                             settings=opts)
 
 
-@single_blas_thread
-def integrate_heavy_gyrostat(I: ArrayLike, center: ArrayLike, N: ArrayLike, Q0: ArrayLike, omega0: ArrayLike,
-                             t: ArrayLike, *, mass: float = 1.0, gravity: ArrayLike = (0.0, 0.0, -9.81),
-                             rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
-                             dtype: str = "dbl") -> tuple[np.ndarray, np.ndarray]:
-    """Integrate a heavy gyrostat about a fixed point: ``mdot = (m + N) x omega + c x Q^T (mass g)``.
-
-    ``I`` is the inertia about the fixed point without the rotors' axial moments, ``center`` the mass
-    centre seen from it, ``N`` the constant rotor momentum (body frame); the rest as for
-    :func:`thetasol.integrators.heavy_top.integrate_heavy_top`.  Returns ``(omega, Q)``.
-    """
-    Im, c, Q0m, w0, mass, g = heavy_top_data(I, center, Q0, omega0, mass, gravity)
-    Nv = V.vector3(N, "N")
-    tt = V.times(t, "t")
-    if not (0 < rtol < 1):
-        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
-    F = mass * g
-    m0 = Im @ w0
-    atol = 1e-3 * rtol if atol is None else float(atol)
-    y0 = np.concatenate([m0, Q0m.ravel(), np.zeros(3)])
-    if method == "heyoka":
-        Jm = 0.5 * np.trace(Im) * np.eye(3) - Im
-        run = _heyoka_run(Jm, w0, Nv, Q0m, rtol, dtype, ("pivot", c, F))
-    else:
-        run = _scipy_run(_rhs_factory(Im, Nv, lambda _time, Q: cross(c, Q.T @ F)), y0, rtol, atol, method)
-    Y, inv = _grid(tt, run, y0)
-    omega, Q, _ = _finish(Y, inv, tt, Im, np.zeros((0, 3)), np.zeros(0), np.zeros(0))
-    return omega, Q
+def _with_rotors(Jm: np.ndarray, axes: np.ndarray, A: np.ndarray) -> np.ndarray:
+    """``J_full = J + sum_k (A_k/2)(1 - 2 l_k l_k^T)``: the second moments with the rotors' axial moments."""
+    return Jm + sum((0.5 * Ak * (np.eye(3) - 2 * np.outer(l, l)) for l, Ak in zip(axes, A, strict=True)),
+                    np.zeros((3, 3)))
 
 
 @dataclass(frozen=True, eq=False)
 class NumericalGyrostat(RotationSolution):
-    """:func:`integrate_gyrostat` in a quadratic potential behind the RotationSolution protocol.
+    """The gyrostat of :func:`integrate_gyrostat` behind the RotationSolution protocol.
 
     ``sol(t)`` integrates on demand from ``t = 0`` (one integration per call, any shape and order of
     ``t``); :meth:`rotor_angles` and :meth:`evaluate_with_angles` give the rotor angles of (8.28).
-    ``J`` is the carrier's second moments without the rotors' axial moments (as for
-    :func:`thetasol.solve_gyrostat`).  Build it with :func:`numerical_gyrostat`.
+    ``I`` is the carrier's inertia without the rotors' axial moments, ``J`` its second moments;
+    ``axes``, ``A``, ``p`` the rotors' unit axes, axial moments and momenta; with ``orbit`` set the
+    torque is the gravity gradient along it and ``a`` its tidal matrix at ``t = 0``.
     """
 
+    I: np.ndarray = None  # noqa: E741 - the inertia tensor's usual name
     N: np.ndarray = None
-    rotors: tuple = ()
-    rtol: float = 1e-12
-    integrator: str = "DOP853"
+    axes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
+    A: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    p: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    orbit: Orbit | None = field(default=None, repr=False)
+    settings: Settings = Settings()
 
+    model: ClassVar[str] = "gyrostat"
     _AT_ONCE = True  # one integration over all requested times
 
     def evaluate_with_angles(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """``(omega, Q, rotor angles)`` at times ``t`` of any shape, one integration."""
-        return integrate_gyrostat(self.J, self.N, self.Q0, self.omega0, t, rotors=list(self.rotors) or None,
-                                  a=self.a, rtol=self.rtol, method=self.integrator)
+        tt, flat = self._times(t)
+        out = self._run(self._evaluate_all, flat)
+        return tuple(x.reshape(tt.shape + x.shape[1:]) for x in out)
 
     def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return self.evaluate_with_angles(t)[:2]
+        return self._evaluate_all(t)[:2]
 
     def rotor_angles(self, t: ArrayLike) -> np.ndarray:
         """Rotor angles ``phi_k(t)``, ``phi_k(0) = 0``, shape ``t.shape + (n_rotors,)``."""
         return self.evaluate_with_angles(t)[2]
 
+    def _evaluate_all(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        s, Im, Nv, Q0m, w0, orbit = self.settings, self.I, self.N, self.Q0, self.omega0, self.orbit
+        Jfull = _with_rotors(self.J, self.axes, self.A)
+        m0 = Im @ w0
+        scale = max(np.linalg.norm(m0) + np.linalg.norm(Nv), np.finfo(float).tiny)
+        atol = 1e-3 * s.rtol * scale if s.atol is None else s.atol
+        y0 = np.concatenate([m0, Q0m.ravel(), np.zeros(3)])
+        if orbit is not None:
+            torque = _orbit_torque(orbit, inertia_from_moments(Jfull))
+        else:
+            am = self.a
 
-def numerical_gyrostat(J: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0: ArrayLike, *,
-                       rotors: Sequence[Mapping] | None = None, a: ArrayLike | None = None, rtol: float = 1e-12,
-                       method: str = "DOP853") -> NumericalGyrostat:
-    """A gyrostat in ``1/2 x^T a x`` (8.32) as a solution evaluated by :func:`integrate_gyrostat`.
+            def torque(_time, Q):
+                ap = Q.T @ am @ Q
+                return vee(Jfull @ ap - ap @ Jfull)
+        if s.method == "heyoka":
+            run = _heyoka_run(Im, w0, Nv, Q0m, s.rtol, s.fp_type, ("quadratic", Jfull, self.a))
+        else:
+            run = _scipy_run(_rhs_factory(Im, Nv, torque), y0, s.rtol, atol, s.method)
+        Y, inv = _grid(t, run, y0)
+        return _finish(Y, inv, t, Im, self.axes, self.A, self.p)
 
-    ``invariants``: ``energy`` ((8.34) as a physical energy, with the rotors' axial moments in the
-    potential) and ``rotor_momenta`` (the ``p_k``); ``diagnostics``: the integrator and its tolerance.
+
+def _orbit_torque(orbit: Orbit, If: np.ndarray) -> Callable:
+    """The gravity-gradient torque (8.37) on a body of inertia ``If`` along ``orbit``, as ``torque(t, Q)``."""
+    mu3 = 3.0 * float(orbit.mu)
+
+    def torque(time, Q):
+        r = np.array(orbit.state_at(time)[0])
+        g = Q.T @ r
+        return mu3 / (r @ r) ** 2.5 * cross(g, If @ g)
+
+    return torque
+
+
+def integrate_heavy_gyrostat(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *,  # noqa: E741
+                             N: ArrayLike, mass: float = 1.0, gravity: ArrayLike = (0.0, 0.0, -9.81),
+                             method: str = "DOP853", rtol: float = 1e-12, atol: float | None = None,
+                             fp_type: Any = float) -> NumericalHeavyGyrostat:
+    """A heavy gyrostat about a fixed point, ``mdot = (m + N) x omega + c x Q^T (mass g)``, integrated numerically.
+
+    ``I`` is the inertia about the fixed point without the rotors' axial moments, ``center`` the mass
+    centre seen from it, ``N`` the constant rotor momentum (body frame); the rest as for
+    :func:`thetasol.integrate_heavy_top`.  Returns a :class:`NumericalHeavyGyrostat`: ``sol(t) -> (omega, Q)``
+    for any shape of ``t``; ``model`` ``"heavy-gyrostat"``, ``method`` ``"numerical/<method>"``,
+    ``invariants`` the ``energy`` and the ``vertical_momentum`` ``Q (m + N) . up`` at ``t = 0``.
     """
-    Jm = V.second_moments(J, "J")
-    axes, A, p, Nv = gyrostat_rotor_data(rotors, N)
-    am = np.zeros((3, 3)) if a is None else V.symmetric_matrix(a, "a")
-    Q0m = V.rotation_matrix(Q0, "Q0")
-    w0 = V.vector3(omega0, "omega0")
-    if not (0 < rtol < 1):
-        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
-    Jfull = Jm + sum((0.5 * Ak * (np.eye(3) - 2 * np.outer(l, l)) for l, Ak in zip(axes, A, strict=True)),
-                     np.zeros((3, 3)))
-    Im = np.trace(Jm) * np.eye(3) - Jm
-    energy = 0.5 * w0 @ Im @ w0 + 0.5 * np.trace(Q0m.T @ am @ Q0m @ Jfull)
-    specs = tuple({"axis": l, "A": float(Ak), "p": float(pk)} for l, Ak, pk in zip(axes, A, p, strict=True))
-    return NumericalGyrostat(Jm, am, np.array(Q0, dtype=float), w0, f"numerical-gyrostat/{method}",
-                             {"energy": float(energy), "rotor_momenta": p.copy()},
-                             None, {"integrator": "integrate_gyrostat", "method": method, "rtol": rtol},
-                             N=Nv, rotors=specs, rtol=float(rtol), integrator=method)
+    Im, c, Q0m, w0, mass, g = heavy_top_data(I, center, Q0, omega0, mass, gravity)
+    Nv = V.vector3(N, "N")
+    opts = settings(method, rtol, atol, fp_type)
+    first = heavy_top_invariants(Im, c, mass, g, w0, Q0m)
+    gn = np.linalg.norm(g)
+    up = -g / gn if gn > 0 else np.array([0.0, 0.0, 1.0])
+    inv = {"energy": float(first["energy"]), "vertical_momentum": float(Q0m @ (Im @ w0 + Nv) @ up)}
+    return NumericalHeavyGyrostat(J=second_moments(Im), a=np.zeros((3, 3)), Q0=Q0m, omega0=w0,
+                                  method=f"numerical/{opts.method}", invariants=inv, diagnostics=opts.diagnostics(),
+                                  I=Im, center=c, mass=mass, gravity=g, N=Nv, settings=opts)
 
 
-def _heyoka_run(Jm, w0, Nv, Q0, rtol, dtype, torque_spec):
-    """heyoka's Taylor integrator of the same equations (state m, Q, Phi), at ``dtype`` precision."""
-    hy, ft = heyoka_and_type(dtype)
+@dataclass(frozen=True, eq=False)
+class NumericalHeavyGyrostat(RotationSolution):
+    """The heavy gyrostat of :func:`integrate_heavy_gyrostat` behind the RotationSolution protocol:
+    ``sol(t)`` integrates on demand, once per call, from ``t = 0`` (``a`` is zero, the field the uniform
+    ``gravity``; ``I`` the inertia about the fixed point without the rotors' axial moments)."""
+
+    I: np.ndarray = None  # noqa: E741 - the inertia tensor's usual name
+    center: np.ndarray = None
+    mass: float = 1.0
+    gravity: np.ndarray = None
+    N: np.ndarray = None
+    settings: Settings = Settings()
+
+    model: ClassVar[str] = "heavy-gyrostat"
+    _AT_ONCE = True  # one integration over all requested times
+
+    def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        s, Im, c, Nv, Q0m, w0 = self.settings, self.I, self.center, self.N, self.Q0, self.omega0
+        F = self.mass * self.gravity
+        atol = 1e-3 * s.rtol if s.atol is None else s.atol
+        y0 = np.concatenate([Im @ w0, Q0m.ravel(), np.zeros(3)])
+        if s.method == "heyoka":
+            run = _heyoka_run(Im, w0, Nv, Q0m, s.rtol, s.fp_type, ("pivot", c, F))
+        else:
+            run = _scipy_run(_rhs_factory(Im, Nv, lambda _time, Q: cross(c, Q.T @ F)), y0, s.rtol, atol, s.method)
+        Y, inv = _grid(t, run, y0)
+        omega, Q, _ = _finish(Y, inv, t, Im, np.zeros((0, 3)), np.zeros(0), np.zeros(0))
+        return omega, Q
+
+
+def _heyoka_run(Im, w0, Nv, Q0, rtol, fp_type, torque_spec):
+    """heyoka's Taylor integrator of the same equations (state m, Q, Phi), in ``fp_type`` arithmetic."""
+    hy, ft = heyoka_and_type(fp_type)
     xs = hy.make_vars(*[f"m{i}" for i in range(3)], *[f"q{i}{j}" for i in range(3) for j in range(3)],
                       *[f"f{i}" for i in range(3)])
     m, Q = xs[:3], [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]
-    Iw, m0w = extended_inertia(Jm, w0, ft, from_moments=True)
+    Iw, m0w = extended_inertia(Im, w0, ft)
     w = [sum(Iw[i][k] * m[k] for k in range(3)) for i in range(3)]
     tau = _heyoka_torque(Q, torque_spec)
     h = [m[i] + float(Nv[i]) for i in range(3)]
@@ -292,7 +323,7 @@ def _heyoka_run(Jm, w0, Nv, Q0, rtol, dtype, torque_spec):
     W = [[0.0, -w[2], w[1]], [w[2], 0.0, -w[0]], [-w[1], w[0], 0.0]]
     Qdot = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
     y0 = np.array(m0w + [ft(float(v)) for v in Q0.ravel()] + [ft(0.0)] * 3)
-    tol = hy.real128(str(rtol)) if dtype == "f128" else ft(rtol)
+    tol = heyoka_tol(hy, ft, rtol)
     ta = hy.taylor_adaptive(list(zip(xs, mdot + Qdot + w, strict=True)), y0, tol=tol, fp_type=ft)
 
     def run(grid):

@@ -14,29 +14,38 @@ Two methods, as in :mod:`thetasol.integrators.rotation`:
 ``"DOP853"`` (default; any explicit :func:`scipy.integrate.solve_ivp` method name works)
     adaptive Runge-Kutta on ``(m, Q)``; ``Q`` is projected onto SO(3) at output only.
 ``"heyoka"``
-    heyoka's Taylor integrator (optional extra ``thetasol[bench]``); ``dtype="ldbl"`` (80-bit)
-    or ``"f128"`` gives an extended-precision reference.
+    heyoka's Taylor integrator (optional extra ``thetasol[bench]``); ``fp_type=numpy.longdouble``
+    (80-bit) or ``heyoka.real128`` gives an extended-precision reference.
 """
 from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
 
-from thetasol.core import validate as V
 from thetasol.core.so3 import cross, hat, polar_orthonormalize
-from thetasol.core.threads import single_blas_thread
-from thetasol.integrators._common import both_ways, extended_inertia, heyoka_and_type, solve_ivp_mQ
-from thetasol.mechanics.heavy_top import heavy_top_data
+from thetasol.integrators._common import (
+    Settings,
+    both_ways,
+    extended_inertia,
+    heyoka_and_type,
+    heyoka_tol,
+    settings,
+    solve_ivp_mQ,
+)
+from thetasol.mechanics.equations import second_moments
+from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
+from thetasol.protocol import RotationSolution
 
-__all__ = ["integrate_heavy_top"]
+__all__ = ["integrate_heavy_top", "NumericalHeavyTop"]
 
 
-@single_blas_thread
-def integrate_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, *,
-                        mass: float = 1.0, gravity: ArrayLike = (0.0, 0.0, -9.81),
-                        rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
-                        dtype: str = "dbl") -> tuple[np.ndarray, np.ndarray]:
-    """Integrate the heavy top (Section 5) numerically.
+def integrate_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *,
+                        mass: float = 1.0, gravity: ArrayLike = (0.0, 0.0, -9.81), method: str = "DOP853",
+                        rtol: float = 1e-12, atol: float | None = None, fp_type: Any = float) -> NumericalHeavyTop:
+    """The heavy top (Section 5), integrated numerically.
 
     Parameters
     ----------
@@ -48,22 +57,24 @@ def integrate_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: 
         Initial attitude, body to space (orthogonal to 1e-10).
     omega0 : array_like, shape (3,)
         Initial body-frame angular velocity (``Qdot = Q hat(omega)``).
-    t : array_like
-        Output times (any shape, any order, negative allowed); integration starts at 0.
     mass : float
         Mass of the body.
     gravity : array_like, shape (3,)
         Gravity acceleration in space; the potential is ``V = -mass gravity . (Q center)``.
-    rtol, atol : float
-        Tolerances (``atol`` defaults to ``1e-3 rtol``; heyoka uses ``rtol`` only).
     method : {"DOP853", "RK45", ..., "heyoka"}
-    dtype : {"dbl", "ldbl", "f128"}
-        Floating type for ``"heyoka"``: ``"ldbl"`` is 80-bit extended precision.
+    rtol, atol : float
+        Tolerances (``atol`` defaults to ``1e-3 rtol``; heyoka takes ``rtol`` only and refuses ``atol``).
+    fp_type : {float, numpy.longdouble, heyoka.real128}
+        Floating type of ``"heyoka"``: ``numpy.longdouble`` is 80-bit extended precision.
 
     Returns
     -------
-    omega : ndarray, shape ``t.shape + (3,)``
-    Q : ndarray, shape ``t.shape + (3, 3)``
+    NumericalHeavyTop
+        ``sol(t) -> (omega, Q)`` with shapes ``t.shape + (3,)`` and ``t.shape + (3, 3)``, one
+        integration from ``t = 0`` per call; ``model`` is ``"heavy-top"``, ``method``
+        ``"numerical/<method>"``; ``invariants`` the ``energy``, ``vertical_momentum`` and
+        ``axial_momentum`` at ``t = 0`` (:func:`thetasol.heavy_top_invariants`); ``diagnostics`` the
+        integrator settings and ``error_estimate`` (its ``rtol``).
 
     Notes
     -----
@@ -72,21 +83,46 @@ def integrate_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: 
     (tests/test_heavy_top.py; benchmarks/bench_heavy_top.py measures both).
     """
     Im, c, Q0m, w0, mass, g = heavy_top_data(I, center, Q0, omega0, mass, gravity)
-    tt = V.times(t, "t")
-    if not (0 < rtol < 1):
-        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
-    atol = 1e-3 * rtol if atol is None else float(atol)
-    F = mass * g  # the weight, space frame
-    m0 = Im @ w0
-    def run(grid):
-        if method == "heyoka":
-            return _heyoka(Im, c, F, Q0m, w0, grid, rtol, dtype)
-        return _solve_ivp(Im, c, F, Q0m, m0, grid, rtol, atol, method)
+    opts = settings(method, rtol, atol, fp_type)
+    first = {k: float(v) for k, v in heavy_top_invariants(Im, c, mass, g, w0, Q0m).items()}
+    return NumericalHeavyTop(J=second_moments(Im), a=np.zeros((3, 3)), Q0=Q0m, omega0=w0,
+                             method=f"numerical/{opts.method}", invariants=first, diagnostics=opts.diagnostics(),
+                             I=Im, center=c, mass=mass, gravity=g, settings=opts)
 
-    m_out, Q_out, inv = both_ways(tt, m0, Q0m, run)
-    Q_out = polar_orthonormalize(Q_out)
-    omega = np.linalg.solve(Im, m_out[..., None])[..., 0]
-    return omega[inv].reshape(tt.shape + (3,)), Q_out[inv].reshape(tt.shape + (3, 3))
+
+@dataclass(frozen=True, eq=False)
+class NumericalHeavyTop(RotationSolution):
+    """The heavy top of :func:`integrate_heavy_top` behind the :class:`~thetasol.protocol.RotationSolution`
+    protocol: ``sol(t)`` integrates on demand, once per call, from ``t = 0`` to every requested time.
+
+    ``I`` is the inertia about the fixed point as given (``J`` its second moments, ``a`` zero: the
+    field is the uniform ``gravity``), ``center`` the mass centre seen from the fixed point.
+    """
+
+    I: np.ndarray = None  # noqa: E741 - the inertia tensor's usual name
+    center: np.ndarray = None
+    mass: float = 1.0
+    gravity: np.ndarray = None
+    settings: Settings = Settings()
+
+    model: ClassVar[str] = "heavy-top"
+    _AT_ONCE = True  # one integration over all requested times
+
+    def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        s, Im, c, Q0m, w0 = self.settings, self.I, self.center, self.Q0, self.omega0
+        atol = 1e-3 * s.rtol if s.atol is None else s.atol
+        F = self.mass * self.gravity  # the weight, space frame
+        m0 = Im @ w0
+
+        def run(grid):
+            if s.method == "heyoka":
+                return _heyoka(Im, c, F, Q0m, w0, grid, s.rtol, s.fp_type)
+            return _solve_ivp(Im, c, F, Q0m, m0, grid, s.rtol, atol, s.method)
+
+        m_out, Q_out, inv = both_ways(t, m0, Q0m, run)
+        Q_out = polar_orthonormalize(Q_out)
+        omega = np.linalg.solve(Im, m_out[..., None])[..., 0]
+        return omega[inv], Q_out[inv]
 
 
 def _solve_ivp(Im, c, F, Q0, m0, grid, rtol, atol, method):
@@ -101,13 +137,13 @@ def _solve_ivp(Im, c, F, Q0, m0, grid, rtol, atol, method):
     return solve_ivp_mQ(rhs, m0, Q0, grid, rtol, atol, method)
 
 
-def _heyoka(Im, c, F, Q0, w0, grid, rtol, dtype):
-    hy, ft = heyoka_and_type(dtype)
+def _heyoka(Im, c, F, Q0, w0, grid, rtol, fp_type):
+    hy, ft = heyoka_and_type(fp_type)
     names = [f"m{i}" for i in range(3)] + [f"q{i}{j}" for i in range(3) for j in range(3)]
     xs = hy.make_vars(*names)
     m = xs[:3]
     Q = [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]
-    if dtype == "dbl":
+    if ft is float:
         Iw, m0w = [[float(x) for x in row] for row in np.linalg.inv(Im)], [float(x) for x in Im @ w0]
     else:
         Iw, m0w = extended_inertia(Im, w0, ft)
@@ -121,7 +157,7 @@ def _heyoka(Im, c, F, Q0, w0, grid, rtol, dtype):
     Qdot = [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
     y0 = np.array(m0w + [ft(float(v)) for v in Q0.ravel()])
     tgrid = np.array([ft(float(v)) for v in np.concatenate([[0.0], grid])])
-    tol = hy.real128(str(rtol)) if dtype == "f128" else ft(rtol)
+    tol = heyoka_tol(hy, ft, rtol)
     ta = hy.taylor_adaptive(list(zip(xs, mdot + Qdot, strict=True)), y0, tol=tol, fp_type=ft)
     res = ta.propagate_grid(tgrid)
     states = np.asarray(res[-1], dtype=float)[1:]

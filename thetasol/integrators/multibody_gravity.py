@@ -9,7 +9,7 @@ bodies on spherical joints is integrated by :func:`~thetasol.integrators.multibo
 pure control couples on each body.
 
 The maximal coordinates are taken relative to the Kepler orbit ``q_K(t)`` of the initial system mass
-centre (closed form), a frame in free fall: each body then also feels the uniform fictitious force
+centre (given by the caller, e.g. :class:`thetasol.KeplerOrbit` in closed form), a frame in free fall: each body then also feels the uniform fictitious force
 ``+mu m q_K / |q_K|^3``, which exerts no torque.  The field minus that force is formed without
 cancellation (Battin's form, ``_tidal_force``), and the joints are evaluated on coordinates of the
 station's size.  In absolute coordinates both carry rounding of relative size ``eps R / L`` (orbit
@@ -39,8 +39,8 @@ from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.multibody import integrate_multibody
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration
+from thetasol.mechanics.orbit import Orbit, check_orbit
 from thetasol.mechanics.trajectories import Trajectories
-from thetasol.solutions.kepler import KeplerOrbit
 
 __all__ = ["box_mass_points", "mass_points", "PointMassGravity", "integrate_multibody_gravity"]
 
@@ -80,14 +80,15 @@ class PointMassGravity:
     torques : callable, optional
         ``torques(t, q, qdot, Q, omega) -> (N, 3)`` body-frame control couples, from the system
         mass centre ``q, qdot`` and the attitudes and angular velocities of all bodies.
-    frame : KeplerOrbit, optional
-        Positions and velocities are relative to this orbit (a frame in free fall along it): the
+    frame : Orbit, optional
+        Positions and velocities are relative to this orbit (a frame in free fall along it, e.g. a
+        :class:`thetasol.KeplerOrbit` in the same field): the
         loads then include the uniform fictitious force ``+mu m q_K / |q_K|^3``, which exerts no
         torque, and ``torques`` still gets the absolute ``q, qdot``.
     """
 
     def __init__(self, config: Configuration, mu: float, points: Mapping | None = None,
-                 torques: Callable | None = None, frame: KeplerOrbit | None = None):
+                 torques: Callable | None = None, frame: Orbit | None = None):
         self.mu = float(V.finite_array(mu, "mu", ()))
         if not self.mu > 0:
             raise ValueError(f"mu must be positive, got {mu}")
@@ -150,8 +151,8 @@ def _tidal_force(mu: float, m: np.ndarray, q: np.ndarray, d: np.ndarray) -> np.n
 
 
 @single_blas_thread
-def integrate_multibody_gravity(config: Configuration, mu: float, q0: ArrayLike, v0: ArrayLike,
-                                Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike], t: ArrayLike, *,
+def integrate_multibody_gravity(config: Configuration, orbit: Orbit, Q0: Mapping[str, ArrayLike],
+                                omega0: Mapping[str, ArrayLike], t: ArrayLike, *,
                                 points: Mapping | None = None, torques: Callable | None = None,
                                 rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
                                 alpha: float | None = None) -> Trajectories:
@@ -161,10 +162,11 @@ def integrate_multibody_gravity(config: Configuration, mu: float, q0: ArrayLike,
     ----------
     config : Configuration
         Any tree of bodies (central or not).
-    mu : float
-        Gravitational parameter ``G m0`` of the attracting centre at the origin.
-    q0, v0 : array_like (3,)
-        Initial system mass centre and its velocity (relative to the attracting centre).
+    orbit : Orbit
+        The Kepler orbit of the system mass centre's initial state, ``thetasol.KeplerOrbit(mu, q0, v0)``
+        (or any :class:`thetasol.mechanics.orbit.Orbit` through that state in the field of ``orbit.mu``):
+        its ``mu`` is the attracting centre's ``G m0``, its ``r0, v0`` the system mass centre's position
+        and velocity at ``t = 0``, and it is the free-falling frame of the maximal coordinates.
     Q0, omega0 : mapping name -> (3, 3), (3,)
         Initial attitudes and body-frame angular velocities (identity, zero where missing).
     t : array_like (T,)
@@ -174,7 +176,7 @@ def integrate_multibody_gravity(config: Configuration, mu: float, q0: ArrayLike,
     rtol, atol, method
         Passed to :func:`~thetasol.integrators.multibody.integrate_multibody`.
     alpha : float, optional
-        Baumgarte rate; default the fastest initial rate, ``max(|omega0|, sqrt(mu / |q0|^3))``
+        Baumgarte rate; default the fastest initial rate, ``max(|omega0|, sqrt(mu / |r0|^3))``
         (unit-free, unlike the default of ``integrate_multibody``).
 
     Returns
@@ -182,11 +184,11 @@ def integrate_multibody_gravity(config: Configuration, mu: float, q0: ArrayLike,
     Trajectories
         As :func:`~thetasol.integrators.multibody.integrate_multibody`, ``info["model"]`` naming the field.
     """
-    q0v, v0v = V.vector3(q0, "q0"), V.vector3(v0, "v0")
+    frame = check_orbit(orbit)
+    q0v = V.vector3(frame.r0, "orbit.r0")
     if not np.linalg.norm(q0v) > 0:
-        raise ValueError("q0 must not be the attracting centre")
-    frame = KeplerOrbit(float(mu), q0v, v0v)           # refuses mu <= 0 and radial orbits
-    gravity = PointMassGravity(config, mu, points, torques, frame=frame)
+        raise ValueError("orbit.r0 must not be the attracting centre")
+    gravity = PointMassGravity(config, frame.mu, points, torques, frame=frame)
     if alpha is None:
         wmax = max((np.linalg.norm(V.vector3(w, "omega0")) for w in omega0.values()), default=0.0)
         alpha = max(wmax, np.sqrt(gravity.mu / np.linalg.norm(q0v) ** 3))

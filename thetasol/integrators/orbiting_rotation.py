@@ -1,6 +1,7 @@
 """The numerical reference of Section 7: one body's rotation about its mass centre on a Kepler orbit.
 
-The mass centre follows a :class:`~thetasol.solutions.kepler.KeplerOrbit` ``r(t)`` (7.7); the body
+The mass centre follows a given orbit ``r(t)`` (:class:`~thetasol.mechanics.orbit.Orbit`, e.g. the
+Kepler orbit (7.7) of :class:`thetasol.KeplerOrbit`); the body
 turns in the gravity-gradient torque of (7.16) (:func:`~thetasol.mechanics.gravity_gradient.gravity_gradient_torque`)
 
     mdot = m x omega + 3 mu / |r|^5 (Q^T r) x I (Q^T r),    Qdot = Q hat(omega),    m = I omega,
@@ -13,10 +14,11 @@ Methods:
 
 ``"DOP853"`` (default; any explicit :func:`scipy.integrate.solve_ivp` method)
     adaptive Runge-Kutta on ``(m, Q)``; ``r(t)`` from the closed-form orbit
-    (:meth:`KeplerOrbit.state_at`) at every stage, ``Q`` projected onto SO(3) at output.
+    (the orbit's ``state_at``) at every stage, ``Q`` projected onto SO(3) at output.
 ``"heyoka"``
     heyoka's Taylor integrator of the same equations with the orbit integrated alongside
-    (``dtype="ldbl"``: 80-bit, ``"f128"``: quadruple precision) -- the extended-precision reference.
+    (``fp_type=numpy.longdouble``: 80-bit, ``heyoka.real128``: quadruple precision) -- the
+    extended-precision reference; it integrates the Kepler orbit of ``orbit.mu``, ``orbit.r0``, ``orbit.v0``.
 
 Accuracy (tests/test_orbiting_rotation.py): DOP853 is checked against 80-bit heyoka over many
 orbits (circular, librating and tumbling), the Jacobi integral (7.18) on circular orbits, and a
@@ -28,76 +30,119 @@ on time through the orbit.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.so3 import polar_orthonormalize
-from thetasol.core.threads import single_blas_thread
-from thetasol.integrators._common import both_ways, heyoka_and_type, solve_ivp_mQ
+from thetasol.integrators._common import (
+    Settings,
+    body_inertia,
+    both_ways,
+    extended_inertia,
+    heyoka_and_type,
+    heyoka_tol,
+    settings,
+    solve_ivp_mQ,
+)
+from thetasol.mechanics.orbit import Orbit, check_orbit
 from thetasol.protocol import RotationSolution
-from thetasol.solutions.kepler import KeplerOrbit
 
-__all__ = ["integrate_orbiting_rotation", "NumericalOrbitingRotation", "numerical_orbiting_rotation"]
+__all__ = ["integrate_orbiting_rotation", "NumericalOrbitingRotation"]
 
 
-@single_blas_thread
-def integrate_orbiting_rotation(J: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, *,
-                                rtol: float = 1e-12, atol: float | None = None, method: str = "DOP853",
-                                dtype: str = "dbl") -> tuple[np.ndarray, np.ndarray]:
-    """Integrate the rotation of a rigid body about its mass centre moving on ``orbit``.
+def integrate_orbiting_rotation(I: ArrayLike, orbit: Orbit, Q0: ArrayLike, omega0: ArrayLike, *,  # noqa: E741
+                                method: str = "DOP853", rtol: float = 1e-12, atol: float | None = None,
+                                fp_type: Any = float) -> NumericalOrbitingRotation:
+    """The rotation of a rigid body about its mass centre moving on ``orbit``, integrated numerically.
 
     Parameters
     ----------
-    J : array_like, shape (3,) or (3, 3)
-        Second moments ``sum m r r^T`` in the body frame (``I = tr(J) 1 - J``).
-    orbit : KeplerOrbit
-        The mass centre's orbit; its ``mu`` sets the torque.
+    I : array_like, shape (3,) or (3, 3)
+        Inertia tensor about the mass centre, body frame (principal values or a symmetric tensor).
+    orbit : Orbit
+        The mass centre's orbit (:class:`thetasol.KeplerOrbit`, or any object with the members of
+        :class:`thetasol.mechanics.orbit.Orbit`); its ``mu`` sets the torque.
     Q0 : array_like, shape (3, 3)
         Attitude at ``t = 0`` (body to space).
     omega0 : array_like, shape (3,)
         Body-frame angular velocity at ``t = 0``.
-    t : array_like
-        Output times (any shape and order; negative allowed).
-    rtol, atol : float
-        Tolerances (``atol`` defaults to ``1e-3 rtol`` times the scale of ``m0``; for heyoka
-        ``rtol`` is its ``tol``).
     method : {"DOP853", "RK45", ..., "heyoka"}
-    dtype : {"dbl", "ldbl", "f128"}
-        Floating type for ``"heyoka"``.
+    rtol, atol : float
+        Tolerances (``atol`` defaults to ``1e-3 rtol`` times the scale of ``m0``; heyoka takes ``rtol``
+        as its ``tol`` and refuses ``atol``).
+    fp_type : {float, numpy.longdouble, heyoka.real128}
+        Floating type of ``"heyoka"``.
 
     Returns
     -------
-    omega : ndarray, shape ``t.shape + (3,)``
-    Q : ndarray, shape ``t.shape + (3, 3)``
+    NumericalOrbitingRotation
+        ``sol(t) -> (omega, Q)`` with shapes ``t.shape + (3,)`` and ``t.shape + (3, 3)``, one
+        integration from ``t = 0`` per call; ``model`` is ``"orbiting-rotation"``, ``method``
+        ``"numerical/<method>"``; ``a`` the tidal matrix (7.11) at ``t = 0``; ``invariants`` the
+        Jacobi integral (7.18) at ``t = 0`` when the orbit is circular (``e <= 1e-13``), else nothing
+        (the rotation on an elliptic orbit has no known first integral); ``diagnostics`` the
+        integrator settings and ``error_estimate`` (its ``rtol``).
     """
-    if not isinstance(orbit, KeplerOrbit):
-        raise TypeError(f"orbit must be a KeplerOrbit, got {type(orbit).__name__}")
-    Jm = V.second_moments(J, "J")
-    Q0 = V.rotation_matrix(Q0, "Q0")
-    w0 = V.vector3(omega0, "omega0")
-    tt = V.times(t, "t")
-    if not (0 < rtol < 1):
-        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
-    Im = np.trace(Jm) * np.eye(3) - Jm
-    m0 = Im @ w0
-    # scale of m: the spin or the orbital rate times the inertia, whichever is larger
-    mscale = max(np.linalg.norm(m0), orbit.diagnostics["mean_motion"] * np.max(np.abs(Im)),
-                 np.finfo(float).tiny)
-    atol = 1e-3 * rtol * mscale if atol is None else float(atol)
-    def run(grid):
-        if method == "heyoka":
-            return _heyoka(Jm, orbit, Q0, w0, grid, rtol, dtype)
-        return _solve_ivp(Jm, Im, orbit, Q0, m0, grid, rtol, atol, method)
-
-    m_out, Q_out, inv = both_ways(tt, m0, Q0, run)
-    Q_out = polar_orthonormalize(Q_out)
-    omega = np.linalg.solve(Im, m_out[..., None])[..., 0]
-    return omega[inv].reshape(tt.shape + (3,)), Q_out[inv].reshape(tt.shape + (3, 3))
+    orbit = check_orbit(orbit)
+    Im, Jm = body_inertia(I)
+    Qm = V.rotation_matrix(Q0, "Q0")
+    wm = V.vector3(omega0, "omega0")
+    opts = settings(method, rtol, atol, fp_type)
+    r = np.asarray(orbit.r0, dtype=float)
+    rn = float(np.linalg.norm(r))
+    a = -3.0 * orbit.mu / rn ** 3 * np.outer(r, r) / rn ** 2
+    d = orbit.diagnostics
+    inv = {}
+    if d["kind"] == "elliptic" and d["e"] <= 1e-13:
+        n = d["mean_motion"]
+        g, h = Qm.T @ (r / rn), np.cross(r, orbit.v0)
+        nb = Qm.T @ (h / np.linalg.norm(h))
+        M = Im @ wm
+        inv["jacobi"] = float(0.5 * M @ wm + 1.5 * n * n * g @ Im @ g - n * M @ nb)
+    return NumericalOrbitingRotation(J=Jm, a=a, Q0=Qm, omega0=wm, method=f"numerical/{opts.method}", invariants=inv,
+                                     diagnostics=opts.diagnostics(), I=Im, orbit=orbit, settings=opts)
 
 
-def _solve_ivp(Jm, Im, orbit, Q0, m0, tgrid, rtol, atol, method):
+@dataclass(frozen=True, eq=False)
+class NumericalOrbitingRotation(RotationSolution):
+    """The rotation of :func:`integrate_orbiting_rotation` behind the
+    :class:`~thetasol.protocol.RotationSolution` protocol.
+
+    ``sol(t) -> (omega, Q)`` integrates on demand, once per call, from ``t = 0`` to every requested
+    time (any shape and order); nothing is cached.  ``a`` is the tidal matrix (7.11) at ``t = 0``,
+    ``I`` the inertia as given and ``J`` its second moments.
+    """
+
+    I: np.ndarray = None  # noqa: E741 - the inertia tensor's usual name
+    orbit: Orbit = field(default=None, repr=False)
+    settings: Settings = Settings()
+
+    model: ClassVar[str] = "orbiting-rotation"
+    _AT_ONCE = True  # one integration over all requested times
+
+    def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        s, Im, orbit, Q0, w0 = self.settings, self.I, self.orbit, self.Q0, self.omega0
+        m0 = Im @ w0
+        # scale of m: the spin or the orbital rate times the inertia, whichever is larger
+        mscale = max(np.linalg.norm(m0), orbit.diagnostics["mean_motion"] * np.max(np.abs(Im)),
+                     np.finfo(float).tiny)
+        atol = 1e-3 * s.rtol * mscale if s.atol is None else s.atol
+
+        def run(grid):
+            if s.method == "heyoka":
+                return _heyoka(Im, orbit, Q0, w0, grid, s.rtol, s.fp_type)
+            return _solve_ivp(Im, orbit, Q0, m0, grid, s.rtol, atol, s.method)
+
+        m_out, Q_out, inv = both_ways(t, m0, Q0, run)
+        Q_out = polar_orthonormalize(Q_out)
+        omega = np.linalg.solve(Im, m_out[..., None])[..., 0]
+        return omega[inv], Q_out[inv]
+
+
+def _solve_ivp(Im, orbit, Q0, m0, tgrid, rtol, atol, method):
     return solve_ivp_mQ(_make_rhs(Im, orbit), m0, Q0, tgrid, rtol, atol, method)
 
 
@@ -137,26 +182,10 @@ def _make_rhs(Im, orbit):
     return rhs
 
 
-def _to_fp(x, fp, mpmath):
-    """An mpmath number rounded to ``fp`` as the sum of its float64 triple-word split."""
-    parts = []
-    for _ in range(3):
-        parts.append(float(x))
-        x = x - mpmath.mpf(parts[-1])
-    return (fp(parts[0]) + fp(parts[1])) + fp(parts[2])
-
-
-def _heyoka(Jm, orbit, Q0, w0, tgrid, rtol, dtype):
-    import mpmath
-
-    hy, ft = heyoka_and_type(dtype)
-    with mpmath.workdps(60):     # I^-1 and m0 of the float64 data, rounded once to the working type
-        Jmp = mpmath.matrix([[mpmath.mpf(float(x)) for x in row] for row in Jm])
-        Imp = (Jmp[0, 0] + Jmp[1, 1] + Jmp[2, 2]) * mpmath.eye(3) - Jmp
-        Iinv_mp, m0_mp = Imp ** -1, Imp * mpmath.matrix([mpmath.mpf(float(x)) for x in w0])
-        Iinv = [[_to_fp(Iinv_mp[i, k], ft, mpmath) for k in range(3)] for i in range(3)]
-        Iw = [[_to_fp(Imp[i, k], ft, mpmath) for k in range(3)] for i in range(3)]
-        m0 = [_to_fp(m0_mp[i], ft, mpmath) for i in range(3)]
+def _heyoka(Im, orbit, Q0, w0, tgrid, rtol, fp_type):
+    hy, ft = heyoka_and_type(fp_type)
+    Iinv, m0 = extended_inertia(Im, w0, ft)  # I^-1 and m0 of the float64 data, rounded once to the working type
+    Iw = [[ft(float(x)) for x in row] for row in Im]
     names = ["x", "y", "z", "vx", "vy", "vz"] + [f"m{i}" for i in range(3)] + [f"q{i}{j}" for i in range(3) for j in range(3)]
     xs = hy.make_vars(*names)
     pos, vel, m = xs[0:3], xs[3:6], xs[6:9]
@@ -177,63 +206,7 @@ def _heyoka(Jm, orbit, Q0, w0, tgrid, rtol, dtype):
     sys = list(zip(xs, list(vel) + acc + mdot + Qdot, strict=True))
     y0 = np.array([ft(float(v)) for v in list(orbit.r0) + list(orbit.v0)] + m0 + [ft(float(v)) for v in Q0.ravel()])
     grid = np.array([ft(float(v)) for v in np.concatenate([[0.0], tgrid])])
-    tol = hy.real128(str(rtol)) if dtype == "f128" else ft(rtol)
+    tol = heyoka_tol(hy, ft, rtol)
     ta = hy.taylor_adaptive(sys, y0, tol=tol, fp_type=ft)
     states = np.asarray(ta.propagate_grid(grid)[-1], dtype=float)[1:]
     return states[:, 6:9], states[:, 9:].reshape(-1, 3, 3)
-
-
-@dataclass(frozen=True, eq=False)
-class NumericalOrbitingRotation(RotationSolution):
-    """:func:`integrate_orbiting_rotation` behind the :class:`~thetasol.protocol.RotationSolution` protocol.
-
-    ``sol(t) -> (omega, Q)`` integrates on demand, once per call, from ``t = 0`` to every requested
-    time (any shape and order); nothing is cached.  ``a`` is the tidal matrix (7.11) at ``t = 0``.
-    Build it with :func:`numerical_orbiting_rotation`.
-    """
-
-    orbit: KeplerOrbit = field(default=None, repr=False)
-    rtol: float = 1e-12
-    integrator: str = "DOP853"
-
-    _AT_ONCE = True  # one integration over all requested times
-
-    def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return integrate_orbiting_rotation(self.J, self.orbit, self.Q0, self.omega0, t, rtol=self.rtol,
-                                           method=self.integrator)
-
-
-def numerical_orbiting_rotation(J: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, omega0: ArrayLike, *,
-                                rtol: float = 1e-12, method: str = "DOP853") -> NumericalOrbitingRotation:
-    """One body's rotation on ``orbit`` as a solution evaluated by :func:`integrate_orbiting_rotation`.
-
-    Returns
-    -------
-    NumericalOrbitingRotation
-        ``method`` is ``"numerical/<method>"``; ``invariants`` holds the Jacobi integral (7.18) at
-        ``t = 0`` when the orbit is circular (``e <= 1e-13``), else nothing (the rotation on an
-        elliptic orbit has no known first integral).
-    """
-    if not isinstance(orbit, KeplerOrbit):
-        raise TypeError(f"orbit must be a KeplerOrbit, got {type(orbit).__name__}")
-    Jm = V.second_moments(J, "J")
-    Qm = V.rotation_matrix(Q0, "Q0")
-    wm = V.vector3(omega0, "omega0")
-    if not (0 < rtol < 1):
-        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
-    r = orbit.r0
-    rn = float(np.linalg.norm(r))
-    a = -3.0 * orbit.mu / rn ** 3 * np.outer(r, r) / rn ** 2
-    d = orbit.diagnostics
-    inv = {}
-    if d["kind"] == "elliptic" and d["e"] <= 1e-13:
-        n = d["mean_motion"]
-        Im = np.trace(Jm) * np.eye(3) - Jm
-        g, h = Qm.T @ (r / rn), np.cross(r, orbit.v0)
-        nb = Qm.T @ (h / np.linalg.norm(h))
-        M = Im @ wm
-        inv["jacobi"] = float(0.5 * M @ wm + 1.5 * n * n * g @ Im @ g - n * M @ nb)
-    return NumericalOrbitingRotation(J=Jm, a=a, Q0=np.array(Q0, dtype=float), omega0=wm, method=f"numerical/{method}",
-                                     invariants=inv, diagnostics={"integrator": "integrate_orbiting_rotation",
-                                                                  "method": method, "rtol": rtol},
-                                     orbit=orbit, rtol=float(rtol), integrator=method)

@@ -11,16 +11,17 @@ equation ``Qdot = Q hat(omega)``.  Three methods:
     by the torque, composed to order 6 by Yoshida's triple jump.  ``Q`` stays in SO(3) to
     round-off and the energy error stays bounded over long times.
 ``"heyoka"``
-    heyoka's Taylor integrator (optional extra ``thetasol[bench]``); ``dtype="f128"`` or
-    ``"ldbl"`` gives a quadruple/extended-precision reference.
+    heyoka's Taylor integrator (optional extra ``thetasol[bench]``); ``fp_type=heyoka.real128`` or
+    ``numpy.longdouble`` gives a quadruple/extended-precision reference.
 
-:class:`NumericalRotation` wraps it in the :class:`~thetasol.protocol.RotationSolution`
-protocol, for bodies whose rotation has no closed form.
+The result, a :class:`NumericalRotation`, follows the :class:`~thetasol.protocol.RotationSolution`
+protocol: the reference for bodies whose rotation has no closed form, and the check of those that have one.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any, ClassVar
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -28,34 +29,33 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.attitude import principal_frame
 from thetasol.core.so3 import polar_orthonormalize
-from thetasol.core.threads import single_blas_thread
-from thetasol.integrators._common import both_ways, extended_inertia, heyoka_and_type, solve_ivp_mQ
-from thetasol.mechanics.equations import inertia_from_moments, invariants, rotation_rhs
+from thetasol.integrators._common import (
+    SCIPY_METHODS,
+    Settings,
+    body_inertia,
+    both_ways,
+    extended_inertia,
+    heyoka_and_type,
+    heyoka_tol,
+    settings,
+    solve_ivp_mQ,
+)
+from thetasol.mechanics.equations import invariants, rotation_rhs
 from thetasol.protocol import RotationSolution
 
-__all__ = ["integrate_rotation", "NumericalRotation", "numerical_rotation", "rotation_expressions"]
+__all__ = ["integrate_rotation", "NumericalRotation", "rotation_expressions"]
 
 
-def _prepare(J, a, Q0, omega0, t) -> tuple[np.ndarray, ...]:
-    Jm = V.second_moments(J, "J")
-    am = V.symmetric_matrix(a, "a")
-    Q0 = V.rotation_matrix(Q0, "Q0")
-    w0 = V.vector3(omega0, "omega0")
-    tt = V.times(t, "t")
-    return Jm, am, Q0, w0, tt
-
-
-@single_blas_thread
-def integrate_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, t: ArrayLike, rtol: float = 1e-12, atol: float | None = None,
-                       method: str = "DOP853", step: float | None = None,
-                       dtype: str = "dbl") -> tuple[np.ndarray, np.ndarray]:
-    """Integrate the rotation of a rigid body in the potential ``1/2 x^T a x`` numerically.
+def integrate_rotation(I: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *, method: str = "DOP853",
+                       rtol: float = 1e-12, atol: float | None = None, fp_type: Any = float,
+                       step: float | None = None) -> NumericalRotation:
+    """The rotation of a rigid body in the potential ``1/2 x^T a x``, integrated numerically.
 
     Parameters
     ----------
-    J : array_like, shape (3,) or (3, 3)
-        Second moments ``sum m r r^T`` of the body in its body frame (principal values or
-        a symmetric tensor).  Inertia is ``I = tr(J) 1 - J``.
+    I : array_like, shape (3,) or (3, 3)
+        Inertia tensor of the body about its mass centre, body frame (principal values or a symmetric
+        tensor); the paper's second moments ``J`` convert with :func:`thetasol.inertia`.
     a : array_like, shape (3, 3)
         Symmetric potential matrix, ``phi(x) = 1/2 x^T a x`` (the linear part of (2.4)
         exerts no torque about the mass centre).
@@ -63,113 +63,87 @@ def integrate_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayL
         Initial attitude, body to space (``x = Q r``); orthogonal to 1e-10.
     omega0 : array_like, shape (3,)
         Initial body-frame angular velocity (``Qdot = Q hat(omega)``).
-    t : array_like
-        Output times (any shape, any order, negative allowed); integration starts at 0.
-    rtol, atol : float
-        Tolerances for the adaptive methods (``atol`` defaults to ``1e-3 rtol``).  For the
-        splitting method ``rtol`` sets the step: ``h = rtol**(1/6) / (2 (|omega0| + sqrt(|a|)))``.
     method : {"DOP853", "RK45", ..., "splitting", "heyoka"}
+        A :func:`scipy.integrate.solve_ivp` method, the symplectic splitting or heyoka's Taylor integrator.
+    rtol : float
+        Relative tolerance of the adaptive methods and of heyoka.  For the splitting it sets the
+        step: ``h = rtol**(1/6) / (2 (|omega0| + sqrt(|a|)))``.
+    atol : float, optional
+        Absolute tolerance of the solve_ivp methods (default ``1e-3 rtol``); refused with the others.
+    fp_type : {float, numpy.longdouble, heyoka.real128}
+        Floating type of ``"heyoka"`` (refused with the other methods).  In extended precision the
+        inverse inertia and ``m0 = I omega0`` are those of the float64 ``I`` and ``omega0`` rounded
+        once to that type (not the float64 inverse, another body one ulp away, which near an unstable
+        relative equilibrium moves the trajectory far more than the data's conditioning).
     step : float, optional
-        Fixed step for ``"splitting"`` (overrides the ``rtol`` rule).
-    dtype : {"dbl", "ldbl", "f128"}
-        Floating type for ``"heyoka"``.  With ``"ldbl"`` and ``"f128"`` the inverse inertia and
-        ``m0 = I omega0`` are those of the float64 ``J`` and ``omega0`` rounded once to that type
-        (not the float64 inverse, another body one ulp away: near an unstable relative equilibrium
-        that body's trajectory parts from the data's, tests/test_equations.py::
-        test_extended_precision_reference_next_to_an_unstable_equilibrium_matches_the_closed_form).
-
-    Returns
-    -------
-    omega : ndarray, shape ``t.shape + (3,)``
-    Q : ndarray, shape ``t.shape + (3, 3)``
-
-    Notes
-    -----
-    Implements the Euler equations (4.8) in the vector form ``mdot = m x omega + tau``,
-    ``tau = vee([J, Q^T a Q])`` (docs/conventions.md).  Its error grows with the horizon;
-    tests/test_equations.py checks DOP853 against heyoka in 80-bit precision on generic data.
-    """
-    Jm, am, Q0, w0, tt = _prepare(J, a, Q0, omega0, t)
-    if not (0 < rtol < 1):
-        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
-    atol = 1e-3 * rtol if atol is None else float(atol)
-    Im = inertia_from_moments(Jm)
-    I_inv = np.linalg.inv(Im)
-    m0 = Im @ w0
-    # Integrate once over the distinct times, forward for t > 0 and backward for t < 0.
-    def run(grid):
-        if method == "splitting":
-            return _splitting(Jm, am, Q0, m0, grid, rtol, step, w0)
-        if method == "heyoka":
-            return _heyoka(Jm, I_inv, am, Q0, m0, grid, rtol, dtype, w0)
-        return _solve_ivp(Jm, I_inv, am, Q0, m0, grid, rtol, atol, method)
-
-    m_out, Q_out, inv = both_ways(tt, m0, Q0, run)
-    Q_out = polar_orthonormalize(Q_out)
-    omega = np.linalg.solve(Im, m_out[..., None])[..., 0]
-    return omega[inv].reshape(tt.shape + (3,)), Q_out[inv].reshape(tt.shape + (3, 3))
-
-
-@dataclass(frozen=True, eq=False)
-class NumericalRotation(RotationSolution):
-    """:func:`integrate_rotation` behind the :class:`~thetasol.protocol.RotationSolution` protocol.
-
-    ``sol(t)`` integrates on demand, once per call, from ``t = 0`` to every requested time (any
-    shape, any order, negative allowed): no chunking, so a call costs one integration over
-    ``[min(t, 0), max(t, 0)]`` and nothing is cached between calls.  Build it with
-    :func:`numerical_rotation`.
-
-    Attributes
-    ----------
-    rtol : float
-        Relative tolerance passed to :func:`integrate_rotation`.
-    integrator : str
-        Its ``method`` (``"DOP853"``, ``"splitting"``, ``"heyoka"``, ...).
-    """
-
-    rtol: float = 1e-12
-    integrator: str = "DOP853"
-
-    _AT_ONCE = True  # one integration over all requested times
-
-    def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return integrate_rotation(self.J, self.a, self.Q0, self.omega0, t, rtol=self.rtol, method=self.integrator)
-
-
-def numerical_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, rtol: float = 1e-12,
-                       method: str = "DOP853") -> NumericalRotation:
-    """The rotation of one body in ``1/2 x^T a x`` as a solution evaluated by :func:`integrate_rotation`.
-
-    Parameters
-    ----------
-    J, a, Q0, omega0
-        As for :func:`integrate_rotation` (validated here).
-    rtol : float
-        Relative tolerance of the integration.
-    method : str
-        Integration method of :func:`integrate_rotation`.
+        Fixed step of ``"splitting"`` (overrides the ``rtol`` rule; refused with the other methods).
 
     Returns
     -------
     NumericalRotation
-        ``method`` is ``"numerical/<method>"``; ``invariants`` the first integrals at ``t = 0``
-        (``energy``, ``I2``, ``I3`` (4.13) and the spectral-curve coefficients ``curve`` (4.12));
-        ``diagnostics`` the integrator and its tolerance.
+        ``sol(t) -> (omega, Q)`` with shapes ``t.shape + (3,)`` and ``t.shape + (3, 3)`` for any
+        shape of ``t`` (any order, negative allowed), one integration from ``t = 0`` per call;
+        ``model`` is ``"rotation"``, ``method`` ``"numerical/<method>"``; ``invariants`` the first
+        integrals at ``t = 0`` (``energy``, ``I2``, ``I3`` (4.13) and the spectral-curve coefficients
+        ``curve`` (4.12)); ``diagnostics`` the integrator settings and ``error_estimate`` (its ``rtol``).
+
+    Notes
+    -----
+    Implements the Euler equations (4.8) in the vector form ``mdot = m x omega + tau``,
+    ``tau = vee([J, Q^T a Q])`` with ``J = tr(I)/2 1 - I`` (docs/conventions.md).  Its error grows with
+    the horizon; tests/test_equations.py checks DOP853 against heyoka in 80-bit precision on generic data.
     """
-    Jm = V.second_moments(J, "J")
+    Im, Jm = body_inertia(I)
     am = V.symmetric_matrix(a, "a")
     Qm = V.rotation_matrix(Q0, "Q0")
     wm = V.vector3(omega0, "omega0")
-    if not (0 < rtol < 1):
-        raise ValueError(f"rtol must be in (0, 1), got {rtol}")
+    opts = settings(method, rtol, atol, fp_type, step, methods=(*SCIPY_METHODS, "splitting", "heyoka"))
     inv = invariants(Jm, am, Qm, wm)
     first = {"energy": float(inv["energy"]), "I2": float(inv["I2"]), "I3": float(inv["I3"]), "curve": inv["curve"]}
-    # Q0 is kept as given (checked above): integrate_rotation projects it onto SO(3) itself, and a
-    # second projection could move its last bits.
-    Qg = np.array(Q0, dtype=float)
-    return NumericalRotation(J=Jm, a=am, Q0=Qg, omega0=wm, method=f"numerical/{method}", invariants=first,
-                             diagnostics={"integrator": "integrate_rotation", "method": method, "rtol": rtol},
-                             rtol=float(rtol), integrator=method)
+    return NumericalRotation(J=Jm, a=am, Q0=Qm, omega0=wm, method=f"numerical/{opts.method}", invariants=first,
+                             diagnostics=opts.diagnostics(), I=Im, settings=opts)
+
+
+@dataclass(frozen=True, eq=False)
+class NumericalRotation(RotationSolution):
+    """The numerical rotation of :func:`integrate_rotation` behind the
+    :class:`~thetasol.protocol.RotationSolution` protocol.
+
+    ``sol(t)`` integrates on demand, once per call, from ``t = 0`` to every requested time (any
+    shape, any order, negative allowed): no chunking, so a call costs one integration over
+    ``[min(t, 0), max(t, 0)]`` and nothing is cached between calls.
+
+    Attributes
+    ----------
+    I : ndarray, shape (3, 3)
+        The inertia tensor as given (``J`` holds its second moments).
+    settings : Settings
+        The integrator and its tolerances.
+    """
+
+    I: np.ndarray = None  # noqa: E741 - the inertia tensor's usual name
+    settings: Settings = Settings()
+
+    model: ClassVar[str] = "rotation"
+    _AT_ONCE = True  # one integration over all requested times
+
+    def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        s, Im, Jm, am, Q0, w0 = self.settings, self.I, self.J, self.a, self.Q0, self.omega0
+        atol = 1e-3 * s.rtol if s.atol is None else s.atol
+        I_inv = np.linalg.inv(Im)
+        m0 = Im @ w0
+
+        def run(grid):
+            if s.method == "splitting":
+                return _splitting(Jm, am, Q0, m0, grid, s.rtol, s.step, w0)
+            if s.method == "heyoka":
+                return _heyoka(Jm, Im, I_inv, am, Q0, m0, grid, s.rtol, s.fp_type, w0)
+            return _solve_ivp(Jm, I_inv, am, Q0, m0, grid, s.rtol, atol, s.method)
+
+        m_out, Q_out, inv = both_ways(t, m0, Q0, run)
+        Q_out = polar_orthonormalize(Q_out)
+        omega = np.linalg.solve(Im, m_out[..., None])[..., 0]
+        return omega[inv], Q_out[inv]
 
 
 def _solve_ivp(Jm, I_inv, am, Q0, m0, tgrid, rtol, atol, method):
@@ -287,23 +261,23 @@ def rotation_expressions(m: list, Q: list, Iinv: list, J: list, A: list) -> list
     return mdot + [sum(Q[i][k] * W[k][j] for k in range(3)) for i in range(3) for j in range(3)]
 
 
-def _heyoka(Jm, I_inv, am, Q0, m0, tgrid, rtol, dtype, w0):
-    hy, ft = heyoka_and_type(dtype)
+def _heyoka(Jm, Im, I_inv, am, Q0, m0, tgrid, rtol, fp_type, w0):
+    hy, ft = heyoka_and_type(fp_type)
     names = [f"m{i}" for i in range(3)] + [f"q{i}{j}" for i in range(3) for j in range(3)]
     xs = hy.make_vars(*names)
     m = xs[:3]
     Q = [xs[3 + 3 * i: 6 + 3 * i] for i in range(3)]
-    if dtype == "dbl":
+    if ft is float:
         Iw, m0w = [[float(x) for x in row] for row in I_inv], [float(x) for x in m0]
     else:
-        Iw, m0w = extended_inertia(Jm, w0, ft, from_moments=True)
+        Iw, m0w = extended_inertia(Im, w0, ft)
     A = [[float(am[i, k]) for k in range(3)] for i in range(3)]
     J = [[float(Jm[i, k]) for k in range(3)] for i in range(3)]
     odes = list(zip(xs, rotation_expressions(m, Q, Iw, J, A), strict=True))
     # Q0 and the times are the float64 values themselves (real128(str(x)) would be another number)
     y0 = np.array(m0w + [ft(float(v)) for v in Q0.ravel()])
     grid = np.array([ft(float(v)) for v in np.concatenate([[0.0], tgrid])])
-    tol = hy.real128(str(rtol)) if dtype == "f128" else ft(rtol)
+    tol = heyoka_tol(hy, ft, rtol)
     ta = hy.taylor_adaptive(odes, y0, tol=tol, fp_type=ft)
     res = ta.propagate_grid(grid)
     states = np.asarray(res[-1], dtype=float)[1:]

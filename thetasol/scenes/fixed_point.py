@@ -25,7 +25,7 @@ The cheapest exact form (Corollaries 2-4), chosen by :func:`main_rotation`:
   heavy top, :func:`thetasol.solutions.heavy_top.solve_heavy_top` with ``I_P``, centre
   ``c - r_P``, mass ``m`` and gravity ``-b_P / 2`` (Euler, Lagrange, Kovalevskaya);
 * otherwise no closed form is known (Corollary 4): the numerical reference
-  :func:`thetasol.integrators.fixed_point.numerical_fixed_point`, and the diagnostics say why.
+  :func:`thetasol.integrators.fixed_point.integrate_fixed_point`, and the diagnostics say why.
 """
 from __future__ import annotations
 
@@ -38,7 +38,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.threads import single_blas_thread
-from thetasol.integrators.fixed_point import fixed_point_energy, numerical_fixed_point
+from thetasol.integrators.fixed_point import fixed_point_energy, integrate_fixed_point
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Pivot, pivot_mass_center
 from thetasol.mechanics.equations import inertia_from_moments, invariants as rotation_invariants
@@ -157,7 +157,7 @@ def main_rotation(pb: PivotedBody, a: np.ndarray, Q0: np.ndarray, omega0: np.nda
                       "linear part (a not isotropic, b + 2 a x_P != 0, mass centre off the pivot)")
     if sol is not None:
         return sol, f"{head}: closed form {sol.method}", True, ""
-    sol = numerical_fixed_point(pb.J, pb.R, a, pb.b, Q0, omega0, rtol=rtol, method=method)
+    sol = integrate_fixed_point(pb.I, pb.R, a, pb.b, Q0, omega0, rtol=rtol, method=method)
     return sol, f"{head}: numerical (integrate_fixed_point {method}, rtol={rtol:g})", False, why
 
 
@@ -188,7 +188,7 @@ class FixedPointSolution(ConfigurationSolution):
 
 def _invariants(config: Configuration, pb: PivotedBody, a: np.ndarray, b: np.ndarray, pivot: Pivot,
                 Qa: np.ndarray, wa: np.ndarray) -> dict:
-    rot = {config.root: {"energy": float(fixed_point_energy(pb.J, pb.R, a, pb.b, Qa[0], wa[0]))}}
+    rot = {config.root: {"energy": float(fixed_point_energy(pb.I, pb.R, a, pb.b, Qa[0], wa[0]))}}
     for i, (n, e) in enumerate(list(config.effective_bodies().items())[1:], start=1):
         inv = rotation_invariants(e.J, a, Qa[i], wa[i])
         rot[n] = {"energy": float(inv["energy"]), "I2": float(inv["I2"]), "I3": float(inv["I3"]),

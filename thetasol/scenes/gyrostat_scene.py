@@ -36,11 +36,12 @@ import numpy as np
 from thetasol.core import validate as V
 from thetasol.core.so3 import rodrigues
 from thetasol.core.threads import single_blas_thread
-from thetasol.integrators.gyrostat import numerical_gyrostat
+from thetasol.integrators.gyrostat import integrate_gyrostat
 from thetasol.integrators.multibody_rotors import integrate_gyrostat_multibody, relative_rotor_angles
-from thetasol.integrators.rotation import numerical_rotation
+from thetasol.integrators.rotation import integrate_rotation
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Joint
+from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.rotors import GyrostatConfiguration, MasslessCarrier, Rotor, axis_rotation, gyrostat_energy
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import Solution
@@ -179,14 +180,14 @@ def _part(e, a, Q0, w0, p, rotation, rtol) -> _Part:
     if not e.rotors:
         sol, why = (None, "numerical") if rotation == "numerical" else closed_form_rotation(e.J, a, Q0, w0)
         if sol is None:
-            sol = numerical_rotation(e.J, a, Q0, w0, rtol=rtol)
+            sol = integrate_rotation(inertia(e.J), a, Q0, w0, rtol=rtol)
             return _Part("rigid", sol, f"rigid body: numerical (integrate_rotation, rtol={rtol:g})", axes, A, p)
         return _Part("rigid", sol, f"rigid body: closed form {sol.method}", axes, A, p)
     specs = e.rotor_specs(p)
     if rotation_kind(a) == "elliptic" and rotation != "numerical":
         sol = solve_gyrostat(e.J_gyro, None, Q0, w0, rotors=specs)
         return _Part("closed", sol, f"gyrostat (8.39): closed form {sol.method}", axes, A, p, specs)
-    sol = numerical_gyrostat(e.J_gyro, None, Q0, w0, rotors=specs, a=a, rtol=rtol)
+    sol = integrate_gyrostat(e.I_gyro, None, Q0, w0, rotors=specs, a=a, rtol=rtol)
     return _Part("numerical", sol, f"gyrostat (8.32): integrate_gyrostat (DOP853, rtol={rtol:g})", axes, A, p, specs)
 
 

@@ -33,8 +33,9 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.multibody_gravity import box_mass_points
-from thetasol.integrators.orbiting_rotation import numerical_orbiting_rotation
+from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
+from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.gravity_gradient import GravityGradientStability, gravity_gradient_stability, orbit_frame
 from thetasol.protocol import ClosedFormUnavailable
 from thetasol.scenes.pipeline import ConfigurationSolution
@@ -213,7 +214,7 @@ def _orbiting_rotation(J, orbit, Q0, w0, rotation, rtol, method):
             why = str(exc)
     else:
         why = "rotation='numerical'"
-    return numerical_orbiting_rotation(J, orbit, Q0, w0, rtol=rtol, method=method), False, why
+    return integrate_orbiting_rotation(inertia(J), orbit, Q0, w0, rtol=rtol, method=method), False, why
 
 
 @single_blas_thread

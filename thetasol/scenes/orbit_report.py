@@ -34,6 +34,7 @@ from thetasol.mechanics.gravity_gradient import orbit_frame
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.scenes.checks import Check, ReportText
 from thetasol.scenes.orbit import OrbitingConfigurationSolution
+from thetasol.solutions.kepler import KeplerOrbit
 
 __all__ = ["run_orbit", "scaled_station", "station_size", "jacobi_integral"]
 
@@ -139,7 +140,7 @@ def _reference_checks(scene, sol, traj, say) -> list[Check]:
             continue
         e = scene.config.effective_body(n)
         start = time.perf_counter()
-        wn, Qn = integrate_orbiting_rotation(e.J, orbit, scene.Q0[n], scene.omega0[n], t, rtol=1e-13)
+        wn, Qn = integrate_orbiting_rotation(e.I, orbit, scene.Q0[n], scene.omega0[n], rtol=1e-13)(t)
         ref = time.perf_counter() - start
         wscale = float(np.linalg.norm(scene.omega0[n])) + n_mean
         dev = max(float(np.max(np.abs(Qn - traj.attitude[i]))), float(np.max(np.abs(wn - traj.omega[i]))) / wscale)
@@ -158,8 +159,8 @@ def _reference_checks(scene, sol, traj, say) -> list[Check]:
 
 
 def _unsplit(scene, config, points, t, rtol):
-    return integrate_multibody_gravity(config, scene.orbit.mu, scene.q0, scene.v0, scene.Q0, scene.omega0, t,
-                                       points=points, rtol=rtol)
+    return integrate_multibody_gravity(config, KeplerOrbit(scene.orbit.mu, scene.q0, scene.v0), scene.Q0, scene.omega0,
+                                       t, points=points, rtol=rtol)
 
 
 def _full_gravity_check(scene, sol, traj, split_seconds, say) -> list[Check]:

@@ -16,7 +16,7 @@ With ``constraint=Sphere(R)`` (Section 6, Theorem 3) the mass centre is held on 
 on a spherical joint at the origin of the potential ``1/2 q^T a q``): it then moves as C. Neumann's
 point, :func:`~thetasol.solutions.neumann.solve_neumann` with the same ``a`` (per unit mass: the
 rod's force acts on the total mass; near a separatrix, where that closed form is refused,
-:func:`~thetasol.integrators.neumann.numerical_neumann`), and the rotations are unchanged (the force is a uniform
+:func:`~thetasol.integrators.neumann.integrate_neumann`), and the rotations are unchanged (the force is a uniform
 acceleration field on the bodies: no torque about any mass centre).
 
 The result, a :class:`ConfigurationSolution`, places every physical body down the tree
@@ -34,8 +34,8 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.threads import single_blas_thread
-from thetasol.integrators.neumann import NumericalNeumann, numerical_neumann
-from thetasol.integrators.rotation import numerical_rotation
+from thetasol.integrators.neumann import NumericalNeumann, integrate_neumann
+from thetasol.integrators.rotation import integrate_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import invariants as rotation_invariants
@@ -223,7 +223,7 @@ def effective_rotations(config: Configuration, a: np.ndarray, Qa: np.ndarray, wa
         if closed:
             model = f"{kind}: closed form {sol.method}"
         else:
-            sol = numerical_rotation(e.J, a, Qa[i], wa[i], rtol=rtol, method=method)
+            sol = integrate_rotation(e.I, a, Qa[i], wa[i], rtol=rtol, method=method)
             model = f"{kind}: numerical fallback (integrate_rotation {method}, rtol={rtol:g})"
         sols[n] = sol
         diag[n] = {"model": model, "closed_form": closed, "reason": why,
@@ -247,7 +247,7 @@ def _mass_center(a: np.ndarray, b: np.ndarray, q0: ArrayLike, v0: ArrayLike, con
             model = head + f"closed form {mc.method}"
         except ClosedFormUnavailable as exc:
             why = str(exc)
-            mc = numerical_neumann(a, q0, v0, rtol=rtol)
+            mc = integrate_neumann(a, q0, v0, rtol=rtol)
             model = head + f"numerical fallback (integrate_neumann DOP853, rtol={rtol:g})"
     return mc, model, why, time.perf_counter() - start
 

@@ -152,7 +152,7 @@ def _rotation_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectorie
             continue
         e = scene.config.effective_body(n)
         start = time.perf_counter()
-        wn, Qn = integrate_rotation(e.J, scene.a, scene.Q0[n], scene.omega0[n], t, rtol=1e-13)
+        wn, Qn = integrate_rotation(e.I, scene.a, scene.Q0[n], scene.omega0[n], rtol=1e-13)(t)
         ref_seconds = time.perf_counter() - start
         dev = max(float(np.max(np.abs(Qn - traj.attitude[i]))), float(np.max(np.abs(wn - traj.omega[i]))))
         checks.append(Check(f"rotation of {n}: {sol.rotations[n].method} vs integrate_rotation (DOP853, rtol 1e-13)",
@@ -168,7 +168,7 @@ def _pivot_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectories) 
     if r["closed_form"]:
         pb = sol.diagnostics["pivoted_body"]
         start = time.perf_counter()
-        wn, Qn = integrate_fixed_point(pb.J, pb.R, scene.a, pb.b, scene.Q0[n], scene.omega0[n], scene.t, rtol=1e-13)
+        wn, Qn = integrate_fixed_point(pb.I, pb.R, scene.a, pb.b, scene.Q0[n], scene.omega0[n], rtol=1e-13)(scene.t)
         ref_seconds = time.perf_counter() - start
         dev = max(float(np.max(np.abs(Qn - traj.attitude[0]))), float(np.max(np.abs(wn - traj.omega[0]))))
         checks.append(Check(f"rotation of {n} about the pivot: {sol.rotations[n].method} vs integrate_fixed_point "
@@ -183,7 +183,7 @@ def _drift(scene: Scene, traj: Trajectories, say: ReportText) -> None:
     for i, n in enumerate(traj.names):
         if i == 0 and scene.fixed_point is not None:
             pb = pivoted_body(scene.config, scene.fixed_point, scene.a, scene.b)
-            E = fixed_point_energy(pb.J, pb.R, scene.a, pb.b, traj.attitude[0], traj.omega[0])
+            E = fixed_point_energy(pb.I, pb.R, scene.a, pb.b, traj.attitude[0], traj.omega[0])
             say(f"  {n} about the pivot: energy (5.3) {float(np.max(np.abs(E - E[0])) / max(abs(E[0]), 1e-300)):.1e}")
             continue
         e = scene.config.effective_body(n)

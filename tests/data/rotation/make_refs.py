@@ -1,6 +1,6 @@
 """Regenerate the long high-accuracy reference trajectories used by the rotation tests.
 
-Each case is integrated with heyoka's Taylor method in quadruple precision (dtype="f128",
+Each case is integrated with heyoka's Taylor method in quadruple precision (fp_type=heyoka.real128,
 tolerance 1e-25) at the sample times TIMES of tests/test_theta_rotation.py, the inverse inertia and
 m0 = I omega0 formed in that precision from the float64 data (integrate_rotation).  The extended-precision run (80-bit,
 tolerance 1e-19) is the cross-check: its largest distance from the stored values over all six
@@ -16,6 +16,7 @@ import numpy as np
 
 from thetasol import integrate_rotation
 from thetasol.core.so3 import rodrigues
+from thetasol.mechanics.equations import inertia
 
 TIMES = [0.7, 3.1, 17.3, 102.0, 997.0, 4002.0]
 
@@ -68,12 +69,14 @@ def main(only=None):
     """Regenerate all cases, or only the named ones (the others are kept as stored)."""
     path = pathlib.Path(__file__).with_name("refs.json")
     data = json.loads(path.read_text()) if only else {}
+    import heyoka as hy
+
     t = np.array(TIMES)
     for name, (J, a, Q0, w0) in cases().items():
         if only and name not in only:
             continue
-        w, Q = integrate_rotation(J, a, Q0, w0, t, method="heyoka", dtype="f128", rtol=1e-25)
-        wl, Ql = integrate_rotation(J, a, Q0, w0, t, method="heyoka", dtype="ldbl", rtol=1e-19)
+        w, Q = integrate_rotation(inertia(J), a, Q0, w0, method="heyoka", fp_type=hy.real128, rtol=1e-25)(t)
+        wl, Ql = integrate_rotation(inertia(J), a, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19)(t)
         err = max(np.abs(Ql - Q).max(), np.abs(wl - w).max())
         data[name] = {"J": list(map(float, J)), "a": np.asarray(a).tolist(), "Q0": np.asarray(Q0).tolist(),
                       "omega0": np.asarray(w0).tolist(), "t": TIMES, "omega": w.tolist(), "Q": Q.tolist(),
