@@ -80,7 +80,8 @@ def dense(name, data, quick):
         for label, fp, tol in (("dbl", float, 1e-16), ("ldbl", np.longdouble, 1e-19)):
             # the first call compiles; report the second
             integrate_rotation(inertia(J), Z, Q0, w0, rtol=tol, method="heyoka", fp_type=fp)(t[:3])
-            cost, out = best_of(lambda: integrate_rotation(inertia(J), Z, Q0, w0, rtol=tol, method="heyoka",  # noqa: B023
+            cost, out = best_of(lambda: integrate_rotation(inertia(J), Z, Q0, w0, rtol=tol, method="heyoka",
+                                                            # noqa: B023
                                                            fp_type=fp)(t), repeat=1)  # noqa: B023
             rows.append((f"heyoka {label} tol={tol:g} (2nd call, compiled code cached)", cost, err(out, ref)))
     except ImportError:

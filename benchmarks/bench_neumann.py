@@ -57,7 +57,8 @@ def rotation():
         errs = ["-"] * len(T_FAR)
         if have:
             w, Q = sol(T_FAR)
-            wr, Qr = integrate_rotation(inertia(J), a, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19)(T_FAR)
+            wr, Qr = integrate_rotation(inertia(J), a, Q0, w0, method="heyoka", fp_type=np.longdouble,
+                                        rtol=1e-19)(T_FAR)
             e = np.maximum(np.abs(w - wr).max(-1), np.abs(Q - Qr).max((-1, -2)))
             errs = [f"{x:.1e}" for x in e]
         print(f"| {label} | {sol.method} | {setup:.3f} | {ev:.1f} | {cpu:.1f} | " + " | ".join(errs) + " |")

@@ -51,11 +51,13 @@ def potential():
     rng = np.random.default_rng(2)
     Q0, w0 = rand_Q(rng), np.array([0.3, -0.5, 0.9])
     t = np.linspace(0.0, 100.0, 21)
-    ref = integrate_gyrostat(inertia(P.J0), None, Q0, w0, rotors=P.ROTORS, a=P.A_POT, rtol=1e-19, method="heyoka", fp_type=np.longdouble).evaluate_with_angles(t)
+    ref = integrate_gyrostat(inertia(P.J0), None, Q0, w0, rotors=P.ROTORS, a=P.A_POT, rtol=1e-19, method="heyoka",
+                             fp_type=np.longdouble).evaluate_with_angles(t)
     print("| rtol | omega | Q | rotor angles | time |")
     print("|---|---|---|---|---|")
     for rtol in (1e-9, 1e-11, 1e-13):
-        sec, out = best_of(lambda: integrate_gyrostat(inertia(P.J0), None, Q0, w0, rotors=P.ROTORS, a=P.A_POT, rtol=rtol).evaluate_with_angles(t), repeat=2)
+        sec, out = best_of(lambda: integrate_gyrostat(inertia(P.J0), None, Q0, w0, rotors=P.ROTORS, a=P.A_POT,
+                                                      rtol=rtol).evaluate_with_angles(t), repeat=2)
         err = [float(np.max(np.abs(x - y))) for x, y in zip(out, ref, strict=True)]
         print(f"| {rtol:g} | {err[0]:.1e} | {err[1]:.1e} | {err[2]:.1e} | {sec:.2f} s |")
 
@@ -70,7 +72,8 @@ def lagrange():
         ts, sol = best_of(lambda: solve_lagrange_gyrostat(I, c, N, Q0, w0, mass=2.0))  # noqa: B023
         te, _ = best_of(lambda: sol(tt))  # noqa: B023
         c0 = time.perf_counter()
-        wh, Qh = integrate_heavy_gyrostat(I, c, Q0, w0, N=N, mass=2.0, rtol=1e-19, method="heyoka", fp_type=np.longdouble)(t)
+        wh, Qh = integrate_heavy_gyrostat(I, c, Q0, w0, N=N, mass=2.0, rtol=1e-19, method="heyoka",
+                                          fp_type=np.longdouble)(t)
         cref = time.perf_counter() - c0
         w, Q = sol(t)
         print(f"| {k} (lam = {N @ c / np.linalg.norm(c):g}) | {ts * 1e3:.1f} ms | {te / tt.size * 1e6:.2f} us "

@@ -124,7 +124,8 @@ def bench_body(name, data, ta, quick):
     row["hy_run"], row["hy_dense"], row["hy_err"] = hy_run, hy_run / grid.size, err(w[at_refs], Q[at_refs], wr[near],
                                                                                      Qr[near])
     if not quick:
-        dop, (w, Q) = best_of(lambda: integrate_rotation(inertia(J), a, Q0, w0, rtol=1e-13)(grid), repeat=1, clock=CLOCK[0])
+        dop, (w, Q) = best_of(lambda: integrate_rotation(inertia(J), a, Q0, w0, rtol=1e-13)(grid), repeat=1,
+                              clock=CLOCK[0])
         row["dop_run"], row["dop_dense"], row["dop_err"] = dop, dop / grid.size, err(w[at_refs], Q[at_refs],
                                                                                   wr[near], Qr[near])
     return row

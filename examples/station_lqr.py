@@ -21,7 +21,6 @@ from thetasol.integrators.multibody_gravity import integrate_multibody_gravity
 from thetasol.mechanics.attitude_control import station_controller
 from thetasol.mechanics.gravity_gradient import orbit_frame
 from thetasol.scenes.format import load_scene
-from thetasol.solutions.kepler import KeplerOrbit
 
 SCENE = Path(__file__).with_name("orbiting_station.toml")
 
@@ -78,7 +77,7 @@ def main(orbits: float = 4.0) -> dict:
     res = {}
     for label, torques in (("free", None), ("LQR", ctrl)):
         start = time.perf_counter()
-        tr = integrate_multibody_gravity(cfg, KeplerOrbit(orbit.mu, orbit.r0, orbit.v0), Q0, w0, t, points=scene.orbit.points, torques=torques)
+        tr = integrate_multibody_gravity(cfg, orbit, Q0, w0, t, points=scene.orbit.points, torques=torques)
         e = errors(tr, ctrl)
         res[label] = e
         print(f"\n{label}: {time.perf_counter() - start:.1f} s; attitude error |theta| (rad) at whole orbits:")

@@ -44,8 +44,10 @@ def test_potential_reference_against_80bit_heyoka_and_energy():
     rng = np.random.default_rng(2)
     Q0, w0 = rand_Q(rng), np.array([0.3, -0.5, 0.9])
     t = np.linspace(0.0, 100.0, 21)
-    w, Q, ang = integrate_gyrostat(inertia(J0), None, Q0, w0, rotors=ROTORS, a=A_POT, rtol=1e-13).evaluate_with_angles(t)
-    wh, Qh, angh = integrate_gyrostat(inertia(J0), None, Q0, w0, rotors=ROTORS, a=A_POT, rtol=1e-19, method="heyoka", fp_type=np.longdouble).evaluate_with_angles(t)
+    w, Q, ang = integrate_gyrostat(inertia(J0), None, Q0, w0, rotors=ROTORS, a=A_POT,
+                                   rtol=1e-13).evaluate_with_angles(t)
+    wh, Qh, angh = integrate_gyrostat(inertia(J0), None, Q0, w0, rotors=ROTORS, a=A_POT, rtol=1e-19, method="heyoka",
+                                      fp_type=np.longdouble).evaluate_with_angles(t)
     # measured 4.1e-13, 1.3e-12, 5.2e-12 at rtol 1e-13
     assert np.max(np.abs(w - wh)) < 5e-12
     assert np.max(np.abs(Q - Qh)) < 1e-11
@@ -112,7 +114,8 @@ def test_lagrange_gyrostat_against_80bit_heyoka(k):
     assert sol.method == "lagrange-gyrostat/elliptic"
     t = np.linspace(0.0, 100.0, 201)
     w, Q = sol(t)
-    wh, Qh = integrate_heavy_gyrostat(I, c, Q0, w0, N=N, mass=2.0, rtol=1e-19, method="heyoka", fp_type=np.longdouble)(t)
+    wh, Qh = integrate_heavy_gyrostat(I, c, Q0, w0, N=N, mass=2.0, rtol=1e-19, method="heyoka",
+                                      fp_type=np.longdouble)(t)
     # measured 1.9e-13 .. 3.3e-13 (omega), 3e-14 .. 1e-13 (Q)
     assert np.max(np.abs(w - wh)) < 2e-12 * max(1.0, np.max(np.abs(wh)))
     assert np.max(np.abs(Q - Qh)) < 1e-12

@@ -159,7 +159,8 @@ def test_rotated_tensor_against_the_exactly_symmetric_body(seed):
     sol = solve_rotation(Jt, a, Q0, w0)
     assert sol.method == "neumann/genus-2"
     w, Q = sol(T_FAR)
-    wr, Qr = integrate_rotation(inertia(J), a, Q0 @ P, P.T @ w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19)(T_FAR)
+    wr, Qr = integrate_rotation(inertia(J), a, Q0 @ P, P.T @ w0, method="heyoka", fp_type=np.longdouble,
+                                rtol=1e-19)(T_FAR)
     assert np.abs(w - wr @ P.T).max() < 1e-10 and np.abs(Q - Qr @ P.T).max() < 1e-10
 
 

@@ -76,7 +76,8 @@ def test_split_and_unsplit_differ_by_size_squared_at_two_orbit_radii():
         d["initial"]["omega"] = {k: (np.array(v) * R ** -1.5).tolist() for k, v in d["initial"]["omega"].items()}
         sc = Scene.from_dict(d)
         tr = sc.solve()
-        mb = integrate_multibody_gravity(sc.config, KeplerOrbit(1.0, sc.q0, sc.v0), sc.Q0, sc.omega0, sc.t, points=sc.orbit.points)
+        mb = integrate_multibody_gravity(sc.config, KeplerOrbit(1.0, sc.q0, sc.v0), sc.Q0, sc.omega0, sc.t,
+                                         points=sc.orbit.points)
         out.append(float(np.max(np.abs(tr.position - mb.position))) / R)
     # (L/R)^2 drops by 4 when R doubles: measured 1.53e-4 and 3.82e-5, ratio 4.0008
     assert out[0] / out[1] == pytest.approx(4.0, rel=0.01), out

@@ -20,7 +20,6 @@ from thetasol.mechanics.attitude_control import (
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability
 from thetasol.scenes.format import load_scene
 from thetasol.scenes.orbit_report import scaled_station
-from thetasol.solutions.kepler import KeplerOrbit
 
 ROOT = Path(__file__).resolve().parent.parent
 BODIES = {"lagrange": [1.25, 0.75, 0.25], "debra-delp": [0.475, 0.175, 0.525], "unstable": [0.5, 1.5, 0.25],
@@ -103,7 +102,7 @@ def _run(demo, scale, torques_on, orbits):
     ctrl = station_controller(cfg, 1.0, B)
     Q0, w0 = demo.initial_state(cfg, orbit, B)
     t = np.linspace(0.0, orbits * 2 * np.pi, int(4 * orbits) + 1)
-    tr = integrate_multibody_gravity(cfg, KeplerOrbit(orbit.mu, orbit.r0, orbit.v0), Q0, w0, t, points=pts, torques=ctrl if torques_on else None)
+    tr = integrate_multibody_gravity(cfg, orbit, Q0, w0, t, points=pts, torques=ctrl if torques_on else None)
     return dict(zip(tr.names, demo.errors(tr, ctrl), strict=True)), ctrl
 
 

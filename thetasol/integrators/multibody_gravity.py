@@ -9,7 +9,7 @@ bodies on spherical joints is integrated by :func:`~thetasol.integrators.multibo
 pure control couples on each body.
 
 The maximal coordinates are taken relative to the Kepler orbit ``q_K(t)`` of the initial system mass
-centre (given by the caller, e.g. :class:`thetasol.KeplerOrbit` in closed form), a frame in free fall: each body then also feels the uniform fictitious force
+centre (the caller's ``orbit``), a frame in free fall: each body then also feels the uniform fictitious force
 ``+mu m q_K / |q_K|^3``, which exerts no torque.  The field minus that force is formed without
 cancellation (Battin's form, ``_tidal_force``), and the joints are evaluated on coordinates of the
 station's size.  In absolute coordinates both carry rounding of relative size ``eps R / L`` (orbit
