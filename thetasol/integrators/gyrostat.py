@@ -264,7 +264,7 @@ def integrate_heavy_gyrostat(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, ome
     ``I`` is the inertia about the fixed point without the rotors' axial moments, ``center`` the mass
     centre seen from it, ``N`` the constant rotor momentum (body frame); the rest as for
     :func:`thetasol.integrate_heavy_top`.  Returns a :class:`NumericalHeavyGyrostat`: ``sol(t) -> (omega, Q)``
-    for any shape of ``t``; ``model`` ``"heavy-gyrostat"``, ``method`` ``"numerical/<method>"``,
+    for any shape of ``t``; ``model`` ``"heavy-top"`` (as the closed form's), ``method`` ``"numerical/<method>"``,
     ``invariants`` the ``energy`` and the ``vertical_momentum`` ``Q (m + N) . up`` at ``t = 0``.
     """
     Im, c, Q0m, w0, mass, g = heavy_top_data(I, center, Q0, omega0, mass, gravity)
@@ -292,7 +292,7 @@ class NumericalHeavyGyrostat(RotationSolution):
     N: np.ndarray = None
     settings: Settings = Settings()
 
-    model: ClassVar[str] = "heavy-gyrostat"
+    model: ClassVar[str] = "heavy-top"    # as the Lagrange gyrostat's closed form: a top carrying rotors
     _AT_ONCE = True  # one integration over all requested times
 
     def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
