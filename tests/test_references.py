@@ -26,7 +26,8 @@ ORBIT = KeplerOrbit(1.0, [1.0, 0.0, 0.0], [0.0, 1.05, 0.1])
 REFERENCES = {
     "rotation": lambda **kw: integrate_rotation(I3, A, Q0, W0, **kw),
     "gyrostat": lambda **kw: integrate_gyrostat(I3, [0.1, 0.2, -0.3], Q0, W0, a=A, **kw),
-    "heavy-top with rotors": lambda **kw: integrate_heavy_gyrostat(I3, [0.0, 0.1, 0.5], Q0, W0, N=[0.0, 0.0, 0.4], **kw),
+    "heavy-top with rotors": lambda **kw: integrate_heavy_gyrostat(I3, [0.0, 0.1, 0.5], Q0, W0, N=[0.0, 0.0, 0.4],
+                                                                   **kw),
     "heavy-top": lambda **kw: integrate_heavy_top(I3, [0.0, 0.1, 0.5], Q0, W0, mass=2.0, **kw),
     "orbiting-rotation": lambda **kw: integrate_orbiting_rotation(I3, ORBIT, Q0, W0, **kw),
     "neumann": lambda **kw: integrate_neumann(A, [0.6, 0.0, 0.8], [0.0, 0.5, 0.0], **kw),
