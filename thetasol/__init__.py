@@ -28,9 +28,9 @@ _group("thetasol.solutions.gyrostat", "solve_gyrostat")
 _group("thetasol.solutions.neumann", "solve_neumann", "NeumannSolution")
 _group("thetasol.solutions.heavy_top", "solve_heavy_top")
 _group("thetasol.solutions.heavy_top_base", "HeavyTopSolution")
-_group("thetasol.solutions.kepler", "KeplerOrbit")
+_group("thetasol.solutions.kepler", "KeplerOrbit", "solve_kepler")
 _group("thetasol.solutions.orbiting_rotation", "solve_orbiting_rotation", "OrbitingRotation")
-_group("thetasol.solutions.mass_center", "MassCenterMotion", "mass_center")
+_group("thetasol.solutions.mass_center", "MassCenterMotion", "solve_mass_center")
 _group("thetasol.solutions.lagrange_gyrostat", "solve_lagrange_gyrostat")
 # mechanics: bodies, configurations, equations and first integrals
 _group("thetasol.mechanics.bodies", "Body")
@@ -137,9 +137,9 @@ if TYPE_CHECKING:
     from thetasol.solutions.gyrostat import solve_gyrostat
     from thetasol.solutions.heavy_top import solve_heavy_top
     from thetasol.solutions.heavy_top_base import HeavyTopSolution
-    from thetasol.solutions.kepler import KeplerOrbit
+    from thetasol.solutions.kepler import KeplerOrbit, solve_kepler
     from thetasol.solutions.lagrange_gyrostat import solve_lagrange_gyrostat
-    from thetasol.solutions.mass_center import MassCenterMotion, mass_center
+    from thetasol.solutions.mass_center import MassCenterMotion, solve_mass_center
     from thetasol.solutions.neumann import NeumannSolution, solve_neumann
     from thetasol.solutions.orbiting_rotation import OrbitingRotation, solve_orbiting_rotation
     from thetasol.solutions.rotation import solve_rotation

@@ -116,7 +116,8 @@ class RotationSolution(Solution):
     Attributes
     ----------
     J : ndarray, shape (3, 3)
-        Second moments in the body frame (``I = tr(J) 1 - J``).
+        The paper's second moments in the body frame, ``J = tr(I)/2 1 - I`` (the property ``I`` gives the
+        inertia tensor the entry points take).
     a : ndarray, shape (3, 3)
         Potential matrix, ``phi = 1/2 x^T a x``.
     Q0, omega0 : ndarray
@@ -162,6 +163,12 @@ class RotationSolution(Solution):
     def Q(self, t: ArrayLike) -> np.ndarray:
         """Attitude (body to space), shape ``t.shape + (3, 3)``."""
         return self(t)[1]
+
+    @property
+    def I(self) -> np.ndarray:
+        """Inertia tensor ``I = tr(J) 1 - J`` in the body frame, shape (3, 3): the body as every entry
+        point takes it, so that results of different models compare."""
+        return inertia_from_moments(self.J)
 
     def m(self, t: ArrayLike) -> np.ndarray:
         """Body angular momentum ``m = I omega``, shape ``t.shape + (3,)``."""

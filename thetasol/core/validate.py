@@ -72,6 +72,49 @@ def second_moments(J: ArrayLike, name: str = "J") -> np.ndarray:
     return arr
 
 
+#: Relative rounding margin of the triangle inequalities ``I_i <= I_j + I_k`` (of the largest principal
+#: inertia): a flat plate (``I_3 = I_1 + I_2``) whose values were rounded to float64 passes.
+TRIANGLE_RTOL = 1e-12
+
+
+def inertia(I: ArrayLike, name: str = "I") -> np.ndarray:
+    """An inertia tensor (3 principal values or a symmetric 3x3, body frame) as a 3x3 array, checked.
+
+    It must be positive definite and satisfy the triangle inequalities ``I_i <= I_j + I_k`` up to
+    :data:`TRIANGLE_RTOL` (a rod excluded).  Values that fail them but are valid second moments
+    ``J = sum m r r^T`` (the paper's convention) are refused with a message naming that mix-up and
+    its conversion, ``thetasol.inertia(J)``.
+    """
+    arr = finite_array(I, name)
+    if arr.shape == (3,):
+        arr = np.diag(arr)
+    elif arr.shape != (3, 3):
+        raise ValueError(f"{name} must be 3 principal values or a 3x3 tensor, got shape {arr.shape}")
+    arr = symmetric_matrix(arr, name)
+    ev = np.linalg.eigvalsh(arr)
+    if ev[0] <= TRIANGLE_RTOL * ev[2]:
+        raise ValueError(f"inertia {name} must be positive definite (a rod or a point has a zero principal "
+                         f"inertia), eigenvalues {ev}")
+    if ev[2] > ev[0] + ev[1] + TRIANGLE_RTOL * ev[2]:
+        hint = ""
+        try:
+            second_moments(arr, name)
+            hint = ("; these look like second moments J = sum m r r^T (the paper's J), not an inertia: "
+                    f"pass thetasol.inertia(J) = {_plain(np.trace(arr) * np.eye(3) - arr)}")
+        except ValueError:
+            pass
+        raise ValueError(f"inertia {name} violates the triangle inequality I_i <= I_j + I_k (eigenvalues {ev}): "
+                         f"no rigid body has it{hint}")
+    return arr
+
+
+def _plain(m: np.ndarray) -> str:
+    """A 3x3 array for a message: its principal values when diagonal, else its rows (6 digits)."""
+    rows = [np.diag(m)] if not np.any(m - np.diag(np.diag(m))) else m
+    text = ["[" + ", ".join(f"{x:.6g}" for x in row) + "]" for row in rows]
+    return text[0] if len(text) == 1 else "[" + ", ".join(text) + "]"
+
+
 def inertia_to_moments(I: ArrayLike, name: str = "I") -> np.ndarray:
     """Second moments ``J = tr(I)/2 1 - I`` from an inertia tensor (principal values or 3x3)."""
     arr = finite_array(I, name)

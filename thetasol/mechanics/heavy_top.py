@@ -29,9 +29,7 @@ def heavy_top_data(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: Array
     triangle inequalities ``I_i <= I_j + I_k``; ``Q0`` must be a rotation; ``mass >= 0``; every
     entry finite.  Raises ``ValueError`` naming the argument otherwise.
     """
-    V.inertia_to_moments(I, "I")  # positive definite, triangle inequalities, symmetry
-    Im = V.finite_array(I, "I")
-    Im = np.diag(Im) if Im.shape == (3,) else V.symmetric_matrix(Im, "I")
+    Im = V.inertia(I, "I")  # positive definite, triangle inequalities (naming a second-moment mix-up), symmetry
     c = V.vector3(center, "center")
     Q0m = V.rotation_matrix(Q0, "Q0")
     w0 = V.vector3(omega0, "omega0")

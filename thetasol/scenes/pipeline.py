@@ -243,7 +243,7 @@ def _mass_center(a: np.ndarray, b: np.ndarray, q0: ArrayLike, v0: ArrayLike, con
         _, q0, v0 = constraint.check(b, q0, v0)
         head = f"Neumann's problem on |q| = {constraint.radius:g}: "
         try:
-            mc = solve_neumann(a, q0, v0, reference="thetasol.integrators.neumann.integrate_neumann")
+            mc = solve_neumann(a, q0, v0)
             model = head + f"closed form {mc.method}"
         except ClosedFormUnavailable as exc:
             why = str(exc)

@@ -132,8 +132,7 @@ def solve_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: Arra
     Im, c, Q0m, w0, mass, g = heavy_top_data(I, center, Q0, omega0, mass, gravity)
     cn, gn = np.linalg.norm(c), np.linalg.norm(g)
     if cn == 0 or gn == 0 or mass == 0:
-        J = 0.5 * np.trace(Im) * np.eye(3) - Im
-        return solve_rotation(J, np.zeros((3, 3)), Q0m, w0)
+        return solve_rotation(Im, np.zeros((3, 3)), Q0m, w0)
     frame = lagrange_frame(Im, c)
     if frame is None:
         if _is_kovalevskaya(Im, c):

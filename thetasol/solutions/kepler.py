@@ -47,7 +47,7 @@ from thetasol.core.dd import two_prod
 from thetasol.protocol import Solution
 from thetasol.special.stumpff import stumpff, stumpff_float
 
-__all__ = ["KeplerOrbit"]
+__all__ = ["KeplerOrbit", "solve_kepler"]
 
 _EPS = np.finfo(float).eps
 _LAGUERRE_N = 5.0
@@ -345,3 +345,18 @@ class KeplerOrbit(Solution):
         pos = f[:, None] * self.r0 + g[:, None] * self.v0
         vel = fdot[:, None] * self.r0 + gdot[:, None] * self.v0
         return pos, vel
+
+
+def solve_kepler(mu: float, r0: ArrayLike, v0: ArrayLike) -> KeplerOrbit:
+    """The two-body orbit ``qddot = -mu q / |q|^3`` (7.7) through ``(r0, v0)`` at ``t = 0``.
+
+    The entry point in the library's one pattern (the model's constant, then the initial state);
+    it builds the same :class:`KeplerOrbit` as its constructor.
+
+    Examples
+    --------
+    >>> r, v = solve_kepler(1.0, [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])(np.pi)
+    >>> np.round(r, 12).tolist()
+    [-1.0, 0.0, 0.0]
+    """
+    return KeplerOrbit(mu, r0, v0)

@@ -42,7 +42,7 @@ def _invariants(Im, c, N, mass, g, w0, Q0) -> dict:
 
 
 @single_blas_thread
-def solve_lagrange_gyrostat(I: ArrayLike, center: ArrayLike, N: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *,
+def solve_lagrange_gyrostat(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *, N: ArrayLike,
                             mass: float = 1.0, gravity: ArrayLike = (0.0, 0.0, -9.81)
                             ) -> HeavyTopSolution | RotationSolution:
     """Exact motion of a Lagrange gyrostat on a fixed point in uniform gravity.
@@ -54,10 +54,11 @@ def solve_lagrange_gyrostat(I: ArrayLike, center: ArrayLike, N: ArrayLike, Q0: A
         transverse moments included): ``m = I omega``.
     center : array_like (3,)
         Mass centre seen from the fixed point, body frame.
-    N : array_like (3,)
-        Constant rotor momentum ``sum p_k l_k`` (8.33), body frame; must lie along ``center``.
     Q0, omega0 : array_like
         Initial attitude and body angular velocity of the carrier.
+    N : array_like (3,)
+        Constant rotor momentum ``sum p_k l_k`` (8.33), body frame; must lie along ``center``
+        (keyword-only: the field of the top is its ``center``).
     mass : float
     gravity : array_like (3,)
 
@@ -84,7 +85,7 @@ def solve_lagrange_gyrostat(I: ArrayLike, center: ArrayLike, N: ArrayLike, Q0: A
     if not np.any(Nv):
         return solve_heavy_top(Im, c, Q0m, w0, mass=mass, gravity=g)
     if cn == 0 or gn == 0 or mass == 0:
-        return solve_gyrostat(0.5 * np.trace(Im) * np.eye(3) - Im, Nv, Q0m, w0)
+        return solve_gyrostat(Im, Nv, Q0m, w0)
     frame = lagrange_frame(Im, c)
     e3 = c / cn
     lam = float(Nv @ e3)

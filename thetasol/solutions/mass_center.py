@@ -40,7 +40,7 @@ from thetasol.core import validate as V
 from thetasol.protocol import Solution
 from thetasol.special.stumpff import stumpff
 
-__all__ = ["MassCenterMotion", "mass_center"]
+__all__ = ["MassCenterMotion", "solve_mass_center"]
 
 
 _KIND_ORDER = ("trigonometric", "hyperbolic", "polynomial")
@@ -89,6 +89,8 @@ class MassCenterMotion(Solution):
         Linear coefficients of (2.4) (note the 1/2 in ``phi``).
     q0, v0 : array_like (3,)
         Position and velocity at ``t = 0``.
+    dps : int, optional
+        Decimal digits of the mpmath evaluation ``mc(t)`` uses when its call names none.
 
     Attributes
     ----------
@@ -124,6 +126,7 @@ class MassCenterMotion(Solution):
     b: np.ndarray
     q0: np.ndarray
     v0: np.ndarray
+    dps: int | None = None
     eigenvalues: np.ndarray = field(init=False, repr=False)
     axes: np.ndarray = field(init=False, repr=False)
     kinds: tuple = field(init=False)
@@ -159,13 +162,14 @@ class MassCenterMotion(Solution):
         t : array_like
             Times, any shape.
         dps : int, optional
-            Decimal digits for an mpmath evaluation (object arrays of ``mpmath.mpf``);
-            mpmath's global precision is not changed.
+            Decimal digits for an mpmath evaluation (object arrays of ``mpmath.mpf``), by default
+            the motion's own ``dps``; mpmath's global precision is not changed.
 
         Returns
         -------
         q, v : ndarray, shape ``t.shape + (3,)``
         """
+        dps = self.dps if dps is None else dps
         if dps is not None:
             return self._mp(V.times(t, "t"), int(dps))
         return super().__call__(t)
@@ -265,9 +269,9 @@ class MassCenterMotion(Solution):
         return out
 
 
-def mass_center(a: ArrayLike, b: ArrayLike, q0: ArrayLike, v0: ArrayLike, t: ArrayLike,
-                dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """Closed-form mass centre ``q(t)`` and velocity in ``phi(x) = 1/2 x^T a x + 1/2 b^T x`` (3.2).
+def solve_mass_center(a: ArrayLike, b: ArrayLike, q0: ArrayLike, v0: ArrayLike, *,
+                      dps: int | None = None) -> MassCenterMotion:
+    """Closed-form motion of the mass centre in ``phi(x) = 1/2 x^T a x + 1/2 b^T x`` (3.2).
 
     Parameters
     ----------
@@ -277,17 +281,14 @@ def mass_center(a: ArrayLike, b: ArrayLike, q0: ArrayLike, v0: ArrayLike, t: Arr
         Linear part of (2.4).
     q0, v0 : array_like (3,)
         Initial position and velocity.
-    t : array_like
-        Times, any shape.
     dps : int, optional
-        Decimal digits of an mpmath evaluation (object arrays).
+        Decimal digits of an mpmath evaluation: ``mc(t)`` then returns object arrays.
 
     Returns
     -------
-    q, v : ndarray, shape ``t.shape + (3,)``
-
-    See Also
-    --------
-    MassCenterMotion : the same with the modes exposed.
+    MassCenterMotion
+        ``mc(t) -> (q, v)`` with shapes ``t.shape + (3,)``, and the modes of the motion.
     """
-    return MassCenterMotion(a, b, q0, v0)(t, dps=dps)
+    if dps is not None and (not isinstance(dps, (int, np.integer)) or dps < 15):
+        raise ValueError(f"dps must be an integer >= 15, got {dps!r}")
+    return MassCenterMotion(a, b, q0, v0, dps=dps)

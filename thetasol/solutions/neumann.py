@@ -501,7 +501,7 @@ def _validated(a, q0, v0):
 
 
 @single_blas_thread
-def solve_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, *, reference: str = _REFERENCE) -> NeumannSolution:
+def solve_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike) -> NeumannSolution:
     """Exact motion of a point on the sphere ``|q| = |q0|`` in the potential ``phi = 1/2 q^T a q``
     (Section 6, (6.1)-(6.2); Theorem 3: the mass centre of the configuration).
 
@@ -516,8 +516,6 @@ def solve_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, *, reference: str 
         Initial position (non-zero; its length is the radius of the sphere).
     v0 : array_like, shape (3,)
         Initial velocity, tangent to the sphere (``|q0.v0| <= 1e-12 |q0| |v0|``; projected exactly).
-    reference : str
-        What the message of :class:`ClosedFormUnavailable` recommends instead.
 
     Returns
     -------
@@ -531,7 +529,8 @@ def solve_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, *, reference: str 
     ClosedFormUnavailable
         The torus on a separatrix within rounding (two branch points equal), thinner than
         ``MIN_WIDTH`` (within ~1e-7 rad of an invariant great circle without being on it), or a
-        Fourier series that would need more terms than its limit: the message names ``reference``.
+        Fourier series that would need more terms than its limit: the message names the numerical
+        reference to use instead, :func:`thetasol.integrate_neumann`.
     """
     a, q0, v0, R = _validated(a, q0, v0)
     k, axes = np.linalg.eigh(a)
@@ -545,7 +544,7 @@ def solve_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike, *, reference: str 
     y0 = axes.T @ v0 / (R * rate)
     x0 = x0 / np.linalg.norm(x0)
     y0 = y0 - x0 * (x0 @ y0)
-    with series_or_unavailable(reference):
+    with series_or_unavailable(_REFERENCE):
         model = neumann_model(ks, x0, y0)
     gaps = np.diff(ks)
     snapped = not isotropic and bool(gaps.min() <= SNAP_TOL * (ks[2] - ks[0]))

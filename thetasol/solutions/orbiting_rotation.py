@@ -47,6 +47,7 @@ from thetasol.core import validate as V
 from thetasol.core.attitude import angle_mod_2pi, principal_frame, uniform_rotation
 from thetasol.core.so3 import rotation_about
 from thetasol.core.threads import single_blas_thread
+from thetasol.mechanics.equations import inertia, second_moments
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability, orbit_frame
 from thetasol.protocol import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
@@ -164,13 +165,14 @@ def _pitch_setup(Ip, k, s, Qp, wp, F0, n):
 
 
 @single_blas_thread
-def solve_orbiting_rotation(J: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, omega0: ArrayLike) -> OrbitingRotation:
+def solve_orbiting_rotation(I: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, omega0: ArrayLike) -> OrbitingRotation:
     """The closed-form rotation about the mass centre on ``orbit`` where one exists.
 
     Parameters
     ----------
-    J : array_like, shape (3,) or (3, 3)
-        Second moments in the body frame (``I = tr(J) 1 - J``).
+    I : array_like, shape (3,) or (3, 3)
+        Inertia tensor about the mass centre in the body frame (second moments convert with
+        :func:`thetasol.inertia`).
     orbit : KeplerOrbit
         The mass centre's orbit (7.7).
     Q0 : array_like, shape (3, 3)
@@ -189,16 +191,16 @@ def solve_orbiting_rotation(J: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, ome
         Valid data outside the solved cases: use
         :func:`thetasol.integrators.orbiting_rotation.integrate_orbiting_rotation`.
     ValueError
-        Bad data (non-physical ``J``, non-orthogonal ``Q0``, NaN).
+        Bad data (non-physical ``I``, non-orthogonal ``Q0``, NaN).
     """
     if not isinstance(orbit, KeplerOrbit):
         raise TypeError(f"orbit must be a KeplerOrbit, got {type(orbit).__name__}")
-    Jm = V.second_moments(J, "J")
+    Im = V.inertia(I, "I")
+    Jm = second_moments(Im)
     Q0 = V.rotation_matrix(Q0, "Q0")
     w0 = V.vector3(omega0, "omega0")
     Jp, P = principal_frame(Jm)
-    Ip = Jp.sum() - Jp
-    Im = np.trace(Jm) * np.eye(3) - Jm
+    Ip = inertia(Jp)
     base = dict(J=Jm, a=_tidal_matrix(orbit), Q0=Q0, omega0=w0, orbit=orbit)
     if np.max(Ip) - np.min(Ip) <= 4 * _EPS * np.max(Ip):
         return OrbitingRotation(method="free/spherical", invariants={"m": Im @ w0},

@@ -1,8 +1,9 @@
 """Closed-form rotation of one effective rigid body: the entry point and the result protocol.
 
-:func:`solve_rotation` takes the data of :func:`thetasol.integrate_rotation` (second
-moments ``J``, potential matrix ``a``, initial attitude ``Q0``, initial body angular
-velocity ``omega0``) and returns a :class:`RotationSolution`, an immutable object that
+:func:`solve_rotation` takes the data of :func:`thetasol.integrate_rotation` (inertia
+tensor ``I``, potential matrix ``a``, initial attitude ``Q0``, initial body angular
+velocity ``omega0``; the paper's second moments ``J = tr(I)/2 1 - I`` are formed once, inside)
+and returns a :class:`RotationSolution`, an immutable object that
 evaluates the motion at any times, in any order, at the cost of a few elementary and
 elliptic function evaluations per time (no time stepping).
 
@@ -38,6 +39,7 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.attitude import principal_frame
 from thetasol.core.threads import single_blas_thread
+from thetasol.mechanics.equations import second_moments
 from thetasol.mechanics.potential import potential_kind
 from thetasol.protocol import ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
@@ -126,16 +128,17 @@ _BRANCHES: list[Callable] = [_free_branch, _pendulum_branch, _neumann_branch, _p
 
 
 @single_blas_thread
-def solve_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *,
+def solve_rotation(I: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *,  
                    dps: int | None = None) -> RotationSolution:
     """Exact rotation of a rigid body in the potential ``phi = 1/2 x^T a x`` (closed form).
 
     Parameters
     ----------
-    J : array_like, shape (3,) or (3, 3)
-        Second moments ``sum m r r^T`` in the body frame: principal values or a symmetric
-        tensor (then a right-handed principal frame is used internally and results are
-        mapped back).  Inertia ``I = tr(J) 1 - J``.
+    I : array_like, shape (3,) or (3, 3)
+        Inertia tensor about the mass centre in the body frame: principal values or a symmetric
+        tensor (then a right-handed principal frame is used internally and results are mapped
+        back).  Positive definite with ``I_i <= I_j + I_k``; second moments ``J = sum m r r^T``
+        convert with :func:`thetasol.inertia`.
     a : array_like, shape (3, 3)
         Symmetric potential matrix.  ``a = 0`` or ``a = c 1`` (no torque) gives the Euler
         top; any other ``a`` the theta-function solution (4.8)-(4.12).
@@ -154,13 +157,14 @@ def solve_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike,
         ``sol.method``, ``sol.invariants`` (first integrals), ``sol.diagnostics`` (self-checks).  Data
         of order one (scales within ``2^+-4`` of 1, no dominant isotropic part) get the branch's own
         solution object; others a :class:`~thetasol.solutions._scaling.ScaledRotation` around the
-        solution of the dimensionless problem (``sol.diagnostics["scales"]``), with the user's ``J``,
-        ``a`` and first integrals.
+        solution of the dimensionless problem (``sol.diagnostics["scales"]``), with the user's body
+        (``sol.I``; the paper's second moments ``sol.J``), ``a`` and first integrals.
 
     Raises
     ------
     ValueError
-        Non-finite, wrongly shaped or unphysical data.
+        Non-finite, wrongly shaped or unphysical data; an ``I`` that violates a triangle
+        inequality but reads as second moments ``J`` says so (pass ``thetasol.inertia(J)``).
     ClosedFormUnavailable
         (a ``NotImplementedError``) A symmetric body (two equal principal moments) with little
         (but not zero) spin about its symmetry axis in a potential with torque, a Neumann torus
@@ -180,13 +184,13 @@ def solve_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike,
     Examples
     --------
     >>> import numpy as np
-    >>> sol = solve_rotation([1.0, 2.0, 3.5], np.zeros((3, 3)), np.eye(3), [0.1, 1.0, 0.2])
+    >>> sol = solve_rotation([5.5, 4.5, 3.0], np.zeros((3, 3)), np.eye(3), [0.1, 1.0, 0.2])
     >>> sol.method
     'euler-top/elliptic'
     >>> sol.omega(np.array([0.0, 1e6])).shape
     (2, 3)
     """
-    Jm = V.second_moments(J, "J")
+    Jm = second_moments(V.inertia(I, "I"))
     am = V.symmetric_matrix(a, "a")
     Q0m = V.rotation_matrix(Q0, "Q0")
     w0 = V.vector3(omega0, "omega0")

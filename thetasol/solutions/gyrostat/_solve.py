@@ -8,13 +8,16 @@ from __future__ import annotations
 
 import warnings
 from dataclasses import dataclass, field
+from collections.abc import Mapping, Sequence
 from fractions import Fraction
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.attitude import norm3 as _norm, principal_frame as _principal_frame
 from thetasol.core.threads import single_blas_thread
+from thetasol.mechanics.equations import second_moments
 from thetasol.solutions.gyrostat._elliptic import elliptic_motion, elliptic_orbit, reanchor
 from thetasol.solutions.gyrostat._forms import Axisymmetric, BodyMap, Delegate, Scaled, Sphere, Steady
 from thetasol.solutions.gyrostat._rotors import RotorAngles, parse_rotors
@@ -99,13 +102,12 @@ class _Form:
     err: float = _EPS
 
 
-def _data(J, N, Q0, omega0) -> _Data:
-    Jm = V.second_moments(J, "J")
+def _data(I, N, Q0, omega0) -> _Data:
+    Im = V.inertia(I, "I")
     n_body = V.vector3(N, "N")
     Q0m = V.rotation_matrix(Q0, "Q0")
     w0 = V.vector3(omega0, "omega0")
-    I = np.trace(Jm) * np.eye(3) - Jm
-    return _Data(J=Jm, N=n_body, Q0=Q0m, omega0=w0, I=I, m=I @ w0)
+    return _Data(J=second_moments(Im), N=n_body, Q0=Q0m, omega0=w0, I=Im, m=Im @ w0)
 
 
 def _first_integrals(d: _Data) -> dict:
@@ -123,7 +125,7 @@ def _degenerate_form(d: _Data) -> _Form | None:
     if _norm(n_body) <= 0.25 * _EPS * _norm(m_body):
         # a rotor momentum below the rounding of m: the Euler top of the same data (exact
         # to rounding; the rotor term's effect stays below eps |m| omega t)
-        sol = solve_rotation(d.J, np.zeros((3, 3)), Q0m, w0)
+        sol = solve_rotation(d.I, np.zeros((3, 3)), Q0m, w0)
         return _Form(sol.method, Delegate(sol), sol.diagnostics["period"], sol.diagnostics["precession_rate"])
     if not np.any(m_body):
         return _Form("rest", Steady(Q0m, np.zeros(3)))
@@ -196,21 +198,22 @@ def _elliptic_form(d: _Data) -> _Form:
 # -- entry point -------------------------------------------------------------------------------
 
 @single_blas_thread
-def solve_gyrostat(J, N, Q0, omega0, *, rotors=None) -> GyrostatSolution:
+def solve_gyrostat(I: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0: ArrayLike, *,
+                   rotors: Sequence[Mapping] | None = None) -> GyrostatSolution:
     """Exact motion of a free gyrostat, (8.39)-(8.40) (Zhukovsky-Volterra case), with the
     angles of its rotors when they are given.
 
-    The carrier obeys ``I omega_dot = (I omega + N) x omega`` with ``I = tr(J) 1 - J`` and a
-    constant ``N``, and ``Qdot = Q hat(omega)``.
+    The carrier obeys ``I omega_dot = (I omega + N) x omega`` with a constant ``N``, and
+    ``Qdot = Q hat(omega)``.
 
     Parameters
     ----------
-    J : array_like, shape (3,) or (3, 3)
-        Second moments of the carrier INCLUDING the rotors' masses and transverse moments but
-        NOT the rotors' axial moments ``A_k``: the ``I`` above is the paper's (8.33) inertia of
-        the effective carrier.  (Equivalently, without ``rotors``: ``J`` with the rotors locked,
-        axial moments included, when the rotors spin at constant rates relative to the carrier
-        and ``N = sum A_k phidot_k l_k``.)
+    I : array_like, shape (3,) or (3, 3)
+        Inertia tensor of the carrier INCLUDING the rotors' masses and transverse moments but
+        NOT the rotors' axial moments ``A_k``: the paper's (8.33) inertia of the effective
+        carrier.  (Equivalently, without ``rotors``: ``I`` with the rotors locked, axial moments
+        included, when the rotors spin at constant rates relative to the carrier and
+        ``N = sum A_k phidot_k l_k``.)  Second moments convert with :func:`thetasol.inertia`.
     N : array_like, shape (3,), or None
         Constant rotor angular momentum in the body frame, ``N = sum_k p_k l_k`` (8.33).  With
         ``rotors`` it is checked against that sum (relative tolerance 1e-12 of
@@ -222,7 +225,7 @@ def solve_gyrostat(J, N, Q0, omega0, *, rotors=None) -> GyrostatSolution:
     rotors : sequence of mappings, optional
         One mapping per rotor with keys ``axis`` (its unit axis ``l_k`` in the carrier frame;
         a norm off 1 by more than 1e-12 is refused, else it is normalized), ``A`` (axial moment,
-        > 0), ``B`` (transverse moment, >= 0; already part of ``J``, kept for inspection) and
+        > 0), ``B`` (transverse moment, >= 0; already part of ``I``, kept for inspection) and
         ``p`` (the conserved rotor momentum ``p_k = A_k (omega . l_k + phidot_k)``, (8.25)).
         The rotor angles start at ``phi_k(0) = 0``.
 
@@ -246,7 +249,7 @@ def solve_gyrostat(J, N, Q0, omega0, *, rotors=None) -> GyrostatSolution:
     Raises
     ------
     ValueError
-        Bad data (non-finite, wrong shapes, unphysical ``J``, ``Q0`` not a rotation, a rotor
+        Bad data (non-finite, wrong shapes, unphysical ``I``, ``Q0`` not a rotation, a rotor
         with a non-unit axis, ``A <= 0``, ``B < 0``, or ``N`` not ``sum p_k l_k``).
     NotImplementedError
         An orbit within 1e-307 of a separatrix but not on it (the elliptic parameter is not
@@ -263,7 +266,7 @@ def solve_gyrostat(J, N, Q0, omega0, *, rotors=None) -> GyrostatSolution:
         rs, N = parse_rotors(rotors, N)
     elif N is None:
         raise ValueError("N is required without rotors")
-    d = _data(J, N, Q0, omega0)
+    d = _data(I, N, Q0, omega0)
     inv = _first_integrals(d)
     form = _degenerate_form(d) or _elliptic_form(d)
     diag = {"period": float(form.period), "precession_rate": float(form.rate),
