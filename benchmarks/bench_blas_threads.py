@@ -19,14 +19,14 @@ import pathlib
 import numpy as np
 from _common import best_of, machine_info
 
-from thetasol import solve_rotation
+from thetasol import inertia, solve_rotation
 from thetasol.core import threads
 
 REFS = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "rotation" / "refs.json"
 
 
 def measure(data):
-    args = (np.diag(data["J"]), np.array(data["a"]), np.array(data["Q0"]), np.array(data["omega0"]))
+    args = (inertia(np.diag(data["J"])), np.array(data["a"]), np.array(data["Q0"]), np.array(data["omega0"]))
     t_dense, t_far = np.linspace(0.0, 1000.0, 2001), np.array([1e6])
     ts, sol = best_of(lambda: solve_rotation(*args), repeat=1)
     td, _ = best_of(lambda: sol(t_dense), repeat=3)

@@ -27,7 +27,7 @@ sys.path.insert(0, ROOT)
 
 from _common import best_of, machine_info  # noqa: E402
 
-from thetasol import solve_rotation
+from thetasol import inertia, solve_rotation
 from thetasol.curves import _quad as _curve_quad  # noqa: E402
 from thetasol.curves._dd import curve_to_cdd, intervals_dd, numerators_to_cdd  # noqa: E402
 from thetasol.curves._mp import interval_mp, numerators_mp  # noqa: E402
@@ -37,7 +37,7 @@ REFS = json.load(open(os.path.join(ROOT, "tests", "data", "rotation", "refs.json
 
 def _args(name):
     r = REFS[name]
-    return np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"])
+    return inertia(np.diag(r["J"])), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"])
 
 
 def _capture(name):

@@ -24,8 +24,7 @@ import time
 import numpy as np
 from _common import best_of, machine_info
 
-from thetasol import integrate_rotation, solve_rotation
-from thetasol.mechanics.equations import inertia
+from thetasol import inertia, integrate_rotation, solve_rotation
 
 Z = np.zeros((3, 3))
 
@@ -50,7 +49,7 @@ def problems():
 
 def reference(data, t, dps=40):
     J, Q0, w0 = data
-    w, Q = solve_rotation(J, Z, Q0, w0, dps=dps)(t)
+    w, Q = solve_rotation(inertia(J), Z, Q0, w0, dps=dps)(t)
     return w.astype(float), Q.astype(float)
 
 
@@ -64,7 +63,7 @@ def dense(name, data, quick):
     print(f"\n## {name}: dense output, {n} points on [0, 1000]  (reference: closed form, mpmath "
           f"40 digits, {tref:.1f} s)")
     rows = []
-    cost, out = best_of(lambda: solve_rotation(J, Z, Q0, w0)(t), repeat=5)
+    cost, out = best_of(lambda: solve_rotation(inertia(J), Z, Q0, w0)(t), repeat=5)
     rows.append(("thetasol closed form (float64)", cost, err(out, ref)))
     for rtol in ([1e-6, 1e-9] if quick else [1e-6, 1e-9, 1e-12, 1e-13]):
         cost, out = best_of(lambda: integrate_rotation(inertia(J), Z, Q0, w0, rtol=rtol, atol=1e-3 * rtol)(t),
@@ -96,7 +95,7 @@ def far(name, data, quick):
     print(f"\n## {name}: one far-time query")
     print("| t | thetasol cost per call [us] | thetasol error | DOP853 1e-13 [s] | DOP853 error | "
           "heyoka dbl [s] | heyoka error |\n|---|---|---|---|---|---|---|")
-    sol = solve_rotation(J, Z, Q0, w0)
+    sol = solve_rotation(inertia(J), Z, Q0, w0)
     has_hy = True
     try:
         import heyoka  # noqa: F401
@@ -121,13 +120,13 @@ def far(name, data, quick):
             hcol = "- | -"
         print(f"| {T:g} | {cost * 1e6:.0f} | {e:.1e} | {dcol} | {hcol} |")
     # setup cost
-    cs, _ = best_of(lambda: solve_rotation(J, Z, Q0, w0), repeat=5, number=20)
+    cs, _ = best_of(lambda: solve_rotation(inertia(J), Z, Q0, w0), repeat=5, number=20)
     print(f"\nsetup (solve_rotation, validation and invariants included): {cs * 1e6:.0f} us")
 
 
 def batches(name, data):
     J, Q0, w0 = data
-    sol = solve_rotation(J, Z, Q0, w0)
+    sol = solve_rotation(inertia(J), Z, Q0, w0)
     rng = np.random.default_rng(0)
     print(f"\n## {name}: random access (times uniform in [0, 1e6])")
     print("| batch size | omega and Q [us/point] | omega only [us/point] |\n|---|---|---|")
@@ -153,7 +152,7 @@ def conditioning(name, data, quick):
         r1 = reference((J, Q0, w1), t)
         for k, g in groups.items():
             spread[k] = max(spread[k], err((r1[0][g], r1[1][g]), (ref[0][g], ref[1][g])))
-    out = solve_rotation(J, Z, Q0, w0)(t)
+    out = solve_rotation(inertia(J), Z, Q0, w0)(t)
     cells = []
     for k, g in groups.items():
         cells.append(f"{spread[k]:.1e} | {err((out[0][g], out[1][g]), (ref[0][g], ref[1][g])):.1e}")

@@ -19,7 +19,7 @@ import time
 import numpy as np
 from _common import best_of, machine_info
 
-from thetasol import solve_gyrostat
+from thetasol import inertia, solve_gyrostat
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 import test_gyrostat_rotors as T  # noqa: E402
@@ -38,8 +38,8 @@ def main():
     for name, body, tmax in cases:
         rot = T.solver_rotors(body)
         N = np.sum([r["p"] * np.asarray(r["axis"]) for r in rot], axis=0)
-        t0, _ = best_of(lambda: solve_gyrostat(body["J"], N, np.eye(3), body["omega0"]))  # noqa: B023
-        t1, sol = best_of(lambda: solve_gyrostat(body["J"], None, np.eye(3), body["omega0"], rotors=rot))  # noqa: B023
+        t0, _ = best_of(lambda: solve_gyrostat(inertia(body["J"]), N, np.eye(3), body["omega0"]))  # noqa: B023
+        t1, sol = best_of(lambda: solve_gyrostat(inertia(body["J"]), None, np.eye(3), body["omega0"], rotors=rot))  # noqa: B023
         ta, _ = best_of(lambda: sol.rotor_angles(tt))  # noqa: B023
         te, _ = best_of(lambda: sol(tt))  # noqa: B023
         Q0 = rand_Q(np.random.default_rng(5))

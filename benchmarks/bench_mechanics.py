@@ -26,7 +26,7 @@ from thetasol.integrators.multibody import integrate_multibody
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.scenes.pipeline import solve_configuration
-from thetasol.solutions.mass_center import mass_center
+from thetasol.solutions.mass_center import solve_mass_center
 
 REPEAT = 3
 
@@ -52,7 +52,7 @@ def mass_centre_table():
                             for tk in tsub])
         scale = np.max(np.abs(ref))
         rows = []
-        sec, (q, _) = best_of(lambda: mass_center(a, b, q0, v0, t), REPEAT)
+        sec, (q, _) = best_of(lambda: solve_mass_center(a, b, q0, v0)(t), REPEAT)
         rows.append(("closed form (thetasol)", sec, np.max(np.abs(q[::50] - ref)) / scale))
         for rtol in (1e-8, 1e-11, 1e-13):
             def run(rtol=rtol):

@@ -29,8 +29,7 @@ from _common import best_of, machine_info  # noqa: E402
 from test_neumann import CASES, T_FAR  # noqa: E402
 from test_neumann_point import CASES as POINT_CASES, _data, _errors, _scales  # noqa: E402
 
-from thetasol import integrate_rotation, solve_rotation  # noqa: E402
-from thetasol.mechanics.equations import inertia
+from thetasol import inertia, integrate_rotation, solve_rotation  # noqa: E402
 from thetasol.solutions.neumann import solve_neumann  # noqa: E402
 
 T_POINT = np.array([0.7, 3.1, 17.3, 102.0, 1000.0])
@@ -51,7 +50,7 @@ def rotation():
           + " | ".join(f"t={t:g}" for t in T_FAR) + " |")
     print("|---|---|---|---|---|" + "---|" * len(T_FAR))
     for label, J, a, Q0, w0, _ in CASES:
-        setup, sol = best_of(lambda: solve_rotation(J, a, Q0, w0))
+        setup, sol = best_of(lambda: solve_rotation(inertia(J), a, Q0, w0))
         ev = best_of(lambda: sol(tt), repeat=5)[0] / tt.size * 1e6
         cpu = best_of(lambda: sol(tt), repeat=5, clock=time.process_time)[0] / tt.size * 1e6
         errs = ["-"] * len(T_FAR)

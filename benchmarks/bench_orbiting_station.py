@@ -91,14 +91,14 @@ def rotation_table():
         Q0 = np.column_stack([math.cos(th0) * F0[:, 0] + math.sin(th0) * F0[:, 1],
                               -math.sin(th0) * F0[:, 0] + math.cos(th0) * F0[:, 1], F0[:, 2]])
         w0 = np.array([0.0, 0.0, n * (1 + thd)])
-        sol = solve_orbiting_rotation(J_SAT, orb, Q0, w0)
+        sol = solve_orbiting_rotation(I_SAT, orb, Q0, w0)
         ts = np.linspace(0, 20 * orb.period, 6)[1:]
         wr, Qr = integrate_orbiting_rotation(inertia(J_SAT), orb, Q0, w0, method="heyoka", fp_type=np.longdouble,
                                              rtol=1e-19)(ts)
         w, Q = sol(ts)
         err = max(np.abs(Q - Qr).max(), np.abs(w - wr).max() / np.abs(wr).max())
         many = np.linspace(0, 1e6 * orb.period, 100000)
-        t_set, _ = best_of(lambda a=(J_SAT, orb, Q0, w0): solve_orbiting_rotation(*a), clock=CPU)
+        t_set, _ = best_of(lambda a=(I_SAT, orb, Q0, w0): solve_orbiting_rotation(*a), clock=CPU)
         t_ev, _ = best_of(lambda s=sol, m=many: s(m), clock=CPU)
         print(f"| circular, {sol.method} | closed form: set-up {t_set * 1e3:.2f} ms, "
               f"{t_ev / many.size * 1e6:.1f} us per time (t up to 1e6 orbits) | - | {err:.1e} |")

@@ -69,7 +69,7 @@ def lagrange():
     t = np.linspace(0.0, 100.0, 201)
     for k in range(3):
         I, c, N, Q0, w0 = P._lagrange_case(k)
-        ts, sol = best_of(lambda: solve_lagrange_gyrostat(I, c, N, Q0, w0, mass=2.0))  # noqa: B023
+        ts, sol = best_of(lambda: solve_lagrange_gyrostat(I, c, Q0, w0, N=N, mass=2.0))  # noqa: B023
         te, _ = best_of(lambda: sol(tt))  # noqa: B023
         c0 = time.perf_counter()
         wh, Qh = integrate_heavy_gyrostat(I, c, Q0, w0, N=N, mass=2.0, rtol=1e-19, method="heyoka",

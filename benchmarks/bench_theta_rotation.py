@@ -40,9 +40,8 @@ import time
 import numpy as np
 from _common import best_of, machine_info
 
-from thetasol import integrate_rotation, invariants, solve_rotation
+from thetasol import inertia, integrate_rotation, invariants, solve_rotation
 from thetasol.integrators.rotation import rotation_expressions
-from thetasol.mechanics.equations import inertia
 
 REFS = pathlib.Path(__file__).resolve().parent.parent / "tests" / "data" / "rotation" / "refs.json"
 QUICK = "generic,saddle,rank_one,near_unstable_equilibrium,symmetric_oblate"
@@ -106,8 +105,8 @@ def bench_body(name, data, ta, quick):
     at_refs = np.searchsorted(grid, tr[near])
     row = {"case": name}
     # a body new to the process (no cache holds anything of its curve), then repeats of it
-    row["setup_new"], _ = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=1, clock=CLOCK[0])
-    row["setup"], sol = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=3, clock=CLOCK[0])
+    row["setup_new"], _ = best_of(lambda: solve_rotation(inertia(J), a, Q0, w0), repeat=1, clock=CLOCK[0])
+    row["setup"], sol = best_of(lambda: solve_rotation(inertia(J), a, Q0, w0), repeat=3, clock=CLOCK[0])
     row["method"] = sol.method
     row["dense"], (w, Q) = best_of(lambda: sol(grid), repeat=3, clock=CLOCK[0])
     row["dense"] /= grid.size
@@ -135,16 +134,16 @@ def first_setup(data) -> float:
     """Seconds of this process's first set-up: its one-off costs (the imports of the set-up's modules, the
     BLAS controllers) stay out of the table.  The body is the given one with omega0 scaled by 1.01, so that
     the table's first body is new to the process too."""
-    args = (np.diag(data["J"]), np.array(data["a"]), np.array(data["Q0"]), 1.01 * np.array(data["omega0"]))
+    args = (inertia(np.diag(data["J"])), np.array(data["a"]), np.array(data["Q0"]), 1.01 * np.array(data["omega0"]))
     return best_of(lambda: solve_rotation(*args), repeat=1, clock=CLOCK[0])[0]
 
 
 def cold_start(data) -> float:
     """Seconds for a fresh process to import thetasol and solve the body (interpreter start excluded)."""
     clock = "process_time" if CLOCK[0] is time.process_time else "perf_counter"
-    code = (f"import time; t0 = time.{clock}(); import numpy as np; from thetasol import solve_rotation; "
+    code = (f"import time; t0 = time.{clock}(); import numpy as np; from thetasol import inertia, solve_rotation; "
             f"d = {json.dumps({k: data[k] for k in ('J', 'a', 'Q0', 'omega0')})}; "
-            "solve_rotation(np.diag(d['J']), np.array(d['a']), np.array(d['Q0']), np.array(d['omega0'])); "
+            "solve_rotation(inertia(d['J']), np.array(d['a']), np.array(d['Q0']), np.array(d['omega0'])); "
             f"print(time.{clock}() - t0)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     return float(out.stdout.split()[-1])

@@ -28,7 +28,7 @@ from _common import best_of, machine_info
 from bench_theta_rotation import CLOCK, heyoka_integrator, heyoka_run
 from bench_units_sweep import REGIMES, _body
 
-from thetasol import ClosedFormUnavailable, solve_rotation
+from thetasol import ClosedFormUnavailable, inertia, solve_rotation
 
 N_DENSE = 20001
 
@@ -46,7 +46,7 @@ def bench_body(regime: str, J, a, Q0, w0, ta) -> dict:
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", RuntimeWarning)
-            row["setup"], sol = best_of(lambda: solve_rotation(J, a, Q0, w0), repeat=3, clock=CLOCK[0])
+            row["setup"], sol = best_of(lambda: solve_rotation(inertia(J), a, Q0, w0), repeat=3, clock=CLOCK[0])
     except ClosedFormUnavailable:
         row["method"] = "refused"
         return row
@@ -103,7 +103,8 @@ def main(argv=None) -> None:
           "[0, 1000 / w]\n")
     rng = np.random.default_rng(args.seed)
     ta, _ = heyoka_integrator()
-    solve_rotation(*_body("generic", np.random.default_rng(10**6)))        # first-call costs, not counted
+    J, a, Q0, w0 = _body("generic", np.random.default_rng(10**6))
+    solve_rotation(inertia(J), a, Q0, w0)        # first-call costs, not counted
     rows = [bench_body(regime, *_body(regime, rng), ta) for _ in range(args.n) for regime in REGIMES]
     print_table(rows)
 

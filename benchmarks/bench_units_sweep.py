@@ -28,7 +28,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 from _common import machine_info  # noqa: E402
 
-from thetasol import ClosedFormUnavailable, solve_rotation  # noqa: E402
+from thetasol import ClosedFormUnavailable, inertia, solve_rotation  # noqa: E402
 from thetasol.core.so3 import rodrigues  # noqa: E402
 from thetasol.integrators.rotation import rotation_expressions  # noqa: E402
 
@@ -151,7 +151,7 @@ def run_case(regime, rng):
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            sol = solve_rotation(Ju, au, Q0, wu)
+            sol = solve_rotation(inertia(Ju), au, Q0, wu)
         except ClosedFormUnavailable:
             rec.update(outcome="refused", setup=time.perf_counter() - t0)
             return rec

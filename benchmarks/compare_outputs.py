@@ -50,13 +50,13 @@ from thetasol import (
     integrate_rotation,
     invariants,
     load_scene,
-    mass_center,
     riemann_theta,
     riemann_theta_separated,
     run,
     siegel_reduce,
     solve_configuration,
     solve_gyrostat,
+    solve_mass_center,
     solve_rotation,
     spectral_coefficients,
     spectral_curve,
@@ -201,7 +201,7 @@ def group_rotation_refs(rec, root):
     refs = json.loads((root / "tests" / "data" / "rotation" / "refs.json").read_text())
     for name, r in refs.items():
         J, a, Q0, w0 = np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"])
-        sol = record_solution(rec, f"rotation/{name}", lambda: solve_rotation(J, a, Q0, w0), T_ROT)
+        sol = record_solution(rec, f"rotation/{name}", lambda: solve_rotation(inertia(J), a, Q0, w0), T_ROT)
         if sol is not None and name in ("generic", "symmetric_oblate", "rank_one"):
             # the public first integrals and spectral coefficients on the solution's own output
             def eq(sol=sol, name=name, J=J, a=a):
@@ -248,7 +248,7 @@ def group_rotation_extra(rec, refs):
 
     # Euler top through mpmath (dps): values as 25-digit strings (exact comparison)
     def mp_top():
-        sol = solve_rotation([1.0, 1.7, 2.3], np.zeros((3, 3)), rodrigues([0.1, 0.2, 0.3]), [0.05, 0.6, 0.4], dps=25)
+        sol = solve_rotation(inertia([1.0, 1.7, 2.3]), np.zeros((3, 3)), rodrigues([0.1, 0.2, 0.3]), [0.05, 0.6, 0.4], dps=25)
         rec.text("dps/euler_top/method", sol.method)
         w, Q = sol(np.array([0.0, 3.1, 102.0]))
         rec.text("dps/euler_top/omega", _mpstr(w))
@@ -315,7 +315,7 @@ def group_neumann(rec):
                                rodrigues([0, 0, -0.4]) @ [0, 2.0, 0]),
     }
     for name, (J, a, Q0, w0) in cases.items():
-        record_solution(rec, f"neumann/{name}", lambda: solve_rotation(J, a, Q0, w0), T_OTHER)
+        record_solution(rec, f"neumann/{name}", lambda: solve_rotation(inertia(J), a, Q0, w0), T_OTHER)
 
 
 def group_pendulum(rec):
@@ -337,7 +337,7 @@ def group_pendulum(rec):
     nu = np.sqrt(2 * abs(J[k] - J[j]) * rho / Ii)
     cases["separatrix"] = (J, A, np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]), [0, 0, nu])
     for name, (Jc, a, Q0, w0) in cases.items():
-        record_solution(rec, f"pendulum/{name}", lambda: solve_rotation(Jc, a, Q0, w0), T_OTHER)
+        record_solution(rec, f"pendulum/{name}", lambda: solve_rotation(inertia(Jc), a, Q0, w0), T_OTHER)
 
 
 def group_euler_top(rec):
@@ -366,7 +366,7 @@ def group_euler_top(rec):
     out["tensor"] = (A @ A.T + np.eye(3), out["tensor"][1], out["tensor"][2])
     Z = np.zeros((3, 3))
     for name, (J, Q0, w0) in out.items():
-        record_solution(rec, f"euler_top/{name}", lambda: solve_rotation(J, Z, Q0, w0), T_OTHER)
+        record_solution(rec, f"euler_top/{name}", lambda: solve_rotation(inertia(J), Z, Q0, w0), T_OTHER)
 
 
 def group_gyrostat(rec):
@@ -387,7 +387,7 @@ def group_gyrostat(rec):
                         np.array([0.4, 0.3, -0.6])),
     }
     for name, (J, N, Q0, w0) in cases.items():
-        sol = record_solution(rec, f"gyrostat/{name}", lambda: solve_gyrostat(J, N, Q0, w0), T_OTHER)
+        sol = record_solution(rec, f"gyrostat/{name}", lambda: solve_gyrostat(inertia(J), N, Q0, w0), T_OTHER)
         if sol is not None:
             rec.guard(f"gyrostat/{name}/h", lambda sol=sol, name=name: rec.num(f"gyrostat/{name}/h", sol.h(T_OTHER)))
 
@@ -525,16 +525,17 @@ def group_mass_center(rec):
         name = "lam_" + "_".join(f"{v:g}" for v in lam)
 
         def mc(a=a, b=b, q0=q0, v0=v0, name=name):
-            q, v = mass_center(a, b, q0, v0, t)
+            q, v = solve_mass_center(a, b, q0, v0)(t)
             rec.num(f"mass_center/{name}/q", q)
             rec.num(f"mass_center/{name}/v", v)
         rec.guard(f"mass_center/{name}", mc)
 
         if lam == [1.3, -0.7, 0.0]:
-            rec.guard("mass_center/overflow_refused", mass_center, a, b, q0, v0, np.array([0.0, 1e3]))
+            rec.guard("mass_center/overflow_refused",
+                      lambda a=a, b=b, q0=q0, v0=v0: solve_mass_center(a, b, q0, v0)(np.array([0.0, 1e3])))
 
             def mp(a=a, b=b, q0=q0, v0=v0):
-                q, v = mass_center(a, b, q0, v0, t[:3], dps=25)
+                q, v = solve_mass_center(a, b, q0, v0, dps=25)(t[:3])
                 rec.text("mass_center/dps25/q", _mpstr(q))
                 rec.text("mass_center/dps25/v", _mpstr(v))
             rec.guard("mass_center/dps25", mp)

@@ -157,7 +157,7 @@ def test_theta_set_up_imports_only_what_it_uses():
     draws of a generator whose streams may change between numpy versions)."""
     refs = str(Path(__file__).parent / "data" / "rotation" / "refs.json")
     code = ("import json, sys, numpy as np, thetasol; d = json.load(open(sys.argv[1])); "
-            "[thetasol.solve_rotation(np.diag(d[n]['J']), np.array(d[n]['a']), np.array(d[n]['Q0']), "
+            "[thetasol.solve_rotation(thetasol.inertia(d[n]['J']), np.array(d[n]['a']), np.array(d[n]['Q0']), "
             "np.array(d[n]['omega0']))(np.array([0.5, 1e6])) for n in ('generic', 'symmetric_oblate', "
             "'rank_one_plus_isotropic', 'symmetric_rank_one')]; "
             "print(sorted(m for m in ('thetasol.solutions.neumann_rotation', 'sympy', 'numpy.random') "

@@ -6,6 +6,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from thetasol import inertia
 from thetasol.cli import main
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -176,7 +177,7 @@ def test_readme_example():
     """The README's code example, as printed there: a theta-function solution of genus 4."""
     from thetasol import solve_rotation
 
-    sol = solve_rotation([0.6, 1.0, 1.7], np.diag([-1.0, 0.4, 1.5]), np.eye(3), [0.5, -0.8, 0.6])
+    sol = solve_rotation(inertia([0.6, 1.0, 1.7]), np.diag([-1.0, 0.4, 1.5]), np.eye(3), [0.5, -0.8, 0.6])
     assert sol.method == "theta/genus-4"
     omega, Q = sol(np.linspace(0, 1000, 2001))
     assert omega.shape == (2001, 3) and Q.shape == (2001, 3, 3)

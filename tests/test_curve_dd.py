@@ -11,7 +11,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from thetasol import solve_rotation
+from thetasol import inertia, solve_rotation
 from thetasol.core.dd import cdd_div, cdd_mul, dd_div
 from thetasol.curves import _quad as _curve_quad
 from thetasol.curves._dd import curve_to_cdd, intervals_dd, numerators_to_cdd
@@ -63,7 +63,7 @@ def critical_call():
     mp.setattr(_curve_quad.Tracked, "_add_dd", spy)
     try:
         r = REFS["symmetric_fast_spin"]
-        solve_rotation(np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"]))
+        solve_rotation(inertia(np.diag(r["J"])), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"]))
     finally:
         mp.undo()
     assert calls, "no critical interval in this set-up: the test case no longer exercises the fallback"
@@ -109,7 +109,7 @@ def test_second_differential_reuses_the_roots_bit_for_bit():
     from thetasol.curves.spectral import spectral_curve
 
     r = REFS["symmetric_oblate"]
-    sol = solve_rotation(np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"]))
+    sol = solve_rotation(inertia(np.diag(r["J"])), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"]))
     data = (np.diag(r["J"]), sol.m(0.0), sol.u(0.0))
     first = spectral_curve(*data)
     x, y = first.x, first.y

@@ -16,6 +16,7 @@ import warnings
 import numpy as np
 import pytest
 
+from thetasol import inertia
 from thetasol.ensembles import solve_many
 from thetasol.protocol import ClosedFormUnavailable
 from thetasol.scenes.format import load_scene
@@ -26,17 +27,17 @@ T = np.linspace(0.0, 50.0, 11)
 
 
 def _euler(w):
-    return dict(J=[1.0, 2.0, 3.5], a=np.zeros((3, 3)), Q0=np.eye(3), omega0=[0.1, 1.0, w])
+    return dict(I=inertia([1.0, 2.0, 3.5]), a=np.zeros((3, 3)), Q0=np.eye(3), omega0=[0.1, 1.0, w])
 
 
 def _theta():
     d = json.loads(REFS.read_text())["rank_one"]
-    return dict(J=np.diag(d["J"]), a=np.array(d["a"]), Q0=np.array(d["Q0"]), omega0=np.array(d["omega0"]))
+    return dict(I=inertia(np.diag(d["J"])), a=np.array(d["a"]), Q0=np.array(d["Q0"]), omega0=np.array(d["omega0"]))
 
 
-BAD = dict(J=[1.0, 2.0, -3.5], a=np.zeros((3, 3)), Q0=np.eye(3), omega0=[0.1, 1.0, 0.2])
+BAD = dict(I=[1.0, 2.0, -3.5], a=np.zeros((3, 3)), Q0=np.eye(3), omega0=[0.1, 1.0, 0.2])
 #: a potential 1e-13 of the spin: valid data, refused at once (below MIN_POTENTIAL)
-NO_CLOSED_FORM = dict(J=[1.0, 2.0, 3.5], a=1e-13 * np.diag([1.0, 2.0, 3.0]), Q0=np.eye(3), omega0=[0.1, 1.0, 0.2])
+NO_CLOSED_FORM = dict(I=inertia([1.0, 2.0, 3.5]), a=1e-13 * np.diag([1.0, 2.0, 3.0]), Q0=np.eye(3), omega0=[0.1, 1.0, 0.2])
 #: two bodies in an isotropic potential: the split with Euler tops, milliseconds
 SMALL_SCENE = """
 name = "pair"
@@ -93,7 +94,7 @@ def test_serial_in_input_order_and_bit_identical():
 
 def test_tuples_and_another_solver():
     item = _euler(0.3)
-    args = (item["J"], item["a"], item["Q0"], item["omega0"])
+    args = (item["I"], item["a"], item["Q0"], item["omega0"])
     (st,) = solve_many([args], workers=1, t=T)
     assert _same(st, solve_rotation(*args)(T))
     assert solve_many([(1,), {"x": 2}], solver=_identity, workers=1, progress=False) == [1, 2]

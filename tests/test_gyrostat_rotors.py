@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 from conftest import rand_Q
 
-from thetasol import solve_gyrostat
+from thetasol import inertia, solve_gyrostat
 
 _TAYLOR = {}
 
@@ -153,7 +153,7 @@ def solver_rotors(body):
 
 def compare(body, Q0, t, slow_factor=1.0):
     """Closed form against the full reference: errors and bounds per quantity."""
-    sol = solve_gyrostat(body["J"], None, Q0, body["omega0"], rotors=solver_rotors(body))
+    sol = solve_gyrostat(inertia(body["J"]), None, Q0, body["omega0"], rotors=solver_rotors(body))
     w, Q = sol(t)
     phi = sol.rotor_angles(t)
     wr, Qr, phir, pk = full_reference(body, Q0, t)
@@ -284,7 +284,7 @@ def test_invariants_and_rates():
     (5-point differences, h = 1e-3: measured 9.5e-12 relative to max |phidot|, bound 1e-10;
     the invariants 1.9e-15, bound 1e-14)."""
     body = make_body(3, 3)
-    sol = solve_gyrostat(body["J"], None, np.eye(3), body["omega0"], rotors=solver_rotors(body))
+    sol = solve_gyrostat(inertia(body["J"]), None, np.eye(3), body["omega0"], rotors=solver_rotors(body))
     assert np.array_equal(sol.invariants["rotor_momenta"], [r["p"] for r in body["rotors"]])
     assert len(sol.rotors) == 3 and sol.rotors[1].A == body["rotors"][1]["A"]
     t = np.linspace(0.0, 50.0, 400)
@@ -304,7 +304,7 @@ def test_far_times_and_wrapping():
     """phi_k at t = 1e6: the wrapped angles equal the unwrapped ones modulo 2 pi (to the unwrapped
     value's own rounding, |phi| eps), and the shapes follow t."""
     body = make_body(2, 2)
-    sol = solve_gyrostat(body["J"], None, np.eye(3), body["omega0"], rotors=solver_rotors(body))
+    sol = solve_gyrostat(inertia(body["J"]), None, np.eye(3), body["omega0"], rotors=solver_rotors(body))
     t = np.array([[1.0, 1e3], [1e5, 1e6]])
     phi, wr = sol.rotor_angles(t), sol.rotor_angles(t, wrap=True)
     assert phi.shape == (2, 2, 2) and wr.shape == (2, 2, 2)
@@ -315,7 +315,7 @@ def test_far_times_and_wrapping():
 
 
 def test_without_rotors_there_are_no_angles():
-    sol = solve_gyrostat([0.7, 0.5, 0.3], [0.0, 0.1, 0.2], np.eye(3), [0.3, -0.9, 0.4])
+    sol = solve_gyrostat(inertia([0.7, 0.5, 0.3]), [0.0, 0.1, 0.2], np.eye(3), [0.3, -0.9, 0.4])
     assert sol.rotors == ()
     with pytest.raises(ValueError, match="without rotors"):
         sol.rotor_angles(1.0)
@@ -342,7 +342,7 @@ def test_euler_top_separatrix_refuses_rotor_angles():
     """Rotors whose momenta cancel on an Euler top's separatrix (I = (3, 4, 6), m = (6, 0, 6))."""
     r = [dict(axis=[0.0, 0.0, 1.0], A=0.1, B=0.0, p=0.5), dict(axis=[0.0, 0.0, -1.0], A=0.1, B=0.0, p=0.5)]
     with pytest.raises(NotImplementedError, match="Euler top"):
-        solve_gyrostat([3.5, 2.5, 0.5], None, np.eye(3), [2.0, 0.0, 1.0], rotors=r)
+        solve_gyrostat(inertia([3.5, 2.5, 0.5]), None, np.eye(3), [2.0, 0.0, 1.0], rotors=r)
 
 
 _R = {"axis": [0.0, 0.0, 1.0], "A": 0.1, "B": 0.02, "p": 0.5}
@@ -361,11 +361,11 @@ _R = {"axis": [0.0, 0.0, 1.0], "A": 0.1, "B": 0.02, "p": 0.5}
 ])
 def test_bad_rotors(rotors, N, msg):
     with pytest.raises(ValueError, match=msg):
-        solve_gyrostat([0.7, 0.5, 0.3], N, np.eye(3), [0.3, -0.9, 0.4], rotors=rotors)
+        solve_gyrostat(inertia([0.7, 0.5, 0.3]), N, np.eye(3), [0.3, -0.9, 0.4], rotors=rotors)
 
 
 def test_rotor_data_are_normalized_and_checked():
     """An axis within 1e-12 of unit length is normalized; N within 1e-12 relative is accepted."""
     r = dict(_R, axis=[0.0, 0.0, 1.0 + 1e-13])
-    sol = solve_gyrostat([0.7, 0.5, 0.3], [0.0, 0.0, 0.5 * (1 + 1e-13)], np.eye(3), [0.3, -0.9, 0.4], rotors=[r])
+    sol = solve_gyrostat(inertia([0.7, 0.5, 0.3]), [0.0, 0.0, 0.5 * (1 + 1e-13)], np.eye(3), [0.3, -0.9, 0.4], rotors=[r])
     assert np.array_equal(sol.rotors[0].axis, [0.0, 0.0, 1.0])

@@ -6,9 +6,8 @@ the conserved quantities; the data at t = 0.
 import numpy as np
 import pytest
 
-from thetasol import ClosedFormUnavailable, integrate_rotation, invariants, solve_rotation
+from thetasol import ClosedFormUnavailable, inertia, integrate_rotation, invariants, solve_rotation
 from thetasol.core.so3 import rodrigues
-from thetasol.mechanics.equations import inertia
 
 OBLATE = np.array([0.8, 0.8, 1.5])      # j3 > j
 PROLATE = np.array([1.1, 1.1, 0.4])     # j3 < j
@@ -61,7 +60,7 @@ IDS = [c[0] for c in CASES]
 
 @pytest.mark.parametrize("label, J, a, Q0, w0, method", CASES, ids=IDS)
 def test_against_dop853(label, J, a, Q0, w0, method):
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     assert sol.method == method
     w, Q = sol(T_DOP)
     wr, Qr = integrate_rotation(inertia(J), a, Q0, w0, rtol=1e-13)(T_DOP)
@@ -83,7 +82,7 @@ def _check_against_heyoka(J, a, Q0, w0):
     """Times to t = 4002 against heyoka 80-bit: measured <= 3.8e-12 on every case (docs/neumann.md),
     so 1e-10 leaves room for the reference and still catches a drift."""
     pytest.importorskip("heyoka")
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     w, Q = sol(T_FAR)
     wr, Qr = integrate_rotation(inertia(J), a, Q0, w0, method="heyoka", fp_type=np.longdouble, rtol=1e-19)(T_FAR)
     assert np.abs(w - wr).max() < 1e-10 and np.abs(Q - Qr).max() < 1e-10
@@ -97,7 +96,7 @@ def test_against_heyoka_far_times_all(label, J, a, Q0, w0, method):
 
 @pytest.mark.parametrize("label, J, a, Q0, w0, method", CASES, ids=IDS)
 def test_integrals_and_orthogonality(label, J, a, Q0, w0, method):
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     t = np.array([0.0, 1.3, 55.0, 1234.5, 1e5, -7.7])
     w, Q = sol(t)
     # measured: orthogonality <= 6.7e-16, integrals <= 2.8e-15 relative, except planar-circulation
@@ -136,7 +135,7 @@ def _random_case(rng, axis_aligned=False):
 def test_random_symmetric_bodies(seed):
     rng = np.random.default_rng(1000 + seed)
     J, a, Q0, w0, _, _ = _random_case(rng, axis_aligned=seed % 4 == 0)
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     assert sol.method.startswith("neumann/")
     t = np.array([0.0, 2.2, 9.0, 25.0])
     w, Q = sol(t)
@@ -156,7 +155,7 @@ def test_rotated_tensor_against_the_exactly_symmetric_body(seed):
     docs/neumann.md)."""
     pytest.importorskip("heyoka")
     Jt, a, Q0, w0, J, P = _random_case(np.random.default_rng(seed))
-    sol = solve_rotation(Jt, a, Q0, w0)
+    sol = solve_rotation(inertia(Jt), a, Q0, w0)
     assert sol.method == "neumann/genus-2"
     w, Q = sol(T_FAR)
     wr, Qr = integrate_rotation(inertia(J), a, Q0 @ P, P.T @ w0, method="heyoka", fp_type=np.longdouble,
@@ -165,7 +164,7 @@ def test_rotated_tensor_against_the_exactly_symmetric_body(seed):
 
 
 def test_vectorized_shapes_and_negative_times():
-    sol = solve_rotation(OBLATE, A_SADDLE, R0, [0.2, 0.5, 0.0])
+    sol = solve_rotation(inertia(OBLATE), A_SADDLE, R0, [0.2, 0.5, 0.0])
     t = np.array([[0.5, -3.0], [10.0, 1e6]])
     w, Q = sol(t)
     assert w.shape == (2, 2, 3) and Q.shape == (2, 2, 3, 3)
@@ -177,7 +176,7 @@ def test_vectorized_shapes_and_negative_times():
 
 
 def test_dispatch_and_invariants_dict():
-    sol = solve_rotation(OBLATE, A_DIAG, R0, [0.2, 0.5, 0.0])
+    sol = solve_rotation(inertia(OBLATE), A_DIAG, R0, [0.2, 0.5, 0.0])
     assert sol.method == "neumann/genus-2"
     inv = sol.invariants
     assert inv["genus"] == 2 and inv["torus_dimension"] == 2 and inv["reference_axis"] in (0, 1, 2)
@@ -185,7 +184,7 @@ def test_dispatch_and_invariants_dict():
     # a symmetric body given as a tensor in a rotated frame, axial spin zero to rounding
     P = rodrigues([0.4, -1.1, 0.7])
     Jt = P @ np.diag(PROLATE) @ P.T
-    sol2 = solve_rotation(Jt, A_SADDLE, R0, P @ [0.2, -0.3, 0.0])
+    sol2 = solve_rotation(inertia(Jt), A_SADDLE, R0, P @ [0.2, -0.3, 0.0])
     assert sol2.method == "neumann/genus-2"
 
 
@@ -193,19 +192,19 @@ def test_small_axial_spin_still_refused_by_the_theta_branch():
     scale = np.linalg.norm([0.2, 0.5]) + np.sqrt(2.0)
     w0 = np.array([0.2, 0.5, 1e-5 * scale])
     with pytest.raises(ClosedFormUnavailable, match="little spin"):
-        solve_rotation(OBLATE, A_DIAG, R0, w0)
+        solve_rotation(inertia(OBLATE), A_DIAG, R0, w0)
 
 
 def test_dps_refused():
     with pytest.raises(ClosedFormUnavailable, match="dps"):
-        solve_rotation(OBLATE, A_DIAG, R0, [0.2, 0.5, 0.0], dps=30)
+        solve_rotation(inertia(OBLATE), A_DIAG, R0, [0.2, 0.5, 0.0], dps=30)
 
 
 @pytest.mark.parametrize("gap", [1e-3, 1e-7, 1e-11])
 def test_nearly_repeated_eigenvalue_keeps_accuracy(gap):
     a = np.diag([1.0, 1.0 + gap, 3.0])
     w0 = [0.2, 0.5, 0.0]
-    sol = solve_rotation(OBLATE, a, R0, w0)
+    sol = solve_rotation(inertia(OBLATE), a, R0, w0)
     assert sol.method == "neumann/genus-2"
     w, Q = sol(T_DOP)
     wr, Qr = integrate_rotation(inertia(OBLATE), a, R0, w0, rtol=1e-13)(T_DOP)
@@ -223,9 +222,9 @@ def test_nearly_planar_keeps_accuracy_or_is_refused():
         w0 = rodrigues([0, 0, -0.4]) @ [off, 0.1, 0]
         if expect is None:
             with pytest.raises(ClosedFormUnavailable, match="nearly degenerate torus"):
-                solve_rotation(OBLATE, A_PLANE, Q0, w0)
+                solve_rotation(inertia(OBLATE), A_PLANE, Q0, w0)
             continue
-        sol = solve_rotation(OBLATE, A_PLANE, Q0, w0)
+        sol = solve_rotation(inertia(OBLATE), A_PLANE, Q0, w0)
         assert sol.method == expect
         w, Q = sol(T_DOP)
         wr, Qr = integrate_rotation(inertia(OBLATE), A_PLANE, Q0, w0, rtol=1e-13)(T_DOP)
@@ -236,7 +235,7 @@ def test_near_separatrix_is_refused_not_wrong():
     """Released 0.02 from the unstable equilibrium: the torus is 1e-4 (relative) from the separatrix;
     its Fourier series do not converge within the limits and the set-up says so."""
     with pytest.raises(ClosedFormUnavailable, match="separatrix"):
-        solve_rotation(OBLATE, A_DIAG, _near(2, 0.02, OBLATE, A_DIAG), [0.01, 0.015, 0.0])
+        solve_rotation(inertia(OBLATE), A_DIAG, _near(2, 0.02, OBLATE, A_DIAG), [0.01, 0.015, 0.0])
 
 
 def test_powers_against_mpmath():
@@ -265,7 +264,7 @@ def test_time_map_tables_and_fallback(label, monkeypatch):
     from thetasol.core.periodic import HermiteTable
 
     J, a, Q0, w0 = next(c[1:5] for c in CASES if c[0] == label)
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     T = getattr(sol, "inner", sol).model                # the Neumann solution of the dimensionless problem
     assert all(tab.error <= 1e-12 / T.drift for tab in T.tables)
     series = T.time_of_s

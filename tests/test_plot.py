@@ -13,7 +13,9 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
 import thetasol  # noqa: E402
-from thetasol import plot  # noqa: E402
+from thetasol import (
+    plot,  # noqa: E402
+)
 from thetasol.mechanics.trajectories import Trajectories  # noqa: E402
 
 
@@ -40,7 +42,7 @@ def test_missing_matplotlib_names_the_extra():
 
 def _euler_top():
     I = np.array([2.0, 3.0, 4.0])
-    return thetasol.solve_rotation(I.sum() / 2 - I, np.zeros((3, 3)), np.eye(3), [1e-3, 2.0, 1e-3])
+    return thetasol.solve_rotation(I, np.zeros((3, 3)), np.eye(3), [1e-3, 2.0, 1e-3])
 
 
 def test_time_series_draws_the_solution():

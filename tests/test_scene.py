@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from thetasol import integrate_rotation
+from thetasol import integrate_rotation, second_moments
 from thetasol.integrators.multibody import initial_state
 from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.trajectories import Trajectories, write_trajectories
@@ -128,10 +128,10 @@ def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
             calls.append(1)
             return integrate_rotation(inertia(self.args[0]), *self.args[1:], rtol=1e-13)(t)
 
-    def solve_rotation(J, a, Q0, w0):
+    def solve_rotation(I, a, Q0, w0):
         if not np.allclose(a, a[0, 0] * np.eye(3)):
             raise NotImplementedError("theta functions: not in this stand-in")
-        return Fake(J, a, Q0, w0)
+        return Fake(second_moments(I), a, Q0, w0)
 
     monkeypatch.setitem(sys.modules, "thetasol.solutions.rotation", types.SimpleNamespace(solve_rotation=solve_rotation))
     text = SMALL.replace("a = [[1.0, 0.2, 0.0], [0.2, 0.5, 0.0], [0.0, 0.0, -0.1]]",

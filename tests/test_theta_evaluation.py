@@ -7,7 +7,7 @@ import pathlib
 import numpy as np
 import pytest
 
-from thetasol import solve_rotation
+from thetasol import inertia, solve_rotation
 from thetasol.core.so3 import polar_near_orthogonal, polar_orthonormalize, rodrigues, rotation_about, vee
 
 REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
@@ -16,7 +16,7 @@ TIMES = np.array([0.0, 0.37, 2.9, 41.3, 997.0, 1e6, 3.3e7])
 
 def _solve(name):
     r = REFS[name]
-    return solve_rotation(np.diag(r["J"]), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"]))
+    return solve_rotation(inertia(np.diag(r["J"])), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"]))
 
 
 @pytest.fixture(scope="module", params=["generic", "near_unstable_equilibrium", "symmetric_oblate"])

@@ -10,9 +10,8 @@ import pathlib
 import numpy as np
 import pytest
 
-from thetasol import ClosedFormUnavailable, integrate_rotation, invariants, solve_rotation
+from thetasol import ClosedFormUnavailable, inertia, integrate_rotation, invariants, solve_rotation
 from thetasol.core.so3 import hat
-from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.lax import eigenvector_poles
 from thetasol.solutions.theta_rotation import ThetaRotation
 from thetasol.solutions.theta_rotation.lattice import lattice_coords as _lattice_coords
@@ -36,7 +35,7 @@ def _case(name):
 def test_against_long_high_accuracy_integration(name):
     """Max error in omega and Q <= 1e-9 at t in {0.7, 3.1, 17.3, 102, 997, 4002}."""
     J, a, Q0, w0, r = _case(name)
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     assert isinstance(sol, ThetaRotation)
     t = np.array(r["t"])
     w, Q = sol(t)
@@ -51,7 +50,7 @@ def test_node_exponent_gap_is_exact_and_used(name):
     third-kind differential E^2 dE / f_w agrees with the fit from theta derivatives (to its ~1e-13
     accuracy, modulo 2 pi n.U) and replaces it: without it the fast spin drifted 1.2e-13 per unit time."""
     J, a, Q0, w0, _ = _case(name)
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     change = sol.diagnostics["node_gap_change"]
     assert change is not None and abs(change) <= 1e-12, change
 
@@ -59,7 +58,7 @@ def test_node_exponent_gap_is_exact_and_used(name):
 @pytest.mark.parametrize("name", ["generic", "rank_one", "saddle"])
 def test_reconstruction_at_zero_returns_the_initial_data(name):
     J, a, Q0, w0, _ = _case(name)
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     w, Q = sol(0.0)
     assert np.abs(Q - Q0).max() <= 1e-13 and np.abs(w - w0).max() <= 1e-13
     M, u = sol.M(0.0), sol.u(0.0)
@@ -70,7 +69,7 @@ def test_reconstruction_at_zero_returns_the_initial_data(name):
 @pytest.mark.parametrize("name", ["generic", "fast_spin", "rank_one"])
 def test_integrals_4_13_are_constant_on_the_theta_solution(name):
     J, a, Q0, w0, _ = _case(name)
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     t = np.concatenate([np.linspace(0, 50, 401), [997.0, 4002.0, 1e5, 1e6]])
     w, Q = sol(t)
     inv = invariants(J, a, Q, w)
@@ -87,7 +86,7 @@ def test_integrals_4_13_are_constant_on_the_theta_solution(name):
 def test_linear_flow_velocity_is_the_drift_of_the_eigenvector_divisor():
     """A(D(t)) = A(D(0)) - t U: U from the expansions at infinity, D(t) from numerically integrated L."""
     J, a, Q0, w0, _ = _case("generic")
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     curve, tau, U, alpha = sol.curve, sol.riemann_matrix, sol.U, sol.alpha
     Jp = np.sqrt(curve.J2)
     Pf = sol.evaluator.P
@@ -118,12 +117,13 @@ def test_linear_flow_velocity_is_the_drift_of_the_eigenvector_divisor():
 
 def test_adapted_basis_makes_the_flow_real_on_the_prym():
     J, a, Q0, w0, _ = _case("generic")
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     assert sol.diagnostics["torus_dimension"] == 3          # the Prym variety of the genus-4 curve
     assert np.all(np.isreal(sol.U)) and sol.U[3] == 0
     tau = sol.riemann_matrix
     assert np.abs(tau - tau.T).max() < 1e-14 and np.linalg.eigvalsh(tau.imag).min() > 0
-    sol1 = solve_rotation(*_case("rank_one")[:4])
+    J1, a1, Q01, w01, _ = _case("rank_one")
+    sol1 = solve_rotation(inertia(J1), a1, Q01, w01)
     assert sol1.diagnostics["torus_dimension"] == 2 and sol1.curve.genus == 3
 
 
@@ -134,7 +134,7 @@ def test_baker_akhiezer_function_at_generic_points():
     at other points of the curve, where the places over E = 0 play no role.
     """
     J, a, Q0, w0, _ = _case("saddle")
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     c = sol.evaluator
     t = np.array([0.5, 2.0, 6.0])
     w, Q = integrate_rotation(inertia(J), a, Q0, w0, rtol=1e-13)(t)
@@ -147,7 +147,7 @@ def test_baker_akhiezer_function_at_generic_points():
 
 def test_far_times_cost_nothing_extra_and_stay_on_the_invariant_torus():
     J, a, Q0, w0, _ = _case("generic")
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     t = np.array([1.0, 1e6, 1e6 + 1.0, 3.3e7])
     w, Q = sol(t)
     assert np.all(np.isfinite(w)) and np.abs(np.swapaxes(Q, -1, -2) @ Q - np.eye(3)).max() < 1e-14
@@ -170,7 +170,7 @@ def test_general_body_frame_and_shapes():
     Q0 = np.linalg.qr(rng.normal(size=(3, 3)))[0]
     Q0 *= np.linalg.det(Q0)
     w0 = rng.normal(size=3)
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     t = np.array([[0.3, 1.1], [7.0, 20.0]])
     w, Q = sol(t)
     assert w.shape == (2, 2, 3) and Q.shape == (2, 2, 3, 3) and sol.M(t).shape == (2, 2, 3, 3)
@@ -182,9 +182,9 @@ def test_symmetric_body_with_little_axial_spin_says_what_is_missing():
     """No axial spin goes to Neumann's problem (tests/test_neumann.py); a little spin (a curve near
     a tacnode, branch points near |E| ~ 1 / spin) is refused at once, naming the cause."""
     J, a = [0.5, 0.5, 1.2], np.diag([1.0, 2.0, 3.0])
-    assert solve_rotation(J, a, np.eye(3), [0.1, 0.2, 0.0]).method.startswith("neumann/")
+    assert solve_rotation(inertia(J), a, np.eye(3), [0.1, 0.2, 0.0]).method.startswith("neumann/")
     with pytest.raises(ClosedFormUnavailable, match="tacnode"):
-        solve_rotation(J, a, np.eye(3), [0.1, 0.2, 1e-5])
+        solve_rotation(inertia(J), a, np.eye(3), [0.1, 0.2, 1e-5])
 
 
 def test_symmetric_body_as_a_tensor_against_dop853():
@@ -194,7 +194,7 @@ def test_symmetric_body_as_a_tensor_against_dop853():
     J = R @ np.diag([0.9, 0.5, 0.9]) @ R.T
     a = np.array([[0.3, -0.2, 0.1], [-0.2, -0.4, 0.25], [0.1, 0.25, 0.6]])
     Q0, w0 = R.T, np.array([0.3, -0.6, 0.45])
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     assert sol.method == "theta/symmetric-genus-3"
     t = np.array([0.0, 2.5, 40.0])
     w, Q = sol(t)
@@ -205,14 +205,14 @@ def test_symmetric_body_as_a_tensor_against_dop853():
 
 def test_symmetric_body_conserves_its_axial_spin():
     J, a, Q0, w0, _ = _case("symmetric_oblate")
-    w = solve_rotation(J, a, Q0, w0).omega(np.linspace(0.0, 500.0, 41))
+    w = solve_rotation(inertia(J), a, Q0, w0).omega(np.linspace(0.0, 500.0, 41))
     assert np.abs(w[:, 2] - w0[2]).max() <= 1e-12
 
 
 def test_splitting_integrator_agrees():
     """Independent check with the symplectic splitting (structure preserving) over a few periods."""
     J, a, Q0, w0, _ = _case("saddle")
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     t = np.array([5.0, 20.0])
     w, Q = sol(t)
     wr, Qr = integrate_rotation(inertia(J), a, Q0, w0, method="splitting", step=2e-3)(t)
@@ -286,13 +286,13 @@ def test_nearly_symmetric_bodies_down_to_the_refusal_limit():
         J = np.array([0.8, 0.8 * (1 + dl), 1.5])
         with warnings.catch_warnings(record=True) as rec:
             warnings.simplefilter("always")
-            sol = solve_rotation(J, a, Q0, w0)
+            sol = solve_rotation(inertia(J), a, Q0, w0)
         assert not [r for r in rec if "set-up lost accuracy" in str(r.message)]
         w, Q = sol(t)
         wr, Qr = integrate_rotation(inertia(J), a, Q0, w0, rtol=1e-13)(t)
         assert max(np.abs(w - wr).max(), np.abs(Q - Qr).max()) <= 1e-9
     with pytest.raises(ClosedFormUnavailable, match="nearly symmetric body"):
-        solve_rotation(np.array([0.8, 0.8 * (1 + 1e-7), 1.5]), a, Q0, w0)
+        solve_rotation(inertia(np.array([0.8, 0.8 * (1 + 1e-7), 1.5])), a, Q0, w0)
 
 
 def test_nearly_symmetric_body_with_far_cell_vertices_against_dop853():
@@ -324,7 +324,7 @@ def test_symmetric_body_with_little_axial_spin_is_refused_at_once(monkeypatch):
     monkeypatch.setattr(tr, "spectral_curve", no_curve)
     scale = np.linalg.norm([0.3, 0.2]) + 3.0 ** 0.5
     with pytest.raises(ClosedFormUnavailable, match="little spin"):
-        solve_rotation([0.5, 0.5, 1.2], np.diag([1.0, 2.0, 3.0]), np.eye(3), [0.3, 0.2, 0.5 * MIN_AXIAL_SPIN * scale])
+        solve_rotation(inertia([0.5, 0.5, 1.2]), np.diag([1.0, 2.0, 3.0]), np.eye(3), [0.3, 0.2, 0.5 * MIN_AXIAL_SPIN * scale])
 
 
 def test_nearly_spherical_symmetric_body_with_small_spin_is_refused_at_once(monkeypatch):
@@ -339,7 +339,7 @@ def test_nearly_spherical_symmetric_body_with_small_spin_is_refused_at_once(monk
     monkeypatch.setattr(tr, "spectral_curve", no_curve)
     a = np.array([[0.84, 0.58, 1.74], [0.58, -1.57, 1.02], [1.74, 1.02, -2.47]])
     with pytest.raises(ClosedFormUnavailable, match="branch points of its spectral curve"):
-        solve_rotation([1.0, 1.0025, 1.0], a, np.eye(3), [-0.9, 0.003, -0.6])
+        solve_rotation(inertia([1.0, 1.0025, 1.0]), a, np.eye(3), [-0.9, 0.003, -0.6])
 
 
 def _small_spin_body(spin):
@@ -363,7 +363,7 @@ def test_symmetric_body_with_small_axial_spin_against_heyoka(spin):
 def _check_against_heyoka(J, a, Q0, w0, method, tol):
     """max error in omega and Q at t in {0.7, ..., 4002} against heyoka 80-bit at most tol."""
     pytest.importorskip("heyoka")
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     assert sol.method == method
     t = np.array([0.7, 3.1, 17.3, 102.0, 997.0, 4002.0])
     wr, Qr = integrate_rotation(inertia(J), a, Q0, w0, rtol=1e-19, method="heyoka", fp_type=np.longdouble)(t)
@@ -390,7 +390,7 @@ def test_exponents_obey_the_exact_relations(name):
     with them to its accuracy; the exact values then replace it.  Measured changes 1.0e-15 .. 2.1e-13
     (the small-spin body; fast spin 3.9e-14, 4.8e-13 with float64 periods)."""
     J, a, Q0, w0 = _rank_one_symmetric_body(1.5e-3) if name == "spin 1.5e-3" else _case(name)[:4]
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     change = sol.diagnostics["nu_exact_change"]
     assert change is not None and change <= 2e-11, change
     nu = sol.evaluator.nu
@@ -454,7 +454,7 @@ def test_random_symmetric_bodies_against_dop853(seed):
     r = rng.normal(size=(3, 3))
     a = (r + r.T) * rng.uniform(0.2, 2.0)
     Q0, w0 = rodrigues(rng.normal(size=3)), rng.normal(size=3) * rng.uniform(0.2, 3.0)
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     assert sol.method == "theta/symmetric-genus-3"
     t = np.array([0.0, 1.3, 7.7, 40.0])
     w, Q = sol(t)
@@ -476,7 +476,7 @@ def test_principal_axes_along_eigenvectors_of_a(turn):
 
 
 def _check_against_dop853(J, a, Q0, w0, method, t, tol):
-    sol = solve_rotation(J, a, Q0, w0)
+    sol = solve_rotation(inertia(J), a, Q0, w0)
     assert sol.method == method
     w, Q = sol(np.array(t))
     wr, Qr = integrate_rotation(inertia(J), a, Q0, w0, rtol=1e-13)(np.array(t))
@@ -506,7 +506,7 @@ def test_node_branch_eigenvectors_against_mpmath():
     from thetasol.mechanics.lax import lax_matrix, right_eigenvector
     from thetasol.solutions.theta_rotation.node import node_branch as _node_branch, node_slopes as _node_slopes
 
-    curve = solve_rotation(*_NODE_NEAR_BRANCH).curve
+    curve = solve_rotation(inertia(_NODE_NEAR_BRANCH[0]), *_NODE_NEAR_BRANCH[1:]).curve
     lb = curve.node[1]
     lam, V = np.linalg.eigh(curve.u)
     k = int(np.argmax(np.abs(lam - lb)))

@@ -6,6 +6,7 @@ import threading
 import numpy as np
 import pytest
 
+from thetasol import inertia
 from thetasol.core import threads
 from thetasol.core.threads import blas_threads, single_blas_thread
 from thetasol.protocol import Solution
@@ -90,7 +91,7 @@ def test_one_time_bits_whatever_the_blas_threads(two_threads):
     from thetasol import solve_rotation
 
     a = np.array([[0.3, 0.1, -0.2], [0.1, -0.4, 0.05], [-0.2, 0.05, 0.6]])
-    sol = solve_rotation([1.0, 1.7, 2.3], a, np.eye(3), [0.4, -0.3, 0.8])
+    sol = solve_rotation(inertia([1.0, 1.7, 2.3]), a, np.eye(3), [0.4, -0.3, 0.8])
     assert sol.method.startswith("theta/")
     w2, Q2 = sol(1e6)
     with blas_threads():
@@ -101,7 +102,7 @@ def test_one_time_bits_whatever_the_blas_threads(two_threads):
 def test_solve_rotation_leaves_the_users_setting(two_threads):
     from thetasol import solve_rotation
 
-    sol = solve_rotation([1.0, 2.0, 3.5], np.zeros((3, 3)), np.eye(3), [0.1, 1.0, 0.2])
+    sol = solve_rotation(inertia([1.0, 2.0, 3.5]), np.zeros((3, 3)), np.eye(3), [0.1, 1.0, 0.2])
     sol(np.linspace(0.0, 10.0, 7))
     assert set(_blas_threads()) == {2}
 
@@ -145,7 +146,7 @@ def test_scipy_blas_found_once_loaded():
         "import json, sys, numpy as np, thetasol\n"
         "from thetasol.core import threads\n"
         f"for d in json.load(open({str(refs)!r})).values():\n"
-        "    thetasol.solve_rotation(np.diag(d['J']), np.array(d['a']), np.array(d['Q0']), np.array(d['omega0']))\n"
+        "    thetasol.solve_rotation(thetasol.inertia(d['J']), np.array(d['a']), np.array(d['Q0']), np.array(d['omega0']))\n"
         "loaded = sorted(m for m in sys.modules if m.split('.')[0] == 'scipy')\n"
         "assert not loaded, f'scipy loaded by the set-up: {loaded[:5]}'\n"
         "n0 = len(threads._blas_controllers())\n"

@@ -109,7 +109,7 @@ def _task(index: int, item: Any, solver: Callable | None) -> _Task:
     if isinstance(item, tuple | list):
         return _Task(index, "call", solver, args=tuple(item))
     raise TypeError(f"solve_many: item {index} is a {type(item).__name__}; expected a mapping of the solver's "
-                    "keyword arguments (by default solve_rotation's J, a, Q0, omega0), a tuple of its positional "
+                    "keyword arguments (by default solve_rotation's I, a, Q0, omega0), a tuple of its positional "
                     "arguments, a Scene or the path of a scene file")
 
 
@@ -243,7 +243,7 @@ def solve_many(items: Iterable[Any], *, t: Any = None, solver: Callable | None =
     ----------
     items : iterable
         Each one of: a mapping of the solver's keyword arguments (by default
-        :func:`~thetasol.solve_rotation`'s ``J, a, Q0, omega0``, optionally ``dps``); a tuple of its
+        :func:`~thetasol.solve_rotation`'s ``I, a, Q0, omega0``, optionally ``dps``); a tuple of its
         positional arguments; a :class:`~thetasol.scenes.format.Scene` or the path of a scene file
         (solved by ``scene.solution()``, the split of Theorem 2).
     t : array_like, optional
@@ -301,7 +301,7 @@ def solve_many(items: Iterable[Any], *, t: Any = None, solver: Callable | None =
     Examples
     --------
     >>> import numpy as np
-    >>> bodies = [dict(J=[1.0, 2.0, 3.5], a=np.zeros((3, 3)), Q0=np.eye(3), omega0=[0.1, 1.0, w])
+    >>> bodies = [dict(I=[5.5, 4.5, 3.0], a=np.zeros((3, 3)), Q0=np.eye(3), omega0=[0.1, 1.0, w])
     ...           for w in (0.2, 0.3)]
     >>> [s.method for s in solve_many(bodies, workers=1)]
     ['euler-top/elliptic', 'euler-top/elliptic']

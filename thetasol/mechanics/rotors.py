@@ -215,7 +215,7 @@ class EffectiveGyrostat:
     J_gyro : ndarray (3, 3)
         ``J_k - sum_a (A_ka / 2)(1 - 2 l l^T)``: the second moments whose inertia ``I(J_gyro) =
         I(J_k) - sum A l l^T`` multiplies ``omega`` in the momentum ``M_k`` (8.33) (rotor axial
-        moments excluded); the ``J`` of :func:`thetasol.solve_gyrostat`.
+        moments excluded); :attr:`I_gyro` is the ``I`` of :func:`thetasol.solve_gyrostat`.
     rotors : tuple of EffectiveRotor
     """
 
@@ -229,7 +229,7 @@ class EffectiveGyrostat:
 
     @property
     def I_gyro(self) -> np.ndarray:
-        """``I(J_gyro)``: the inertia in ``M_k = I_gyro omega`` (8.33)."""
+        """``I(J_gyro)``: the inertia in ``M_k = I_gyro omega`` (8.33), what :func:`thetasol.solve_gyrostat` takes."""
         return inertia_from_moments(self.J_gyro)
 
     def momenta(self, omega: ArrayLike, spins: ArrayLike) -> np.ndarray:

@@ -13,6 +13,7 @@ from functools import lru_cache
 import numpy as np
 
 from thetasol.core.so3 import rodrigues
+from thetasol.mechanics.equations import inertia, second_moments
 from thetasol.reference import _models as mdl
 from thetasol.reference._case import Case, Group
 
@@ -53,7 +54,7 @@ def _rotation_case(name, description, J, a, Q0, w0, t_span=(0.0, 20.0), model="b
 
     def build():
         from thetasol.solutions.rotation import solve_rotation
-        sol = solve_rotation(J, a, Q0, w0)
+        sol = solve_rotation(inertia(J), a, Q0, w0)
         return sol, _rotation_states(sol)
 
     eq = _ROT_EQ if np.any(a) else "I omega' = (I omega) x omega,  Q' = Q hat(omega),  I = tr(J) 1 - J (Euler)"
@@ -89,13 +90,13 @@ def _free_cases():
 def _potential_cases():
     a_pend = np.diag([0.4, -0.3, 1.1])
     return [
-        _rotation_case("potential_generic", "asymmetric body J = (0.6, 1, 1.7) in a generic quadratic "
+        _rotation_case("potential_generic", "asymmetric body I = (2.7, 2.3, 1.6) in a generic quadratic "
                        "potential: the genus-4 theta-function solution of Section 4 II",
                        (0.6, 1.0, 1.7), _A_GENERIC, _Q0, [0.5, -0.8, 0.6]),
         _rotation_case("potential_rank_one", "asymmetric body in a rank-one potential a = c g g^T "
                        "(gravity-gradient-like): nodal spectral curve, genus 3",
                        (0.6, 1.0, 1.7), _A_RANK_ONE, _Q0, [0.5, -0.8, 0.6]),
-        _rotation_case("potential_symmetric_body", "symmetric body J = (1, 1, 1.7) with axial spin in a "
+        _rotation_case("potential_symmetric_body", "symmetric body I = (2.7, 2.7, 2) with axial spin in a "
                        "generic potential: theta functions of the genus-3 curve",
                        (1.0, 1.0, 1.7), _A_GENERIC, _Q0, [0.5, -0.8, 0.6]),
         _rotation_case("potential_pendulum", "spin about a principal axis that is an eigenvector of "
@@ -119,7 +120,7 @@ def _gyrostat_case(name, description, N, rotors=None):
 
     def build():
         from thetasol.solutions.gyrostat import solve_gyrostat
-        sol = solve_gyrostat(J, Nv if rot is None else None, Q0, w0, rotors=rot)
+        sol = solve_gyrostat(inertia(J), Nv if rot is None else None, Q0, w0, rotors=rot)
         return sol, _rotation_states(sol, (lambda t: sol.rotor_angles(t).reshape(t.size, nr)) if nr else None)
 
     columns = mdl.ROTATION_COLUMNS + tuple(f"phi_{k + 1}" for k in range(nr))
@@ -134,7 +135,7 @@ def _gyrostat_case(name, description, N, rotors=None):
 
 def _gyrostat_cases():
     return [
-        _gyrostat_case("gyrostat", "free gyrostat (Zhukovsky-Volterra), carrier J = (2.5, 1.5, 0.5) with a "
+        _gyrostat_case("gyrostat", "free gyrostat (Zhukovsky-Volterra), carrier I = (2, 3, 4) with a "
                        "constant rotor momentum N = (0.3, -0.2, 0.5)", [0.3, -0.2, 0.5]),
         _gyrostat_case("gyrostat_rotors", "free gyrostat with two rotors (axes e_3 and (0.6, 0.8, 0)): "
                        "carrier motion and the rotor angles", None, _GYRO_ROTORS),
@@ -200,13 +201,13 @@ def _point_cases():
 
     def kepler(r0, v):
         def make():
-            from thetasol.solutions.kepler import KeplerOrbit
-            return KeplerOrbit(1.0, r0, v)
+            from thetasol.solutions.kepler import solve_kepler
+            return solve_kepler(1.0, r0, v)
         return make
 
     def mass_centre():
-        from thetasol.solutions.mass_center import MassCenterMotion
-        return MassCenterMotion(a_mc, b_mc, [0.3, -0.2, 0.5], [0.1, 0.4, -0.2])
+        from thetasol.solutions.mass_center import solve_mass_center
+        return solve_mass_center(a_mc, b_mc, [0.3, -0.2, 0.5], [0.1, 0.4, -0.2])
 
     kep = "r' = v,  v' = -mu r / |r|^3  (7.7), mu = 1"
     return [
@@ -231,7 +232,7 @@ def _point_cases():
 # -- gravity-gradient pitch on a circular orbit (Section 7) ----------------------------------------
 def _orbiting_case():
     Isat = np.array([1.2, 1.5, 1.8])
-    J = np.diag(0.5 * Isat.sum() - Isat)
+    J = np.diag(second_moments(Isat))
     r0, v0 = np.array([1.0, 0.0, 0.0]), np.array([0.0, math.cos(0.4), math.sin(0.4)])
     F0 = np.stack([r0, np.cross(np.cross(r0, v0), r0), np.cross(r0, v0)], axis=1)
     th0, thd = 0.5, 0.3                               # pitch angle from the radial and its rate (n = 1)
@@ -240,10 +241,10 @@ def _orbiting_case():
     rhs, integrals = mdl.orbiting_system(J, 1.0)
 
     def build():
-        from thetasol.solutions.kepler import KeplerOrbit
+        from thetasol.solutions.kepler import solve_kepler
         from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation
-        orbit = KeplerOrbit(1.0, r0, v0)
-        sol = solve_orbiting_rotation(J, orbit, Q0, w0)
+        orbit = solve_kepler(1.0, r0, v0)
+        sol = solve_orbiting_rotation(Isat, orbit, Q0, w0)
         return sol, _rotation_states(sol, lambda t: np.concatenate(orbit(t), axis=1))
 
     cols = mdl.ROTATION_COLUMNS + ("r_1", "r_2", "r_3", "v_1", "v_2", "v_3")

@@ -185,7 +185,7 @@ def _part(e, a, Q0, w0, p, rotation, rtol) -> _Part:
         return _Part("rigid", sol, f"rigid body: closed form {sol.method}", axes, A, p)
     specs = e.rotor_specs(p)
     if rotation_kind(a) == "elliptic" and rotation != "numerical":
-        sol = solve_gyrostat(e.J_gyro, None, Q0, w0, rotors=specs)
+        sol = solve_gyrostat(e.I_gyro, None, Q0, w0, rotors=specs)
         return _Part("closed", sol, f"gyrostat (8.39): closed form {sol.method}", axes, A, p, specs)
     sol = integrate_gyrostat(e.I_gyro, None, Q0, w0, rotors=specs, a=a, rtol=rtol)
     return _Part("numerical", sol, f"gyrostat (8.32): integrate_gyrostat (DOP853, rtol={rtol:g})", axes, A, p, specs)

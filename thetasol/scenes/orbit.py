@@ -209,7 +209,7 @@ def _orbiting_rotation(J, orbit, Q0, w0, rotation, rtol, method):
     """(solution, closed?, reason) of one effective body."""
     if rotation != "numerical":
         try:
-            return solve_orbiting_rotation(J, orbit, Q0, w0), True, ""
+            return solve_orbiting_rotation(inertia(J), orbit, Q0, w0), True, ""
         except ClosedFormUnavailable as exc:
             why = str(exc)
     else:

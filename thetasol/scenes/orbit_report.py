@@ -30,6 +30,7 @@ from thetasol.integrators.multibody_gravity import integrate_multibody_gravity, 
 from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
+from thetasol.mechanics.equations import inertia_from_moments
 from thetasol.mechanics.gravity_gradient import orbit_frame
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.scenes.checks import Check, ReportText
@@ -62,7 +63,7 @@ def station_size(config: Configuration, points: dict, traj: Trajectories) -> flo
 def jacobi_integral(J: np.ndarray, orbit, t: np.ndarray, Q: np.ndarray, omega: np.ndarray) -> np.ndarray:
     """(7.18) along a rotation on a circular ``orbit``: ``1/2 (M, w) + 3 n^2 / 2 (g, I g) - n (M, n_b)``."""
     n = orbit.diagnostics["mean_motion"]
-    I = np.trace(J) * np.eye(3) - J
+    I = inertia_from_moments(J)
     r, v = orbit(t)
     F = orbit_frame(r, v)
     g = np.einsum("tji,tj->ti", Q, F[..., 0])

@@ -38,7 +38,7 @@ from thetasol.integrators.neumann import NumericalNeumann, integrate_neumann
 from thetasol.integrators.rotation import integrate_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Sphere
-from thetasol.mechanics.equations import invariants as rotation_invariants
+from thetasol.mechanics.equations import inertia, invariants as rotation_invariants
 from thetasol.mechanics.potential import potential_kind
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import ClosedFormUnavailable, Solution
@@ -61,12 +61,13 @@ def rotation_kind(a: ArrayLike) -> str:
 
 
 def closed_form_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike) -> tuple[Any, str]:
-    """``solve_rotation(J, a, Q0, omega0)`` and ``""``, or ``None`` and the reason it refused the data."""
+    """``solve_rotation(inertia(J), a, Q0, omega0)`` and ``""``, or ``None`` and the reason it refused the data
+    (``J`` the second moments the split of the configuration gives)."""
     # imported here: scenes without a closed-form rotation never load the theta machinery
     from thetasol.solutions.rotation import solve_rotation
 
     try:
-        return solve_rotation(J, a, Q0, omega0), ""
+        return solve_rotation(inertia(J), a, Q0, omega0), ""
     except NotImplementedError as exc:
         return None, str(exc) or "not implemented"
 

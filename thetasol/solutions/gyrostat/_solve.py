@@ -7,8 +7,8 @@ form (:func:`_degenerate_form` for the trigonometric and limiting cases, else
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass, field
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 from fractions import Fraction
 
 import numpy as np
