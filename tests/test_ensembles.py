@@ -104,10 +104,10 @@ def test_errors_return_or_raise():
     assert NotImplementedError in ClosedFormUnavailable.__mro__
     items = [_euler(0.2), BAD, NO_CLOSED_FORM, _euler(0.3)]
     out = solve_many(items, workers=1, errors="return")
-    assert isinstance(out[1], ValueError) and "J is not physical" in str(out[1])
+    assert isinstance(out[1], ValueError) and "inertia I must be positive definite" in str(out[1])
     assert isinstance(out[2], ClosedFormUnavailable) and "integrate_rotation" in str(out[2])
     assert out[0].method == out[3].method == "euler-top/elliptic"
-    with pytest.raises(ValueError, match="J is not physical") as info:
+    with pytest.raises(ValueError, match="inertia I must be positive definite") as info:
         solve_many(items, workers=1)
     assert info.value.__notes__ == ["solve_many: item 1 of 4"]
     with pytest.raises(ClosedFormUnavailable) as info:
@@ -196,7 +196,7 @@ def test_dask_local_cluster():
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                                   dashboard_address=None) as cluster, distributed.Client(cluster) as client:
         out = solve_many(items, client=client, t=T, errors="return", progress=False)
-        with pytest.raises(ValueError, match="J is not physical"):
+        with pytest.raises(ValueError, match="inertia I must be positive definite"):
             solve_many([_euler(0.2), BAD], client="dask", progress=False)
     assert isinstance(out[3], ValueError)
     for item, st in zip(items[:3], out[:3], strict=True):

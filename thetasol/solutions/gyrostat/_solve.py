@@ -157,7 +157,9 @@ def _elliptic_form(d: _Data) -> _Form:
     """The generic motion: :func:`elliptic_motion` of the data scaled by a power of two near
     ``|h|``, re-anchored where the anchor is degenerate or slow, with its error estimate."""
     Jp, R = _principal_frame(d.J)
-    Ip = np.array([Jp[1] + Jp[2], Jp[0] + Jp[2], Jp[0] + Jp[1]])
+    diagonal = not np.any(d.I - np.diag(np.diag(d.I)))
+    # the user's principal inertia as given (R = 1 then); else from the principal second moments
+    Ip = np.diag(d.I).copy() if diagonal else np.array([Jp[1] + Jp[2], Jp[0] + Jp[2], Jp[0] + Jp[1]])
     n = R.T @ d.N
     m = Ip * (R.T @ d.omega0)
     hdot = np.cross(m + n, m / Ip)
@@ -172,10 +174,12 @@ def _elliptic_form(d: _Data) -> _Form:
     # (a power of two near |h|: the scaled data are the data, exactly)
     Gs = 2.0 ** round(np.log2(_norm(m + n)))
     n, m = n / Gs, m / Gs
-    # the exact data for the algebra: I_i = J_j + J_k and m = I omega0 (no rounding)
+    # the exact data for the algebra: the principal inertia (the user's, or I_i = J_j + J_k) and
+    # m = I omega0 (no rounding)
     wp = R.T @ d.omega0
-    Iq = [Fraction(float(Jp[1])) + Fraction(float(Jp[2])), Fraction(float(Jp[0])) + Fraction(float(Jp[2])),
-          Fraction(float(Jp[0])) + Fraction(float(Jp[1]))]
+    Iq = ([Fraction(float(x)) for x in Ip] if diagonal else
+          [Fraction(float(Jp[1])) + Fraction(float(Jp[2])), Fraction(float(Jp[0])) + Fraction(float(Jp[2])),
+           Fraction(float(Jp[0])) + Fraction(float(Jp[1]))])
     mq = [Iq[i] * Fraction(float(wp[i])) / Fraction(Gs) for i in range(3)]
     orbit = elliptic_orbit(Ip, n, m, R, m0_mp=mq, Ip_exact=Iq)
     if orbit.anchor_is_degenerate() or orbit.anchor_is_slow():
