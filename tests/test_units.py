@@ -282,12 +282,13 @@ def test_nearly_symmetric_between_snap_and_engine_refused_at_once(gap):
 
 
 def test_snapped_gap_moves_the_answer_by_the_conditioning():
-    """A J gap of 1e-15 relative (within SNAP_TOL) is snapped: the answer stays within 3 x the data's
-    conditioning at t <= 4002 (measured 1.7 x: 1.6e-12 against 9.3e-13)."""
+    """A gap of 1e-15 relative (within SNAP_TOL) in the second moments, here J = (0.7 - 7e-16, 0.7, 1.3 - 6e-16)
+    of the inertia (2, 2 - 7e-16, 1.4), is snapped: the answer stays within 3 x the data's conditioning at
+    t <= 4002."""
     w0 = W0 + np.array([0.0, 0.0, 0.3])
-    J = np.array([0.7, 0.7 * (1 + 1e-15), 1.3])
-    sol = solve_rotation(inertia(J), A0, Q00, w0)
+    sol = solve_rotation([2.0, 2.0 - 7e-16, 1.4], A0, Q00, w0)
     assert sol.method.startswith("theta/symmetric")
+    J = np.diag(sol.J)   # the body solved: its second moments, formed from the inertia
     w_ref, Q_ref = heyoka_rotation(J, A0, Q00, w0, T_REF)
     w_p, Q_p = heyoka_rotation(J * [1, 1 + 4 * EPS, 1], A0, Q00, w0 * (1 + 2 * EPS), T_REF)
     cond = max(np.abs(w_p - w_ref).max() / np.abs(w_ref).max(), np.abs(Q_p - Q_ref).max())
