@@ -343,6 +343,7 @@ def test_refusals():
 
 @pytest.mark.parametrize("bad, match", [
     ({"I": [1.0, 1.0, 3.0]}, "triangle"),
+    ({"I": [0.6, 1.0, 1.7]}, r"look like second moments.*thetasol\.inertia\(J\) = \[2\.7, 2\.3, 1\.6\]"),
     ({"I": [1.0, -1.0, 1.0]}, "positive definite"),
     ({"I": [[2.0, 1, 0], [0, 2, 0], [0, 0, 1]]}, "symmetric"),
     ({"center": [0, np.nan, 1]}, "center"),
