@@ -131,8 +131,8 @@ def invariants(J: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray) -
     ``m2``      ``|m|^2 = -1/2 tr(M^2)`` ((4.7), conserved only when ``a`` is isotropic or zero);
     ``curve``   all coefficients of the spectral curve (4.12), see :func:`spectral_coefficients`.
 
-    ``J`` may be given as :func:`thetasol.solve_rotation` takes it: three principal values (a list
-    or a 1-D array) or a 3x3 tensor; ``a`` as a 3x3 matrix.
+    ``J`` is the paper's second moments (of an inertia ``I``: :func:`second_moments`), three principal
+    values (a list or a 1-D array) or a 3x3 tensor; ``a`` a 3x3 matrix.
     """
     J = _moments_matrix(J)
     a = np.asarray(a, dtype=float)
