@@ -53,6 +53,7 @@ from thetasol import (
     riemann_theta,
     riemann_theta_separated,
     run,
+    second_moments,
     siegel_reduce,
     solve_configuration,
     solve_gyrostat,
@@ -241,7 +242,7 @@ def group_rotation_extra(rec, refs):
         "not_a_rotation": ([1.0, 2.0, 3.5], np.zeros((3, 3)), 2 * np.eye(3), [0.1, 1.0, 0.2], {}),
     }
     for name, (J, a, Q0, w0, kw) in cases.items():
-        sol = rec.guard(f"refusals/{name}", solve_rotation, J, a, Q0, w0, **kw)
+        sol = rec.guard(f"refusals/{name}", solve_rotation, inertia(J), a, Q0, w0, **kw)
         if sol is not None:
             rec.text(f"refusals/{name}/method", sol.method)
             rec.guard(f"refusals/{name}/eval", lambda sol=sol, name=name: rec.num(f"refusals/{name}/Q", sol.Q(T_ROT[:6])))
@@ -332,9 +333,10 @@ def group_pendulum(rec):
         "uniform": (np.array([0.8, 0.8, 1.5]), A, rodrigues([0, 0, 0.3]), [0, 0, 1.3]),
     }
     i, j, k = 2, 0, 1
-    Ii = J.sum() - J[i]
+    Jb = np.diag(second_moments(inertia(J)))   # the separatrix of the body solved: its second moments from I
+    Ii = Jb.sum() - Jb[i]
     rho = 0.5 * abs(A[k, k] - A[j, j])
-    nu = np.sqrt(2 * abs(J[k] - J[j]) * rho / Ii)
+    nu = np.sqrt(2 * abs(Jb[k] - Jb[j]) * rho / Ii)
     cases["separatrix"] = (J, A, np.array([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]), [0, 0, nu])
     for name, (Jc, a, Q0, w0) in cases.items():
         record_solution(rec, f"pendulum/{name}", lambda: solve_rotation(inertia(Jc), a, Q0, w0), T_OTHER)
