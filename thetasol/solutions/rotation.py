@@ -128,7 +128,7 @@ _BRANCHES: list[Callable] = [_free_branch, _pendulum_branch, _neumann_branch, _p
 
 
 @single_blas_thread
-def solve_rotation(I: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *,  
+def solve_rotation(I: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *,
                    dps: int | None = None) -> RotationSolution:
     """Exact rotation of a rigid body in the potential ``phi = 1/2 x^T a x`` (closed form).
 
