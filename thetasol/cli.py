@@ -13,8 +13,15 @@ installed, else a line per part).
 ``reference export NAME -o FILE [--t0 T0 --t1 T1 --n N]`` writes one case's exact states on ``N``
 equally spaced times to ``.csv`` or ``.json`` (default: the case's own interval, 101 times).
 
-Exit status: 0 when every check passed, 1 when a check failed, 2 on bad input (the
-message starts with ``thetasol: error:``; nothing is written).
+``--t-end T`` and ``--samples N`` replace the scene's output times by ``N`` equally spaced times on
+``[0, T]``; ``--no-check`` skips every numerical reference (the closed forms evaluate at any time,
+so a far horizon then finishes at once).  A reference expected to take long is announced with its
+expected duration and shows its progress on stderr.
+
+Exit status: 0 when no check failed (an inconclusive check, whose reference cannot judge, is
+not a failure), 1 when a check failed, 2 on bad input (the message starts with
+``thetasol: error:``; nothing is written), 130 on Ctrl-C (the message says which files, each
+complete, were written before it; the others are not).
 """
 from __future__ import annotations
 
@@ -49,7 +56,11 @@ def _parser() -> argparse.ArgumentParser:
         q.add_argument("-o", "--output", help="write the trajectories to this .npz or .csv file "
                                               "(and the report to <stem>.report.txt)")
         q.add_argument("--no-check", action="store_true",
-                       help="skip the unsplit multibody reference (the slowest comparison)")
+                       help="skip every numerical reference (the exact parts are evaluated, not compared)")
+        q.add_argument("--t-end", type=float, metavar="T",
+                       help="last output time (instead of the scene's; the number of times is kept)")
+        q.add_argument("--samples", type=int, metavar="N",
+                       help="number of equally spaced output times on [0, t_end] (instead of the scene's)")
         q.add_argument("--plot", metavar="FILE", help="write a figure of the trajectories (.png, .pdf or .svg; "
                                                       "needs matplotlib: pip install \"thetasol[plot]\")")
     return p
@@ -76,28 +87,37 @@ def main(argv: list[str] | None = None) -> int:
     if args.command == "reference":
         return _reference(args)
     from thetasol.mechanics.trajectories import write_trajectories
-    from thetasol.scenes.format import demo_scene_path, load_scene
+    from thetasol.scenes.format import demo_scene_path, load_scene, with_times
     from thetasol.scenes.report import run
 
+    written = []
     try:
         if args.output is not None:
             _check_output(args.output)
         if args.plot is not None:
             _check_plot(args.plot)
         path = demo_scene_path() if args.command == "demo" else args.scene
-        scene = load_scene(path)
+        scene = with_times(load_scene(path), args.t_end, args.samples)
         with _Progress() as progress:
-            traj, report, checks = run(scene, check=not args.no_check, out=sys.stdout, progress=progress)
+            traj, report, checks = run(scene, check=not args.no_check, out=sys.stdout, progress=progress,
+                                       references=not args.no_check)
         if args.output is not None:
             for p in write_trajectories(traj, args.output, report=report):
+                written.append(p)
                 print(f"wrote {p}")
         if args.plot is not None:
-            print(f"wrote {_write_plot(traj, args.plot)}")
+            written.append(_write_plot(traj, args.plot))
+            print(f"wrote {written[-1]}")
         if args.command == "demo" and args.output is None:
             print(_OUTPUT_HINT + ("; '--plot station.png' draws them" if args.plot is None else ""))
     except ValueError as exc:
         print(f"thetasol: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:
+        # the files are written whole or not at all (atomically): the ones listed are complete
+        done = f"; written before it: {', '.join(map(str, written))}" if written else "; no file was written"
+        print(f"\nthetasol: interrupted{done}", file=sys.stderr)
+        return 130
     return 0 if all(c.ok for c in checks) else 1
 
 

@@ -78,6 +78,13 @@ class Trajectories:
         write_trajectories(self, path)
 
 
+def _umask() -> int:
+    """The process's umask (read by setting it and restoring it at once)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 def _atomic_write(path: Path, write) -> None:
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
@@ -85,6 +92,8 @@ def _atomic_write(path: Path, write) -> None:
         raise ValueError(f"output directory {str(directory)!r} does not exist")
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
     try:
+        # mkstemp creates the file 0600; the result gets the mode open() would give it (0666 less the umask)
+        os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, "wb") as fh:
             write(fh)
             fh.flush()

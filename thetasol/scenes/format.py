@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import tomllib
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -26,8 +26,9 @@ from thetasol.scenes.fixed_point import solve_fixed_point
 from thetasol.scenes.gyrostat_scene import GyrostatScene, gyrostat_scene_from_dict
 from thetasol.scenes.orbit import OrbitEntry, orbit_entry, solve_orbiting_configuration
 from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
+from thetasol.scenes.values import number, numeric_array
 
-__all__ = ["Scene", "load_scene", "demo_scene_path"]
+__all__ = ["Scene", "load_scene", "demo_scene_path", "with_times"]
 
 _TOP_KEYS = {"name", "description", "bodies", "joints", "potential", "initial", "output", "solver", "constraint",
              "fixed_point", "orbit"}
@@ -131,6 +132,22 @@ def load_scene(path: str | Path) -> Scene | GyrostatScene:
     return _scene_from_dict(d, str(path))
 
 
+def with_times(scene: Scene | GyrostatScene, t_end: float | None = None,
+               samples: int | None = None) -> Scene | GyrostatScene:
+    """The scene with ``samples`` equally spaced output times on ``[0, t_end]`` (each defaulting to the scene's
+    own number of times and last time); the rest, ``check_t_end`` included, unchanged.
+
+    Raises ``ValueError`` for a ``t_end`` that is not a positive finite number or ``samples`` outside [2, 1e7].
+    """
+    if t_end is None and samples is None:
+        return scene
+    t_end = float(scene.t[-1]) if t_end is None else _number(t_end, "t_end", positive=True)
+    n = scene.t.size if samples is None else samples
+    if isinstance(n, bool) or not isinstance(n, (int, np.integer)) or not 2 <= n <= 10**7:
+        raise ValueError(f"the number of output times must be an integer in [2, 1e7], got {n!r}")
+    return replace(scene, t=np.linspace(0.0, t_end, int(n)))
+
+
 def demo_scene_path() -> Path:
     """Path of the bundled demo scene (a C^2-central space-station-like configuration)."""
     return Path(__file__).with_name("data") / "station.toml"
@@ -156,24 +173,11 @@ def _unknown(d: Mapping, allowed: set, where: str) -> None:
 
 
 def _number(x: Any, where: str, positive: bool = False) -> float:
-    if isinstance(x, bool) or not isinstance(x, (int, float)):
-        raise ValueError(f"{where} must be a number, got {x!r}")
-    x = float(x)
-    if not np.isfinite(x):
-        raise ValueError(f"{where} must be finite, got {x!r}")
-    if positive and x <= 0:
-        raise ValueError(f"{where} must be positive, got {x!r}")
-    return x
+    return number(x, where, positive)
 
 
 def _array(x: Any, where: str, shape: tuple | None = None) -> np.ndarray:
-    if isinstance(x, (str, bool, dict)):
-        raise ValueError(f"{where} must be numeric, got {x!r}")
-    try:
-        arr = np.array(x, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{where} must be a (nested) list of numbers, got {x!r}") from exc
-    return V.finite_array(arr, where, shape)
+    return numeric_array(x, where, shape)
 
 
 def _attitude(x: Any, where: str) -> np.ndarray:

@@ -47,6 +47,7 @@ from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import Solution
 from thetasol.scenes.checks import ReportText
 from thetasol.scenes.pipeline import closed_form_rotation, rotation_kind
+from thetasol.scenes.values import number, numeric_array
 from thetasol.solutions.gyrostat import solve_gyrostat
 from thetasol.solutions.mass_center import MassCenterMotion
 
@@ -178,17 +179,21 @@ def _part(e, a, Q0, w0, p, rotation, rtol) -> _Part:
     axes = np.array([r.axis for r in e.rotors]).reshape(-1, 3)
     A = np.array([r.A for r in e.rotors])
     if not e.rotors:
-        sol, why = (None, "numerical") if rotation == "numerical" else closed_form_rotation(e.J, a, Q0, w0)
+        sol, why = (None, "rotation='numerical'") if rotation == "numerical" else closed_form_rotation(e.J, a, Q0, w0)
         if sol is None:
             sol = integrate_rotation(inertia(e.J), a, Q0, w0, rtol=rtol)
-            return _Part("rigid", sol, f"rigid body: numerical (integrate_rotation, rtol={rtol:g})", axes, A, p)
+            return _Part("rigid", sol, f"rigid body: numerical (integrate_rotation, rtol={rtol:g}); no closed form: {why}",
+                         axes, A, p)
         return _Part("rigid", sol, f"rigid body: closed form {sol.method}", axes, A, p)
     specs = e.rotor_specs(p)
     if rotation_kind(a) == "elliptic" and rotation != "numerical":
         sol = solve_gyrostat(e.I_gyro, None, Q0, w0, rotors=specs)
         return _Part("closed", sol, f"gyrostat (8.39): closed form {sol.method}", axes, A, p, specs)
     sol = integrate_gyrostat(e.I_gyro, None, Q0, w0, rotors=specs, a=a, rtol=rtol)
-    return _Part("numerical", sol, f"gyrostat (8.32): integrate_gyrostat (DOP853, rtol={rtol:g})", axes, A, p, specs)
+    why = ("rotation='numerical'" if rotation == "numerical" else
+           "the potential is not isotropic, and Section 8 gives a gyrostat's closed form (8.39) only for a = c 1")
+    return _Part("numerical", sol, f"gyrostat (8.32): integrate_gyrostat (DOP853, rtol={rtol:g}); no closed form: {why}",
+                 axes, A, p, specs)
 
 
 @single_blas_thread
@@ -255,13 +260,7 @@ class GyrostatScene:
 
 
 def _arr(x, where, shape=None):
-    if isinstance(x, (str, bool, dict)):
-        raise ValueError(f"{where} must be numeric, got {x!r}")
-    try:
-        arr = np.array(x, dtype=float)
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{where} must be a (nested) list of numbers, got {x!r}") from exc
-    return V.finite_array(arr, where, shape)
+    return numeric_array(x, where, shape)
 
 
 def _keys(d, allowed, where):
@@ -289,8 +288,9 @@ def _carrier(d, i):
         raise ValueError(f"body {name!r}: give exactly one of 'J', 'I' or 'box'")
     k = given[0]
     if k == "box":
-        return Body.box(float(d["mass"]), _arr(d["box"], f"body {name!r}: box", (3,)), center=center, name=name)
-    return Body(mass=float(d["mass"]), center=center, name=name, **{k: _arr(d[k], f"body {name!r}: {k}")})
+        return Body.box(number(d["mass"], f"body {name!r}: mass"), _arr(d["box"], f"body {name!r}: box", (3,)),
+                        center=center, name=name)
+    return Body(mass=number(d["mass"], f"body {name!r}: mass"), center=center, name=name, **{k: _arr(d[k], f"body {name!r}: {k}")})
 
 
 def _rotor(d, i):
@@ -304,12 +304,13 @@ def _rotor(d, i):
     if "J" in d:
         if "A" in d or "B" in d:
             raise ValueError(f"{w}: give 'A' and 'B', or 'J' (and 'center'), not both")
-        body = Body(mass=float(d["mass"]), J=_arr(d["J"], f"{w}: J"),
+        body = Body(mass=number(d["mass"], f"{w}: mass"), J=_arr(d["J"], f"{w}: J"),
                     center=_arr(d.get("center", point), f"{w}: center", (3,)), name=name)
         return Rotor(name, d["carrier"], axis, point, body, spin)
     if "A" not in d or "B" not in d or "center" in d:
         raise ValueError(f"{w}: give 'A' and 'B' (mass centre at 'point'), or 'J' and 'center'")
-    return Rotor.symmetric(name, d["carrier"], axis, point, float(d["mass"]), float(d["A"]), float(d["B"]), spin)
+    return Rotor.symmetric(name, d["carrier"], axis, point, number(d["mass"], f"{w}: mass"), number(d["A"], f"{w}: A"),
+                           number(d["B"], f"{w}: B"), spin)
 
 
 def _config(d) -> GyrostatConfiguration:
@@ -357,7 +358,10 @@ def _times(d):
     else:
         if "t_end" not in out:
             raise ValueError("[output] needs 't_end' (and 'samples') or 'times'")
-        t = np.linspace(0.0, float(out["t_end"]), int(out.get("samples", 201)))
+        n = out.get("samples", 201)
+        if isinstance(n, bool) or not isinstance(n, int) or not 2 <= n <= 10**7:
+            raise ValueError(f"output.samples must be an integer in [2, 1e7], got {n!r}")
+        t = np.linspace(0.0, number(out["t_end"], "output.t_end", positive=True), n)
     if t.ndim != 1 or t.size == 0 or t[0] < 0 or np.any(np.diff(t) <= 0):
         raise ValueError("output times must be >= 0 and strictly increasing")
     return t
@@ -376,6 +380,8 @@ def gyrostat_scene_from_dict(d: Mapping[str, Any], source: str = "scene") -> Gyr
         t = _times(d)
         solver = d.get("solver", {})
         _keys(solver, _SOLVER, "[solver]")
+        solver = {k: number(v, f"solver.{k}", positive=True) if k in ("rtol", "check_rtol", "check_t_end") else v
+                  for k, v in solver.items()}
         s = {"rtol": 1e-12, "rotation": "auto", "check_multibody": True, "check_rtol": 1e-13,
              "check_t_end": float(t[-1]), **solver}
         return GyrostatScene(gc, a, b, q0, v0, Q0, w0, t, str(d.get("name", "")), str(d.get("description", "")), s)

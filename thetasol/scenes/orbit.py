@@ -30,7 +30,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
-from thetasol.core import validate as V
 from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.multibody_gravity import box_mass_points
 from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
@@ -39,6 +38,7 @@ from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.gravity_gradient import GravityGradientStability, gravity_gradient_stability, orbit_frame
 from thetasol.protocol import ClosedFormUnavailable
 from thetasol.scenes.pipeline import ConfigurationSolution
+from thetasol.scenes.values import numeric_array
 from thetasol.solutions.kepler import KeplerOrbit
 from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation
 
@@ -80,12 +80,7 @@ class OrbitEntry:
 
 
 def _vec(x: Any, where: str) -> np.ndarray:
-    if isinstance(x, (str, bool, dict)):
-        raise ValueError(f"{where} must be 3 numbers, got {x!r}")
-    try:
-        return V.finite_array(np.array(x, dtype=float), where, (3,))
-    except (TypeError, ValueError) as exc:
-        raise ValueError(f"{where} must be 3 finite numbers, got {x!r}") from exc
+    return numeric_array(x, where, (3,))
 
 
 def _body_points(raw_bodies: list) -> dict:

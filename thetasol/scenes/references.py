@@ -41,7 +41,7 @@ __all__ = ["Part", "Reference", "reference", "horizon_tolerance", "ANNOUNCE_SECO
 ANNOUNCE_SECONDS = 2.0
 #: Seconds one reference may take: a longer one checks the horizon it reaches in that time (a user who
 #: wants the whole horizon checked sets ``check_t_end``; a reference of hours tells nothing sooner).
-BUDGET_SECONDS = 120.0
+BUDGET_SECONDS = 30.0
 #: Wall time of the timed probe that measures a run's cost per unit time (long enough to be timed
 #: to a few per cent, short beside the run it predicts).
 PROBE_SECONDS = 0.05

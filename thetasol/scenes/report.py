@@ -360,11 +360,13 @@ def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = N
         inconclusive check is not a failure: its line says why the reference cannot judge).
     """
     if isinstance(scene, GyrostatScene):
-        step, _ = _stepper(progress, ["split solution", "numerical references"])
+        multibody = check and scene.solver.get("check_multibody", True)
+        step, _ = _stepper(progress, ["split solution"] + (["unsplit multibody reference"] if multibody else []))
         step()
         traj, text, raw = run_gyrostat_scene(scene, check=check, out=out)
         step()
-        step()
+        if multibody:
+            step()
         return traj, text, [Check(f"split (Theorem 5) vs unsplit multibody: {w}", d, tl, "-") for w, d, tl in raw]
     if scene.orbit is not None:
         return run_orbit(scene, check=check, out=out, references=references)
