@@ -1,4 +1,7 @@
 """The command line: `python -m thetasol demo` and `python -m thetasol solve SCENE.toml`."""
+import os
+import re
+import stat
 import subprocess
 import sys
 from pathlib import Path
@@ -43,13 +46,14 @@ def test_solve_writes_csv_report_and_plot(tmp_path, capsys):
     assert (tmp_path / "sat.report.txt").read_text() in printed + "\n"
     assert (tmp_path / "sat.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert f"wrote {tmp_path / 'sat.png'}" in printed
-    lines = captured.err.splitlines()       # not a terminal: a line per part
-    assert lines[:2] == ["thetasol: [1/2] split solution ...", "thetasol: [2/2] numerical references ..."]
-    assert lines[2].startswith("thetasol: done in ") and len(lines) == 3
+    lines = captured.err.splitlines()       # not a terminal: a line per part; --no-check: no reference at all
+    assert lines[0] == "thetasol: [1/1] split solution ..."
+    assert lines[1].startswith("thetasol: done in ") and len(lines) == 2
+    assert "not checked against numerical references" in printed and "vs integrate_" not in printed
     assert "-o station.npz" not in printed   # the hint is the demo's
 
 
-def _fake_run(scene, check=True, out=None, progress=None):
+def _fake_run(scene, check=True, out=None, progress=None, references=True):
     """A stand-in for scenes.report.run: one static body, the progress calls of a run without multibody."""
     from thetasol.mechanics.trajectories import Trajectories
 
@@ -162,8 +166,14 @@ def test_failed_check_exits_1(tmp_path, capsys, monkeypatch):
             return q + 1e-6, v
 
     monkeypatch.setattr(pipeline_mod, "MassCenterMotion", Off)
-    assert main(["solve", str(EXAMPLE), "--no-check"]) == 1
-    assert "verdict: FAILED" in capsys.readouterr().out
+    scene = tmp_path / "s.toml"
+    scene.write_text(EXAMPLE.read_text().replace("check_multibody = true", "check_multibody = false"))
+    import thetasol.scenes.references as refs
+
+    monkeypatch.setattr(refs, "_heyoka_installed", lambda: False)    # DOP853 references: no model to compile
+    assert main(["solve", str(scene), "--t-end", "2", "--samples", "9"]) == 1
+    out = capsys.readouterr().out
+    assert "verdict: FAILED: mass centre" in out and "the checked part is off by at least" in out
 
 
 def test_example_script_runs():
@@ -196,3 +206,67 @@ def test_unwritable_output_refused_before_solving(tmp_path, capsys, monkeypatch)
     err = capsys.readouterr().err
     assert err.startswith("thetasol: error:") and "does not exist" in err and str(tmp_path / "missing") in err
     assert not (tmp_path / "missing").exists()
+
+
+PIVOTED = ROOT / "thetasol" / "scenes" / "data" / "pivoted_top.toml"
+
+
+def test_output_times_on_the_command_line(tmp_path, capsys):
+    """--t-end and --samples replace the scene's times; a far horizon with --no-check finishes at once
+    (the closed forms evaluate at any time) and runs no reference."""
+    out = tmp_path / "far.npz"
+    assert main(["solve", str(PIVOTED), "--t-end", "1e12", "--samples", "7", "--no-check", "-o", str(out)]) == 0
+    captured = capsys.readouterr()
+    assert "output: 7 times in [0, 1e+12]" in captured.out and "numerical references" not in captured.err
+    with np.load(out) as z:
+        assert np.array_equal(z["t"], np.linspace(0.0, 1e12, 7)) and np.all(np.isfinite(z["attitude"]))
+    for bad, match in ((["--t-end", "-1"], "t_end must be positive"), (["--t-end", "nan"], "t_end must be finite"),
+                       (["--samples", "1"], r"integer in \[2, 1e7\]")):
+        assert main(["solve", str(PIVOTED), "--no-check", *bad]) == 2
+        err = capsys.readouterr().err
+        assert err.startswith("thetasol: error:") and re.search(match, err), err
+
+
+def test_interrupt_exits_130_with_what_was_written(tmp_path, capsys, monkeypatch):
+    """Ctrl-C during the checks: exit 130, a message, and no file (they are written whole, after the run)."""
+    import thetasol.scenes.report as scene_mod
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(scene_mod, "run", interrupted)
+    assert main(["solve", str(PIVOTED), "-o", str(tmp_path / "x.csv")]) == 130
+    assert "thetasol: interrupted; no file was written" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_output_files_get_the_umask(tmp_path, capsys):
+    """CSV, NPZ, report and PNG are created as open() would create them: 0666 less the umask."""
+    old = os.umask(0o027)
+    try:
+        assert main(["solve", str(PIVOTED), "--no-check", "--samples", "5", "-o", str(tmp_path / "a.csv")]) == 0
+        assert main(["solve", str(PIVOTED), "--no-check", "--samples", "5", "-o", str(tmp_path / "b.npz")]
+                    + (["--plot", str(tmp_path / "b.png")] if _has_matplotlib() else [])) == 0
+    finally:
+        os.umask(old)
+    files = sorted(tmp_path.iterdir())
+    assert len(files) >= 4
+    for p in files:
+        assert stat.S_IMODE(p.stat().st_mode) == 0o640, p
+
+
+def _has_matplotlib() -> bool:
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+def test_strings_in_a_scene_file_are_refused(tmp_path, capsys):
+    """A number written as a string is an error naming the entry and the file, not a number."""
+    bad = tmp_path / "bad.toml"
+    bad.write_text(PIVOTED.read_text().replace("top = [0.5, 0.0, 12.0]", 'top = [0.5, 0.0, "12"]'))
+    assert main(["solve", str(bad), "--no-check"]) == 2
+    err = capsys.readouterr().err
+    assert str(bad) in err and "initial.omega.top" in err and "'12'" in err and "not a number" in err
