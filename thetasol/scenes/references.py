@@ -4,12 +4,13 @@
 only be judged against a reference whose own error over the horizon is known to be smaller, so every
 reference is run twice and the difference of the two runs is its error estimate:
 
-* a rotation about the mass centre, and a heavy top about a pivot in a uniform field (``a = 0``):
+* a rotation about the mass centre (in a fixed potential or on an orbit), and a heavy top about a
+  pivot in a uniform field (``a = 0``):
   heyoka's Taylor integrator in 80-bit precision (``np.longdouble``) at tolerance 1e-19 where
   heyoka is installed (the ``test`` and ``bench`` extras bring it), checked against the same
   integration in float64 at tolerance 1e-15;
-* otherwise (no heyoka, a body about a pivot in a non-uniform field, the mass centre): DOP853 at
-  rtol 1e-13, checked against DOP853 at rtol 1e-11.
+* otherwise (no heyoka, a body about a pivot in a non-uniform field, the mass centre, an orbit):
+  DOP853 at rtol 1e-13, checked against DOP853 at rtol 1e-11.
 
 The difference of the two runs is mostly the coarser run's error, so it over-estimates the finer
 run's: a verdict built on it blames the closed form only when the difference from the reference
@@ -32,6 +33,7 @@ from scipy.integrate import solve_ivp
 
 from thetasol.integrators.fixed_point import integrate_fixed_point
 from thetasol.integrators.heavy_top import integrate_heavy_top
+from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
 from thetasol.integrators.rotation import integrate_rotation
 
 __all__ = ["Part", "Reference", "reference", "horizon_tolerance", "ANNOUNCE_SECONDS", "BUDGET_SECONDS",
@@ -70,12 +72,13 @@ class Part:
     what : str
         Its name in the report (``"rotation of cap"``).
     kind : str
-        ``"rotation"`` (``I``, ``a``), ``"heavy_top"`` (``I``, ``center``, ``mass``, ``gravity``),
-        ``"fixed_point"`` (``I``, ``R``, ``a``, ``b``) or ``"mass_center"`` (``a``, ``b``, ``constraint``).
+        ``"rotation"`` (``I``, ``a``), ``"orbiting_rotation"`` (``I``, ``orbit``), ``"heavy_top"`` (``I``,
+        ``center``, ``mass``, ``gravity``), ``"fixed_point"`` (``I``, ``R``, ``a``, ``b``), ``"mass_center"``
+        (``a``, ``b``, ``constraint``) or ``"kepler"`` (``mu``).
     data : dict
         The model's data, by those names.
     state0 : tuple of ndarray
-        The state at ``t = 0``: ``(omega0, Q0)``, or ``(q0, v0)`` for the mass centre.
+        The state at ``t = 0``: ``(omega0, Q0)``, or ``(q0, v0)`` for the mass centre and an orbit.
     """
 
     what: str
@@ -121,7 +124,7 @@ def _heyoka_installed() -> bool:
 
 def _runs(kind: str) -> tuple[dict, dict, str]:
     """The finer and the coarser run of a part's reference, and the label of the pair."""
-    if kind in ("rotation", "heavy_top") and _heyoka_installed():
+    if kind in ("rotation", "orbiting_rotation", "heavy_top") and _heyoka_installed():
         return ({"method": "heyoka", "fp_type": np.longdouble, "rtol": 1e-19}, {"method": "heyoka", "rtol": 1e-15},
                 "heyoka 80-bit, tol 1e-19; its error: the difference from float64 heyoka at tol 1e-15")
     return ({"method": "DOP853", "rtol": 1e-13}, {"method": "DOP853", "rtol": 1e-11},
@@ -146,14 +149,31 @@ def _mass_center(a, b, constraint, q0, v0, t, rtol) -> tuple[np.ndarray, np.ndar
     return sol.y[:3].T, sol.y[3:].T
 
 
+def _kepler(mu, q0, v0, t, rtol) -> tuple[np.ndarray, np.ndarray]:
+    """A point in the field ``-mu / |q|`` (7.7), by DOP853 (``atol`` relative to ``|q0|``)."""
+    def rhs(_t, y):
+        q = y[:3]
+        return np.concatenate([y[3:], -mu * q / np.dot(q, q) ** 1.5])
+
+    sol = solve_ivp(rhs, (0.0, float(t[-1])), np.concatenate([q0, v0]), t_eval=t, method="DOP853", rtol=rtol,
+                    atol=1e-3 * rtol * float(np.linalg.norm(q0)))
+    if not sol.success:
+        raise RuntimeError(f"orbit reference failed: {sol.message}")
+    return sol.y[:3].T, sol.y[3:].T
+
+
 def _integrate(part: Part, t: np.ndarray, state0: tuple, run: dict) -> tuple[np.ndarray, np.ndarray]:
     """One run of ``part``'s equations from ``state0`` at ``t = 0`` through the times ``t >= 0``."""
     d = part.data
     if part.kind == "mass_center":
         return _mass_center(d["a"], d["b"], d["constraint"], *state0, t, run["rtol"])
+    if part.kind == "kepler":
+        return _kepler(d["mu"], *state0, t, run["rtol"])
     w0, Q0 = state0
     if part.kind == "rotation":
         ref = integrate_rotation(d["I"], d["a"], Q0, w0, **run)
+    elif part.kind == "orbiting_rotation":
+        ref = integrate_orbiting_rotation(d["I"], d["orbit"], Q0, w0, **run)
     elif part.kind == "heavy_top":
         ref = integrate_heavy_top(d["I"], d["center"], Q0, w0, mass=d["mass"], gravity=d["gravity"], **run)
     else:
@@ -235,7 +255,9 @@ def reference(part: Part, t: np.ndarray, *, note: Callable[[str], None] | None =
     expected = rate * float(tc[-1])
     segments = 1
     if expected > ANNOUNCE_SECONDS and note is not None:
-        segments = int(min(50, tc.size, np.ceil(expected / ANNOUNCE_SECONDS)))
+        # a rotation on an orbit depends on t itself (the orbit's phase): it cannot restart at a segment's start
+        if part.kind != "orbiting_rotation":
+            segments = int(min(50, tc.size, np.ceil(expected / ANNOUNCE_SECONDS)))
         note(f"{part.what}: {label.split(';')[0]} to t = {tc[-1]:g}, expected about {expected:.2g} s")
     edges = np.linspace(0, tc.size, segments + 1).round().astype(int)
 
