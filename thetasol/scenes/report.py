@@ -2,24 +2,26 @@
 
 :func:`run` solves a scene by the split (:mod:`thetasol.scenes.pipeline`) and reports the
 effective bodies, the model of each part, and the exact parts against numerical references
-that do not use them, each with its max deviation, a stated tolerance and timings:
+that do not use them, each with its max deviation, a stated tolerance, the reference's own error
+estimate and timings (the references and their error estimates: :mod:`thetasol.scenes.references`):
 
-* the closed-form mass centre against DOP853 at rtol 1e-13 (tolerance 1e-9 times the scale); on
-  the sphere of a ``[constraint]`` (Theorem 3) Neumann's equation
-  ``qddot = -a q + lambda q``, ``lambda = (q.aq - |qdot|^2) / |q|^2``, and ``|q| = R`` along the split;
-* each closed-form rotation against :func:`thetasol.integrate_rotation` at rtol 1e-13
-  (tolerance 1e-8);
+* the closed-form mass centre against DOP853 (on the sphere of a ``[constraint]`` (Theorem 3)
+  Neumann's equation ``qddot = -a q + lambda q``, ``lambda = (q.aq - |qdot|^2) / |q|^2``, and
+  ``|q| = R`` along the split);
+* each closed-form rotation against :func:`thetasol.integrate_rotation` (80-bit heyoka where installed);
 * the whole split against the unsplit multibody system of :mod:`thetasol.integrators.multibody`
   (tolerance ``10 check_rtol (1 + t) (1 + max |x|)``, docs/mechanics.md);
-* with a ``[fixed_point]`` (Section 5): the main body's closed form about the pivot against
-  :func:`thetasol.integrators.fixed_point.integrate_fixed_point` at rtol 1e-13 (tolerance 1e-8;
-  no mass-centre check, the pivot fixes it), and the unsplit system with the pivot as a spherical
-  joint to the ground;
+* with a ``[fixed_point]`` (Section 5): the main body's closed form about the pivot against the heavy
+  top's integration in a uniform field (``a = 0``), else against
+  :func:`thetasol.integrators.fixed_point.integrate_fixed_point` (no mass-centre check, the pivot
+  fixes it), and the unsplit system with the pivot as a spherical joint to the ground.
 
-and the drift of the first integrals (4.9), (4.13), (4.12) along each rotation; then when the closed
+A closed form's tolerance grows with the angle turned over the horizon (:func:`_check`); a check
+beyond it says whether the closed form or the reference is off (:class:`~thetasol.scenes.checks.Check`).
+Then the drift of the first integrals (4.9), (4.13), (4.12) along each rotation; then when the closed
 form pays off: from this run's set-up, evaluation and integration times, the horizon beyond which the
-split is cheaper than the multibody integration and each closed-form rotation cheaper than
-integrate_rotation (at the scene's output density and for one far time), and the accuracy argument.
+split is cheaper than the multibody integration and each closed-form rotation cheaper than its
+reference's integration (at the scene's output density and for one far time), and the accuracy argument.
 """
 from __future__ import annotations
 
