@@ -6,6 +6,7 @@ or the Routh reduction: every carrier and rotor is a body, every joint a constra
 spacecraft (4 carriers, 3 rotors, the turntable carrying the probe) and Hooke scenes are run to t = 10
 here and to t = 40 (many rotor turns) in the slow tests.
 """
+import re
 import tomllib
 
 import numpy as np
@@ -76,6 +77,29 @@ def test_bundled_scenes_load_through_load_scene_and_report():
     assert checks == [] and "cross" in text and traj.names == ("shaft_1", "shaft_2")
     sp = load_scene(DATA / "spacecraft.toml")
     assert sp.config.body_names == ["bus", "wheel_x", "wheel_yz", "boom", "turntable", "panel", "probe"]
+    # the carriers with rotors are integrated, and the report says why (a is not isotropic)
+    _, text, _ = run(sp, check=False, references=False)
+    models = [line for line in text.splitlines() if "model: gyrostat (8.32): integrate_gyrostat" in line]
+    assert len(models) == 2 and all("no closed form: the potential is not isotropic" in m for m in models)
+
+
+@pytest.mark.parametrize("where, value, match", [
+    (("rotors", 0, "mass"), "1.5", "rotor 'wheel_x': mass must be a number, got '1.5'"),
+    (("rotors", 0, "point"), [0.5, "0.2", 0.1], "rotor 'wheel_x': point must be numbers, got '0.2'"),
+    (("bodies", 0, "mass"), "40", "body 'bus': mass must be a number"),
+    (("output", "t_end"), "40", "output.t_end must be a number"),
+    (("solver", "check_rtol"), "1e-13", "solver.check_rtol must be a number"),
+])
+def test_strings_are_not_numbers_in_rotor_scenes(where, value, match):
+    d = tomllib.loads((DATA / "spacecraft.toml").read_text())
+    *path, key = where
+    node = d
+    for k in path:
+        node = node[k]
+    node[key] = value
+    with pytest.raises(ValueError, match=re.escape(match)) as err:
+        gyrostat_scene_from_dict(d, "myfile")
+    assert str(err.value).startswith("myfile: ")
 
 
 def test_scene_errors_name_the_file_and_the_reason():
