@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import time
 import tomllib
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, TextIO
@@ -47,6 +47,7 @@ from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import Solution
 from thetasol.scenes.checks import ReportText
 from thetasol.scenes.pipeline import closed_form_rotation, rotation_kind
+from thetasol.scenes.references import announce_fallbacks
 from thetasol.scenes.values import number, numeric_array
 from thetasol.solutions.gyrostat import solve_gyrostat
 from thetasol.solutions.mass_center import MassCenterMotion
@@ -451,20 +452,27 @@ def _drift(scene: GyrostatScene, sol: GyrostatSplit, traj: Trajectories, say) ->
         say(line)
 
 
-def run_gyrostat_scene(scene: GyrostatScene, check: bool = True, out: TextIO | None = None
+def run_gyrostat_scene(scene: GyrostatScene, check: bool = True, out: TextIO | None = None,
+                       note: Callable[[str], None] | None = None
                        ) -> tuple[Trajectories, str, list[tuple[str, float, float]]]:
     """Solve a scene with rotors by the split and compare it with the unsplit multibody system.
 
     Returns the split's trajectories, the report text and the checks ``(what, deviation, tolerance)``.
     The tolerance of the comparison is ``10 check_rtol (1 + t_end) (1 + max |x|)``, the reference's
-    own error (docs/gyrostat.md).
+    own error (docs/gyrostat.md).  ``note`` is told how long the carriers integrated numerically will take,
+    when long.
     """
     say = ReportText(out)
 
     start = time.perf_counter()
     sol = scene.solution()
+    setup_seconds = time.perf_counter() - start
+    announce_fallbacks({f"rotation of {n}": part for n, part in sol.parts.items()
+                        if part.kind == "numerical" or "numerical" in part.model},
+                       float(scene.t[-1]), note)
+    start = time.perf_counter()
     traj = sol(scene.t)
-    split_seconds = time.perf_counter() - start
+    split_seconds = setup_seconds + time.perf_counter() - start
     _describe(scene, sol, say)
     _drift(scene, sol, traj, say)
     checks = []

@@ -27,6 +27,7 @@ import importlib.util
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -36,8 +37,8 @@ from thetasol.integrators.heavy_top import integrate_heavy_top
 from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
 from thetasol.integrators.rotation import integrate_rotation
 
-__all__ = ["Part", "Reference", "reference", "horizon_tolerance", "ANNOUNCE_SECONDS", "BUDGET_SECONDS",
-           "PER_RADIAN"]
+__all__ = ["Part", "Reference", "reference", "horizon_tolerance", "probe_rate", "announce_fallbacks", "ANNOUNCE_SECONDS",
+           "BUDGET_SECONDS", "PER_RADIAN"]
 
 #: Expected seconds of a reference above which the command line is told how long it will take.
 ANNOUNCE_SECONDS = 2.0
@@ -181,25 +182,46 @@ def _integrate(part: Part, t: np.ndarray, state0: tuple, run: dict) -> tuple[np.
     return ref(t)
 
 
-def _rate(part: Part, run: dict, horizon: float) -> float:
-    """Seconds per unit time of one run, from timed probes after a warm-up (which compiles heyoka's model).
+def probe_rate(run: Callable[[np.ndarray], Any], horizon: float) -> float:
+    """Seconds per unit time of ``run(times)`` (an integration from 0 through ``times``), from timed probes
+    after a warm-up (which compiles heyoka's model).
 
     The probe's horizon grows eightfold until it takes :data:`PROBE_SECONDS` or reaches ``horizon``;
     the cost of a run over a tiny horizon (building the integrator) is subtracted.
     """
+    if horizon <= 0:
+        return 0.0
     tiny = np.array([0.0, min(horizon, 1e-3)])
-    _integrate(part, tiny, part.state0, run)
+    run(tiny)
     start = time.perf_counter()
-    _integrate(part, tiny, part.state0, run)
+    run(tiny)
     overhead = time.perf_counter() - start
     span = min(horizon, 1.0)
     while True:
         start = time.perf_counter()
-        _integrate(part, np.array([0.0, span]), part.state0, run)
+        run(np.array([0.0, span]))
         seconds = time.perf_counter() - start
         if seconds >= PROBE_SECONDS or span >= horizon:
             return max(seconds - overhead, 0.0) / span
         span = min(horizon, 8.0 * span)
+
+
+def announce_fallbacks(runs: dict[str, Callable[[np.ndarray], Any]], horizon: float,
+                       note: Callable[[str], None] | None) -> None:
+    """Tell ``note`` how long each of a split's own numerical integrations (``what -> run(times)``) will take
+    to reach ``horizon``, when more than :data:`ANNOUNCE_SECONDS` (from :func:`probe_rate`); nothing without
+    ``note``."""
+    if note is None:
+        return
+    for what, run in runs.items():
+        expected = probe_rate(run, horizon) * horizon
+        if expected > ANNOUNCE_SECONDS:
+            note(f"{what}: numerical fallback to t = {horizon:g}, expected about {expected:.2g} s")
+
+
+def _rate(part: Part, run: dict, horizon: float) -> float:
+    """Seconds per unit time of one run of ``part``'s reference (:func:`probe_rate`)."""
+    return probe_rate(lambda times: _integrate(part, times, part.state0, run), horizon)
 
 
 def _segmented(part: Part, t: np.ndarray, runs: tuple[dict, ...], edges: np.ndarray,
@@ -249,8 +271,8 @@ def reference(part: Part, t: np.ndarray, *, note: Callable[[str], None] | None =
     start = time.perf_counter()
     fine, coarse, label = _runs(part.kind)
     horizon = float(t[-1])
-    fine_rate = _rate(part, fine, horizon) if horizon > 0 else 0.0
-    rate = fine_rate + (_rate(part, coarse, horizon) if horizon > 0 else 0.0)
+    fine_rate = _rate(part, fine, horizon)
+    rate = fine_rate + _rate(part, coarse, horizon)
     tc, cut = _checked_times(t, rate, budget)
     expected = rate * float(tc[-1])
     segments = 1

@@ -42,7 +42,7 @@ from thetasol.scenes.format import Scene
 from thetasol.scenes.gyrostat_scene import GyrostatScene, run_gyrostat_scene
 from thetasol.scenes.orbit_report import run_orbit
 from thetasol.scenes.pipeline import ConfigurationSolution, rotation_kind
-from thetasol.scenes.references import Part, horizon_tolerance, reference
+from thetasol.scenes.references import Part, announce_fallbacks, horizon_tolerance, reference
 
 __all__ = ["Check", "run"]
 
@@ -312,6 +312,15 @@ def _pays_off(scene: Scene, sol: ConfigurationSolution, traj: Trajectories, ref_
     say("  " + _ACCURACY)
 
 
+def _fallbacks(sol: ConfigurationSolution) -> dict:
+    """The split's own numerical integrations (rotations and mass centre where no closed form applies), by name."""
+    runs = {f"rotation of {n}": sol.rotations[n] for n, r in sol.diagnostics["rotations"].items()
+            if not r["closed_form"]}
+    if sol.diagnostics.get("mass_center_reason"):
+        runs["mass centre"] = sol.mass_center
+    return runs
+
+
 def _stepper(progress: Callable[[str, int, int], None] | None,
              parts: list[str]) -> tuple[Callable[[], None], Callable[[str], None]]:
     """``step()`` announces the next of ``parts`` as ``progress(label, k, n)`` before part ``k`` of ``n``
@@ -363,9 +372,9 @@ def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = N
     """
     if isinstance(scene, GyrostatScene):
         multibody = check and scene.solver.get("check_multibody", True)
-        step, _ = _stepper(progress, ["split solution"] + (["unsplit multibody reference"] if multibody else []))
+        step, note = _stepper(progress, ["split solution"] + (["unsplit multibody reference"] if multibody else []))
         step()
-        traj, text, raw = run_gyrostat_scene(scene, check=check, out=out)
+        traj, text, raw = run_gyrostat_scene(scene, check=check, out=out, note=note if progress is not None else None)
         step()
         if multibody:
             step()
@@ -382,8 +391,10 @@ def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = N
     start = time.perf_counter()
     sol = scene.solution()
     setup_seconds = time.perf_counter() - start
+    announce_fallbacks(_fallbacks(sol), float(scene.t[-1]), note if progress is not None else None)
+    start = time.perf_counter()
     traj = sol(scene.t)
-    split_seconds = time.perf_counter() - start
+    split_seconds = setup_seconds + time.perf_counter() - start
     _describe_models(sol, say)
 
     checks = []
