@@ -105,3 +105,18 @@ def test_a_wrong_closed_form_is_blamed(monkeypatch):
     _, report, checks = run(sc, check=False)
     assert all(c.status == "FAILED" for c in checks)
     assert "the checked part is off by at least" in report and "verdict: FAILED" in report
+
+
+def test_unsplit_multibody_check_within_the_budget(tmp_path, monkeypatch):
+    """The unsplit comparison to a far check_t_end is not run (and the report says why); over a budget it
+    checks the output times the budget reaches and says so."""
+    import thetasol.scenes.report as report_mod
+
+    far = tmp_path / "far.toml"
+    far.write_text(PIVOTED.read_text().replace("t_end = 20.0", "t_end = 1e12").replace("check_t_end = 10.0", ""))
+    _, report, checks = run(load_scene(far), references=False)
+    assert checks == [] and "unsplit multibody system: not run (to check_t_end = 1e+12 it would take" in report
+    monkeypatch.setattr(report_mod, "BUDGET_SECONDS", 0.2)
+    _, report, checks = run(load_scene(PIVOTED), references=False)
+    assert len(checks) == 1 and "checked on t <=" in checks[0].note and checks[0].ok
+    assert "t <= 10)" not in report

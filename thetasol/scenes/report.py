@@ -42,7 +42,15 @@ from thetasol.scenes.format import Scene
 from thetasol.scenes.gyrostat_scene import GyrostatScene, run_gyrostat_scene
 from thetasol.scenes.orbit_report import run_orbit
 from thetasol.scenes.pipeline import ConfigurationSolution, rotation_kind
-from thetasol.scenes.references import Part, announce_fallbacks, horizon_tolerance, reference
+from thetasol.scenes.references import (
+    ANNOUNCE_SECONDS,
+    BUDGET_SECONDS,
+    Part,
+    announce_fallbacks,
+    horizon_tolerance,
+    probe_rate,
+    reference,
+)
 
 __all__ = ["Check", "run"]
 
@@ -213,20 +221,41 @@ def _drift(scene: Scene, traj: Trajectories, say: ReportText) -> None:
             f"spectral curve (4.12) {cd:.1e}")
 
 
-def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say: ReportText) -> tuple[Check, float, float]:
-    """The split against the unsplit multibody integration up to the scene's ``check_t_end``.
+def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say: ReportText,
+                     note: Callable[[str], None] | None = None) -> tuple[Check, float, float] | None:
+    """The split against the unsplit multibody integration up to the scene's ``check_t_end``, or up to the
+    output time it reaches in :data:`~thetasol.scenes.references.BUDGET_SECONDS` (from a timed probe;
+    ``None`` when that is not even the second output time, and the report says why).
 
     Also returns the multibody integration's seconds and the end time it reached.
     """
     s, t = scene.solver, scene.t
     t_end = min(float(s.get("check_t_end", t[-1])), float(t[-1]))
+    pivot = scene.fixed_point
+
+    def unsplit(times):
+        return integrate_multibody(scene.config, scene.a, scene.b, scene.q0, scene.v0, scene.Q0, scene.omega0, times,
+                                   rtol=s.get("check_rtol", 1e-12),
+                                   constraint=scene.constraint if pivot is None else pivot)
+
+    rate = probe_rate(unsplit, t_end)
+    cut = ""
+    if rate * t_end > BUDGET_SECONDS:
+        reach = t[t <= BUDGET_SECONDS / rate]
+        cut = (f"checked on t <= {reach[-1]:.4g} only: to check_t_end = {t_end:g} it would take about "
+               f"{rate * t_end:.2g} s (set check_t_end or --no-check)")
+        if reach.size < 2:
+            say()
+            say(f"the split against the unsplit multibody system: not run ({cut.split(': ', 1)[1]})")
+            return None
+        t_end = float(reach[-1])
+    if note is not None and rate * t_end > ANNOUNCE_SECONDS:
+        note(f"to t = {t_end:g}, expected about {rate * t_end:.2g} s")
     sel = t <= t_end
     say()
-    pivot = scene.fixed_point
     say(f"the split against the unsplit multibody system (maximal coordinates, KKT, t <= {t_end:g}"
         + (", the pivot a spherical joint to the ground):" if pivot is not None else "):"))
-    mb = integrate_multibody(scene.config, scene.a, scene.b, scene.q0, scene.v0, scene.Q0, scene.omega0, t[sel],
-                             rtol=s.get("check_rtol", 1e-12), constraint=scene.constraint if pivot is None else pivot)
+    mb = unsplit(t[sel])
     sub = Trajectories(t=t[sel], names=traj.names, position=traj.position[:, sel],
                        velocity=traj.velocity[:, sel], attitude=traj.attitude[:, sel], omega=traj.omega[:, sel],
                        mass_center=traj.mass_center[sel], mass_center_velocity=traj.mass_center_velocity[sel])
@@ -241,7 +270,7 @@ def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say
         + (f", max sphere gap ||q| - R| {mb.info['sphere_residual']:.1e}" if scene.constraint is not None else "")
         + (f", max pivot gap {mb.info['pivot_residual']:.1e}" if pivot is not None else ""))
     check = Check("split vs unsplit multibody: positions and attitudes", max(dv["position"], dv["attitude"]), tol,
-                  f"split {split_seconds:.2f} s vs multibody {mb.info['seconds']:.2f} s")
+                  f"split {split_seconds:.2f} s vs multibody {mb.info['seconds']:.2f} s", note=cut)
     say(check.line())
     return check, mb.info["seconds"], t_end
 
@@ -413,8 +442,10 @@ def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = N
     mb_cost = None
     if multibody:
         step()
-        mb_check, *mb_cost = _multibody_check(scene, traj, split_seconds, say)
-        checks.append(mb_check)
+        result = _multibody_check(scene, traj, split_seconds, say, note)
+        if result is not None:
+            mb_check, *mb_cost = result
+            checks.append(mb_check)
     ref_seconds = {c.body: c.reference_seconds for c in checks if c.body and c.reference_seconds is not None}
     _pays_off(scene, sol, traj, ref_seconds, mb_cost, say)
     step()
