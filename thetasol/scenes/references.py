@@ -42,8 +42,8 @@ __all__ = ["Part", "Reference", "reference", "horizon_tolerance", "probe_rate", 
 
 #: Expected seconds of a reference above which the command line is told how long it will take.
 ANNOUNCE_SECONDS = 2.0
-#: Seconds one reference may take: a longer one checks the horizon it reaches in that time (a user who
-#: wants the whole horizon checked sets ``check_t_end``; a reference of hours tells nothing sooner).
+#: Seconds one reference may take: a longer one checks the horizon it reaches in that time (a reference of
+#: hours would hold back the report of a solution computed in milliseconds).
 BUDGET_SECONDS = 30.0
 #: Wall time of the timed probe that measures a run's cost per unit time (long enough to be timed
 #: to a few per cent, short beside the run it predicts).
@@ -251,7 +251,7 @@ def _checked_times(t: np.ndarray, rate: float, budget: float) -> tuple[np.ndarra
     if tc.size < 11:
         tc = np.linspace(0.0, reach, 101)
     return tc, (f"checked on t <= {tc[-1]:.4g} only: the reference to t = {horizon:g} would take about "
-                f"{rate * horizon:.2g} s (set check_t_end or --no-check)")
+                f"{rate * horizon:.2g} s (a shorter --t-end checks it all; --no-check skips the references)")
 
 
 def reference(part: Part, t: np.ndarray, *, note: Callable[[str], None] | None = None,
