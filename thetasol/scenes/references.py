@@ -120,7 +120,10 @@ class Reference:
 
 
 def _heyoka_installed() -> bool:
-    return importlib.util.find_spec("heyoka") is not None
+    """heyoka can be imported, and ``np.longdouble`` is wider than float64 here (80-bit on x86; on platforms
+    where it is float64 the extended-precision reference would not be one)."""
+    extended = np.finfo(np.longdouble).eps < np.finfo(float).eps
+    return extended and importlib.util.find_spec("heyoka") is not None
 
 
 def _runs(kind: str) -> tuple[dict, dict, str]:
@@ -278,6 +281,7 @@ def reference(part: Part, t: np.ndarray, *, note: Callable[[str], None] | None =
     segments = 1
     if expected > ANNOUNCE_SECONDS and note is not None:
         # a rotation on an orbit depends on t itself (the orbit's phase): it cannot restart at a segment's start
+        # segments of about ANNOUNCE_SECONDS each, at most 50 progress lines
         if part.kind != "orbiting_rotation":
             segments = int(min(50, tc.size, np.ceil(expected / ANNOUNCE_SECONDS)))
         note(f"{part.what}: {label.split(';')[0]} to t = {tc[-1]:g}, expected about {expected:.2g} s")
