@@ -136,7 +136,7 @@ def test_local_samples_fall_back_to_mpmath_only_where_double_double_loses_digits
     x, y = sp.symbols("x y")
     e2 = sp.Rational(1, 10**26)
     poly = CurvePoly(sp.expand(y**2 - (x - 1) ** 2 - e2), x, y)
-    curve = SimpleNamespace(_poly=poly, _exact=ExactEvaluator(poly))
+    curve = SimpleNamespace(engine=SimpleNamespace(poly=poly, exact=ExactEvaluator(poly)))
     xs = 1 + 3e-13 * np.exp(2j * np.pi * np.arange(8) / 8)
     with mpmath.workdps(50):
         r = [complex(mpmath.sqrt((mpmath.mpc(complex(v)) - 1) ** 2 + mpmath.mpf(e2.p) / e2.q)) for v in xs]
@@ -155,7 +155,7 @@ def test_local_samples_fall_back_to_mpmath_only_where_double_double_loses_digits
     with mpmath.workdps(50):
         r2 = [complex(mpmath.sqrt((mpmath.mpc(complex(v)) - 1) ** 2 + mpmath.mpf(e2.p) / e2.q)) for v in xs2]
     start2 = np.array([r2, [-v for v in r2]])
-    no_mp = SimpleNamespace(_poly=poly, _exact=None)  # any use of the mpmath evaluator fails
+    no_mp = SimpleNamespace(engine=SimpleNamespace(poly=poly, exact=None))  # any use of the mpmath evaluator fails
     a, _ = _accurate_samples(no_mp, xs2, start2.copy(), None)
     b, _ = _accurate_samples(no_mp, xs2, start2.copy(), np.full(8, 1e-3))
     assert np.array_equal(a, b)
