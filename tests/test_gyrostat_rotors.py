@@ -21,12 +21,14 @@ Tolerance: ``max(1e-9, 100 x conditioning)``, the conditioning being the spread 
 itself when ``omega0`` moves by 1e-15 (relative): measured for each quantity (omega relative to
 ``max |omega|``, Q and the rotor angles absolute).
 """
+import functools
+
 import mpmath as mp
 import numpy as np
 import pytest
 from conftest import rand_Q
 
-from thetasol import inertia, solve_gyrostat
+from thetasol import ClosedFormUnavailable, inertia, solve_gyrostat, solve_many
 
 _TAYLOR = {}
 
@@ -341,8 +343,17 @@ def test_rotors_on_the_separatrix():
 def test_euler_top_separatrix_refuses_rotor_angles():
     """Rotors whose momenta cancel on an Euler top's separatrix (I = (3, 4, 6), m = (6, 0, 6))."""
     r = [dict(axis=[0.0, 0.0, 1.0], A=0.1, B=0.0, p=0.5), dict(axis=[0.0, 0.0, -1.0], A=0.1, B=0.0, p=0.5)]
-    with pytest.raises(NotImplementedError, match="Euler top"):
+    with pytest.raises(ClosedFormUnavailable, match="Euler top"):
         solve_gyrostat(inertia([3.5, 2.5, 0.5]), None, np.eye(3), [2.0, 0.0, 1.0], rotors=r)
+
+
+def test_refusals_are_returned_by_solve_many():
+    """The refusal is a ClosedFormUnavailable, so solve_many(errors="return") returns it in place
+    (a bare NotImplementedError was a fault raised in every mode)."""
+    r = [dict(axis=[0.0, 0.0, 1.0], A=0.1, B=0.0, p=0.5), dict(axis=[0.0, 0.0, -1.0], A=0.1, B=0.0, p=0.5)]
+    separatrix = (inertia([3.5, 2.5, 0.5]), None, np.eye(3), [2.0, 0.0, 1.0])
+    out = solve_many([separatrix], solver=functools.partial(solve_gyrostat, rotors=r), workers=1, errors="return")
+    assert isinstance(out[0], ClosedFormUnavailable) and "Euler top" in str(out[0])
 
 
 _R = {"axis": [0.0, 0.0, 1.0], "A": 0.1, "B": 0.02, "p": 0.5}

@@ -51,3 +51,12 @@ def test_taylor_table_against_mpmath():
         der = mp.re(2 * mp.fsum(1j * k * cm[k] * mp.expj(k * xm) for k in range(1, 300)))
         assert abs(gg - float(val)) <= 4e-14 * np.abs(c).sum()
         assert abs(dd - float(der)) <= 1e-14 * (n * np.abs(c)).sum()
+
+
+def test_adaptive_series_refuses_with_its_own_exception():
+    """A series whose tail stays large raises core's SeriesNotConverged (the solution layer turns it
+    into ClosedFormUnavailable), not a bare NotImplementedError."""
+    from thetasol.core.periodic import SeriesNotConverged, adaptive_series
+
+    with pytest.raises(SeriesNotConverged, match="tail 1.0e"):
+        adaptive_series(lambda n: np.ones(n), 128, "no decay (tail {tail:.1e})")

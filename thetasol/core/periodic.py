@@ -216,7 +216,8 @@ def adaptive_series(coeffs: Callable[[int], np.ndarray], nmax: int, failure: str
     ``nmax`` samples.
 
     Returns the coefficients and the tail relative to the largest (0 for all-zero coefficients).
-    A tail above 1e-9 raises :class:`NotImplementedError` with ``failure`` followed by the tail.
+    A tail above 1e-9 raises :class:`SeriesNotConverged` with ``failure`` followed by the tail (the
+    solution layer turns it into :class:`~thetasol.protocol.ClosedFormUnavailable`).
     """
     n, prev = 64, np.inf
     while True:
@@ -230,5 +231,5 @@ def adaptive_series(coeffs: Callable[[int], np.ndarray], nmax: int, failure: str
         prev = tail
         n *= 2
     if tail / scale > 1e-9:
-        raise NotImplementedError(failure.format(tail=tail / scale))
+        raise SeriesNotConverged(failure.format(tail=tail / scale))
     return c, tail / scale

@@ -87,7 +87,7 @@ and every pencil of planes through a line meeting the curve twice degenerates): 
 grows like ``eps / torsion ratio`` and the estimate reports it (checked against quadruple heyoka in
 ``test_nearly_planar_orbits_report_their_loss``).  Orbits within 1e-307 (but not exactly
 on) a separatrix, and motions within 1e-60 (relative) of a relative equilibrium, raise
-:class:`NotImplementedError`.  There is no ``dps=`` path.
+:class:`~thetasol.protocol.ClosedFormUnavailable`.  There is no ``dps=`` path.
 """
 from __future__ import annotations
 

@@ -12,6 +12,8 @@ from fractions import Fraction
 
 import numpy as np
 
+from thetasol.protocol import ClosedFormUnavailable
+
 __all__ = ["orbit_algebra", "mpq"]
 
 
@@ -281,7 +283,7 @@ def _cubic(mp, g2, g3, disc) -> _Cubic:
         r = sorted(_cubic_roots_mp(mp, g2, g3), reverse=True)
     elif disc == 0:
         if g2 == 0:
-            raise NotImplementedError("solve_gyrostat: a triple root of the Weierstrass cubic "
+            raise ClosedFormUnavailable("solve_gyrostat: a triple root of the Weierstrass cubic "
                                       "(degenerate orbit); not supported")
         ed = -3 * g3 / (2 * g2)  # 4x^3 - g2 x - g3 = 4 (x - ed)^2 (x + 2 ed)
         r = [ed, ed, -2 * ed] if ed > 0 else [-2 * ed, ed, ed]
@@ -310,7 +312,7 @@ def _check_resolution(mp, cub: _Cubic, dps, exact):
     if not exact and small > mp.mpf(2) ** -1020 and mp.mpf(10) ** -dps > mp.mpf(10) ** -20 * small ** 2:
         raise _NeedDigits
     if mc != 0 and (mc <= mp.mpf(2) ** -1020 or not mp.isfinite(cub.T)):
-        raise NotImplementedError("solve_gyrostat: the orbit is within 1e-307 (mc = "
+        raise ClosedFormUnavailable("solve_gyrostat: the orbit is within 1e-307 (mc = "
                                   f"{mp.nstr(mc, 3)}) of a separatrix of the gyrostat, "
                                   "closer than float64 resolves; not supported")
 

@@ -27,6 +27,7 @@ import numpy as np
 from thetasol.core import validate as V
 from thetasol.core.attitude import angle_mod_2pi as _angle_mod_2pi
 from thetasol.core.periodic import adaptive_series
+from thetasol.protocol import ClosedFormUnavailable
 
 __all__ = ["Rotor", "parse_rotors", "RotorAngles", "AXIS_TOL", "N_RTOL"]
 
@@ -175,7 +176,7 @@ class RotorAngles:
     def _separatrix(self):
         impl = self.impl
         if not hasattr(impl, "separatrix_argument"):
-            raise NotImplementedError("solve_gyrostat: rotor angles on this separatrix (the Euler top's) "
+            raise ClosedFormUnavailable("solve_gyrostat: rotor angles on this separatrix (the Euler top's) "
                                       "are not supported; use thetasol.integrate_multibody")
         C = np.polynomial.chebyshev
         c, self.tail = _chebyshev_series(lambda s: impl.omega_at_tanh(s) @ self.L.T)

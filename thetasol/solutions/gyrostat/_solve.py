@@ -16,8 +16,10 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.attitude import norm3 as _norm, principal_frame as _principal_frame
+from thetasol.core.periodic import SeriesNotConverged
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.equations import second_moments
+from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions.gyrostat._elliptic import elliptic_motion, elliptic_orbit, reanchor
 from thetasol.solutions.gyrostat._forms import Axisymmetric, BodyMap, Delegate, Scaled, Sphere, Steady
 from thetasol.solutions.gyrostat._rotors import RotorAngles, parse_rotors
@@ -167,7 +169,7 @@ def _elliptic_form(d: _Data) -> _Form:
         # the orbit is a loop of relative size < 1e-60 about a relative equilibrium (or the
         # carrier is at rest to 1e-60): its polynomial coefficients, powers of that size,
         # would underflow in float64
-        raise NotImplementedError("solve_gyrostat: the motion is within 1e-60 (relative) of a "
+        raise ClosedFormUnavailable("solve_gyrostat: the motion is within 1e-60 (relative) of a "
                                   "relative equilibrium; not supported")
     # the motion scales with |h|: m(t) = G m1(G t) for the data divided by G (so that tiny or
     # huge momenta neither underflow nor overflow in the orbit's polynomial coefficients)
@@ -197,6 +199,16 @@ def _elliptic_form(d: _Data) -> _Form:
                       "diagnostics['error_estimate']", RuntimeWarning, stacklevel=3)
     method = "gyrostat/separatrix" if impl.separatrix else "gyrostat/elliptic"
     return _Form(method, Scaled(impl, Gs), period=impl.T / Gs, rate=impl.nu * Gs, err=err)
+
+
+def _closed_form(d: _Data, rs) -> tuple[_Form, RotorAngles | None]:
+    """The carrier's form and the rotors' angles; a series that does not converge (an orbit too
+    close to a separatrix) puts the data outside the closed form."""
+    try:
+        form = _degenerate_form(d) or _elliptic_form(d)
+        return form, (RotorAngles(rs, form.impl, form.period, d.omega0) if rs else None)
+    except SeriesNotConverged as exc:
+        raise ClosedFormUnavailable(f"{exc}; use thetasol.integrators.gyrostat.integrate_gyrostat") from exc
 
 
 # -- entry point -------------------------------------------------------------------------------
@@ -255,10 +267,11 @@ def solve_gyrostat(I: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0: Arr
     ValueError
         Bad data (non-finite, wrong shapes, unphysical ``I``, ``Q0`` not a rotation, a rotor
         with a non-unit axis, ``A <= 0``, ``B < 0``, or ``N`` not ``sum p_k l_k``).
-    NotImplementedError
+    ClosedFormUnavailable
         An orbit within 1e-307 of a separatrix but not on it (the elliptic parameter is not
-        representable), a motion within 1e-60 of a relative equilibrium, or rotor angles on the
-        Euler top's separatrix (rotors whose momenta cancel).
+        representable), a motion within 1e-60 of a relative equilibrium, rotor angles on the
+        Euler top's separatrix (rotors whose momenta cancel), or a Fourier series of the precession
+        or of the rotor angles that does not converge.
 
     Warns
     -----
@@ -272,12 +285,10 @@ def solve_gyrostat(I: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0: Arr
         raise ValueError("N is required without rotors")
     d = _data(I, N, Q0, omega0)
     inv = _first_integrals(d)
-    form = _degenerate_form(d) or _elliptic_form(d)
+    form, angles = _closed_form(d, rs)
     diag = {"period": float(form.period), "precession_rate": float(form.rate),
             "error_estimate": float(form.err)}
-    angles = None
     if rs:
-        angles = RotorAngles(rs, form.impl, form.period, d.omega0)
         inv["rotor_momenta"] = np.array([r.p for r in rs])
         diag.update(rotor_mean_rates=angles.drift.copy(), rotor_series_terms=int(angles.nterms),
                     rotor_series_tail=float(angles.tail))
