@@ -21,8 +21,27 @@ SYM_RTOL = 1e-12
 ORTHO_TOL = 1e-10
 
 
+def not_numbers(x: object) -> bool:
+    """Whether ``x`` is text (a string or bytes, or an array of them) or an array of objects that are
+    not numbers: numpy would turn ``"10"`` into ``10.0``, and a number typed as text is a mistake to
+    name, not to repair."""
+    if isinstance(x, str | bytes):
+        return True
+    if isinstance(x, int | float | complex):
+        return False
+    try:
+        kind = np.asarray(x).dtype.kind
+    except (TypeError, ValueError):            # ragged nests: the conversion's own error follows
+        return False
+    if kind == "O":
+        return any(isinstance(v, str | bytes) for v in np.asarray(x, dtype=object).ravel())
+    return kind in "USV"
+
+
 def finite_array(x: ArrayLike, name: str, shape: Sequence[int] | None = None, dtype: DTypeLike = float) -> np.ndarray:
-    """Convert to an array, checking dtype, shape and finiteness."""
+    """Convert to an array, checking that it holds numbers (not text), its shape and finiteness."""
+    if not_numbers(x):
+        raise ValueError(f"{name} must be numeric, got {x!r} (text is not read as a number)")
     try:
         arr = np.asarray(x, dtype=dtype)
     except (TypeError, ValueError) as exc:
