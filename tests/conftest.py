@@ -27,3 +27,8 @@ def inertia(J):
 
     J = np.diag(J) if np.ndim(J) == 1 else np.asarray(J)
     return np.trace(J) * np.eye(3) - J
+
+
+def label(sol):
+    """``method`` and, when there is one, ``case``: ``"elliptic"``, ``"elliptic:separatrix"``."""
+    return sol.method + (f":{sol.case}" if sol.case else "")

@@ -67,7 +67,7 @@ def test_example_scene_split_against_unsplit():
     assert sc.constraint == Sphere(2.0) and len(sc.config) == 4 and sc.config.depth == 2
     traj, report, checks = run(sc, check=False)  # the multibody check is repeated below, per quantity
     assert all(c.ok for c in checks), report
-    assert "Neumann's problem on |q| = 2: closed form neumann/genus-2" in report
+    assert "Neumann's problem on |q| = 2: closed form fourier/genus-2" in report
     assert all("closed form" in m for m in traj.info["models"]["rotations"].values())
     # the constraint along the split: measured 5.6e-16 relative
     assert np.max(np.abs(np.linalg.norm(traj.mass_center, axis=1) - 2.0)) < 4e-15
@@ -86,7 +86,7 @@ def test_split_matches_unsplit_random_tree_over_many_periods():
     cfg, a, b, s = make_system(3)
     t = np.linspace(0.0, 40.0, 161)
     sol = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-13, constraint=Sphere(1.5), **s)
-    assert isinstance(sol.mass_center, NeumannSolution) and sol.method.startswith("split: neumann/")
+    assert isinstance(sol.mass_center, NeumannSolution) and sol.diagnostics["parts"].startswith("neumann=")
     split = sol(t)
     q = split.mass_center
     crossings = [int(np.sum(np.diff(np.sign(q[:, i])) != 0)) for i in range(3)]

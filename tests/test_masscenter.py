@@ -8,6 +8,7 @@ import dataclasses
 import mpmath
 import numpy as np
 import pytest
+from conftest import label
 from hypothesis import given, settings, strategies as st
 
 from thetasol.core.so3 import rodrigues
@@ -146,8 +147,8 @@ def test_solution_protocol():
     a = matrix_with_eigenvalues([1.3, -0.7, 0.0], [0.2, 0.5, -0.9])
     mc = MassCenterMotion(a, rng.normal(size=3), rng.normal(size=3), rng.normal(size=3))
     assert isinstance(mc, Solution)
-    assert mc.method == "mass-center/trigonometric+hyperbolic+polynomial"
-    assert MassCenterMotion(np.eye(3), np.zeros(3), np.ones(3), np.zeros(3)).method == "mass-center/trigonometric"
+    assert label(mc) == "elementary:trigonometric+hyperbolic+polynomial"
+    assert label(MassCenterMotion(np.eye(3), np.zeros(3), np.ones(3), np.zeros(3))) == "elementary:trigonometric"
     with pytest.raises(dataclasses.FrozenInstanceError):
         mc.a = np.eye(3)
     d = mc.diagnostics

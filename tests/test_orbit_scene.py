@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import label
 
 from thetasol.integrators.multibody_gravity import (
     PointMassGravity,
@@ -37,8 +38,8 @@ def test_example_models_and_stability_table():
     sol = scene.solution()
     closed = {n: r["closed_form"] for n, r in sol.diagnostics["rotations"].items()}
     assert closed == {"core": False, "dock": True, "truss": False, "panel": True}
-    assert sol.rotations["dock"].method == "relative-equilibrium"
-    assert sol.rotations["panel"].method == "pitch/libration"
+    assert label(sol.rotations["dock"]) == "elementary:relative-equilibrium"
+    assert label(sol.rotations["panel"]) == "elliptic:pitch/libration"
     regions = {n: b.stability.region for n, b in sol.stability.items()}
     assert regions == {"core": "lagrange", "dock": "lagrange", "truss": "lagrange", "panel": "lagrange"}
     assert sol.stability["dock"].angle < 1e-12

@@ -9,6 +9,7 @@ import tomllib
 
 import numpy as np
 import pytest
+from conftest import label
 from test_scene import SMALL
 
 from thetasol.integrators.multibody import initial_state
@@ -55,11 +56,12 @@ def test_protocol_and_parts(closed, scene):
         closed.method = "x"
     assert isinstance(closed.mass_center, MassCenterMotion)
     assert list(closed.rotations) == scene.config.order == list(closed.names)
-    assert closed.method == ("split: mass-center/trigonometric+hyperbolic; root=theta/genus-4, "
-                             "arm=pendulum/libration, tip=theta/genus-4")
+    assert (closed.model, closed.method) == ("configuration", "split")
+    assert closed.diagnostics["parts"] == ("mass-center=elementary (trigonometric+hyperbolic); root=theta/genus-4, "
+                                           "arm=elliptic (pendulum/libration), tip=theta/genus-4")
     d = closed.diagnostics
     assert d["rotation_kind"] == "theta"
-    assert d["models"]["rotations"]["arm"] == "theta: closed form pendulum/libration"
+    assert d["models"]["rotations"]["arm"] == "theta: closed form elliptic (pendulum/libration)"
     assert all(r["closed_form"] and r["reason"] == "" and r["setup_seconds"] > 0 for r in d["rotations"].values())
     assert d["setup_seconds"] >= sum(r["setup_seconds"] for r in d["rotations"].values())
 
@@ -115,7 +117,7 @@ def test_numerical_rotations_on_demand(numerical, scene):
     """Bodies without a closed form integrate at the requested times, with the integrator's result."""
     t = np.array([7.0, -2.0, 0.0, 3.5])
     for n, rot in numerical.rotations.items():
-        assert isinstance(rot, NumericalRotation) and rot.method == "numerical/DOP853"
+        assert isinstance(rot, NumericalRotation) and label(rot) == "numerical/DOP853"
         e = scene.config.effective_body(n)
         w1, Q1 = rot(t)
         w2, Q2 = integrate_rotation(inertia(e.J), scene.a, scene.Q0[n], scene.omega0[n], rtol=1e-13)(t)
@@ -126,7 +128,8 @@ def test_numerical_rotations_on_demand(numerical, scene):
         assert np.max(np.abs(inv["energy"] - rot.invariants["energy"])) < 3e-13 * abs(rot.invariants["energy"])
     d = numerical.diagnostics["rotations"]
     assert all(not r["closed_form"] and r["reason"] == "rotation='numerical'" for r in d.values())
-    assert numerical.method.startswith("split: mass-center/trigonometric+hyperbolic; root=numerical/DOP853")
+    assert numerical.diagnostics["parts"].startswith("mass-center=elementary (trigonometric+hyperbolic); "
+                                                     "root=numerical/DOP853")
 
 
 def test_bad_arguments(scene):

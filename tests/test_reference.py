@@ -45,14 +45,15 @@ def test_catalogue_covers_every_model():
 def test_each_model_uses_its_closed_form_branch():
     """The cases exercise the branches they name (theta genus 4, nodal, symmetric, pendulum, ...)."""
     methods = {c.name: c.method for c in reference.cases()}
+    cases = {c.name: c.solution.case for c in reference.cases()}
     assert methods["potential_generic"] == "theta/genus-4"
-    assert methods["potential_rank_one"].startswith("theta/nodal")
-    assert methods["potential_symmetric_body"].startswith("theta/symmetric")
-    assert methods["potential_pendulum"].startswith("pendulum/")
-    assert methods["free_top_near_separatrix"] == "euler-top/elliptic"
-    assert methods["simo_wong_top"] == methods["lagrange_top"] == "lagrange/elliptic"
-    assert methods["neumann"] == "neumann/genus-2"
-    assert methods["gravity_gradient_pitch"] == "pitch/libration"
+    assert methods["potential_rank_one"] == "theta/genus-3" and cases["potential_rank_one"] == "nodal"
+    assert methods["potential_symmetric_body"].startswith("theta/") and cases["potential_symmetric_body"] == "symmetric"
+    assert methods["potential_pendulum"] == "elliptic" and cases["potential_pendulum"].startswith("pendulum/")
+    assert methods["free_top_near_separatrix"] == "elliptic"
+    assert methods["simo_wong_top"] == methods["lagrange_top"] == "elliptic"
+    assert methods["neumann"] == "fourier/genus-2"
+    assert methods["gravity_gradient_pitch"] == "elliptic" and cases["gravity_gradient_pitch"] == "pitch/libration"
     assert reference.case("gyrostat_rotors").solution.rotors
 
 

@@ -97,7 +97,7 @@ def test_load_solve_and_initial_state(tmp_path):
     # the arm (a symmetric box at rest) turns as a pendulum; the tip is generic: genus 4, and so is the root,
     # whose principal axis z is an eigenvector of a
     assert models["rotations"]["root"].endswith("closed form theta/genus-4")
-    assert models["rotations"]["arm"].endswith("closed form pendulum/libration")
+    assert models["rotations"]["arm"].endswith("closed form elliptic (pendulum/libration)")
     assert models["rotations"]["tip"].endswith("closed form theta/genus-4")
 
 
@@ -119,7 +119,8 @@ def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
     calls = []
 
     class Fake:
-        method = "fake/elliptic"
+        model, method, case = "rotation", "elliptic", "fake"
+        diagnostics = {"error_estimate": 1e-15}
 
         def __init__(self, J, a, Q0, w0):
             self.args = (J, a, Q0, w0)
@@ -140,7 +141,7 @@ def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
     assert rotation_kind(sc.a) == "elliptic"
     traj, report, checks = run(sc, check=False)
     assert len(calls) == 3
-    assert all("closed form fake/elliptic" in m for m in traj.info["models"]["rotations"].values())
+    assert all("closed form elliptic (fake)" in m for m in traj.info["models"]["rotations"].values())
     assert sum("vs integrate_rotation" in c.what for c in checks) == 3 and all(c.ok for c in checks)
     # a generic a falls back to numerics and says why
     sc2 = load_scene(write(tmp_path, SMALL, "generic.toml"))

@@ -42,8 +42,14 @@ from thetasol.integrators.fixed_point import fixed_point_energy, integrate_fixed
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Pivot, pivot_mass_center
 from thetasol.mechanics.equations import inertia_from_moments, invariants as rotation_invariants
-from thetasol.protocol import ClosedFormUnavailable
-from thetasol.scenes.pipeline import ConfigurationSolution, closed_form_rotation, effective_rotations, rotation_kind
+from thetasol.protocol import ClosedFormUnavailable, describe, worst_error
+from thetasol.scenes.pipeline import (
+    ConfigurationSolution,
+    closed_form_rotation,
+    effective_rotations,
+    parts_text,
+    rotation_kind,
+)
 
 __all__ = ["PivotedBody", "pivoted_body", "main_rotation", "FixedPointSolution", "solve_fixed_point",
            "ZERO_RTOL"]
@@ -156,7 +162,7 @@ def main_rotation(pb: PivotedBody, a: np.ndarray, Q0: np.ndarray, omega0: np.nda
         why = why or ("no closed form is known for a body about a fixed point in a quadratic potential with a "
                       "linear part (a not isotropic, b + 2 a x_P != 0, mass centre off the pivot)")
     if sol is not None:
-        return sol, f"{head}: closed form {sol.method}", True, ""
+        return sol, f"{head}: closed form {describe(sol)}", True, ""
     sol = integrate_fixed_point(pb.I, pb.R, a, pb.b, Q0, omega0, rtol=rtol, method=method)
     return sol, f"{head}: numerical (integrate_fixed_point {method}, rtol={rtol:g})", False, why
 
@@ -253,7 +259,7 @@ def solve_fixed_point(config: Configuration, a: ArrayLike, b: ArrayLike, pivot: 
     diagnostics = {"models": models, "rotation_kind": kind, "rotations": rot_diag, "mass_center_reason": "",
                    "mass_center_setup_seconds": 0.0, "pivoted_body": pb,
                    "setup_seconds": sum(r["setup_seconds"] for r in rot_diag.values())}
-    method_text = "split about a fixed point: " + ", ".join(f"{n}={r.method}" for n, r in rots.items())
-    return FixedPointSolution(config=config, a=a, b=b, mass_center=pb, rotations=rots, method=method_text,
+    diagnostics.update(parts="about a fixed point: " + parts_text(None, rots), error_estimate=worst_error(rots.values()))
+    return FixedPointSolution(config=config, a=a, b=b, mass_center=pb, rotations=rots, method="split",
                               invariants=_invariants(config, pb, a, b, pivot, Qa, wa), diagnostics=diagnostics,
                               constraint=None, pivot=pivot)

@@ -44,9 +44,9 @@ from thetasol.mechanics.configuration import Joint
 from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.rotors import GyrostatConfiguration, MasslessCarrier, Rotor, axis_rotation, gyrostat_energy
 from thetasol.mechanics.trajectories import Trajectories
-from thetasol.protocol import Solution
+from thetasol.protocol import Solution, describe, worst_error
 from thetasol.scenes.checks import ReportText
-from thetasol.scenes.pipeline import closed_form_rotation, rotation_kind
+from thetasol.scenes.pipeline import closed_form_rotation, parts_text, rotation_kind
 from thetasol.scenes.references import announce_fallbacks
 from thetasol.scenes.values import number, numeric_array
 from thetasol.solutions.gyrostat import solve_gyrostat
@@ -95,17 +95,20 @@ class GyrostatSplit(Solution):
     a, b : ndarray
     mass_center : MassCenterMotion
     parts : dict carrier -> the rotation of its effective gyrostat
-    method : str
-        ``"split (Theorem 5): "`` and the method of every carrier.
+    model, method : str
+        ``"configuration"`` and ``"split"``.
     invariants : dict
         First integrals: ``rotor_momenta`` (carrier -> the conserved ``p_ka`` (8.25)), ``energies``
         (carrier -> (8.34) as a physical energy, :func:`~thetasol.mechanics.rotors.gyrostat_energy`) and
         ``mass_center`` (per unit mass).
     diagnostics : dict
-        ``models`` (carrier -> which method turns its effective gyrostat).
+        ``models`` (carrier -> which method turns its effective gyrostat), ``parts`` (Theorem 5's split
+        in one line) and ``error_estimate`` (the largest of the parts').
     rtol : float
         Tolerance of the numerical rotations.
     """
+
+    model = "configuration"
 
     config: GyrostatConfiguration
     a: np.ndarray
@@ -185,11 +188,11 @@ def _part(e, a, Q0, w0, p, rotation, rtol) -> _Part:
             sol = integrate_rotation(inertia(e.J), a, Q0, w0, rtol=rtol)
             return _Part("rigid", sol, f"rigid body: numerical (integrate_rotation, rtol={rtol:g}); no closed form: {why}",
                          axes, A, p)
-        return _Part("rigid", sol, f"rigid body: closed form {sol.method}", axes, A, p)
+        return _Part("rigid", sol, f"rigid body: closed form {describe(sol)}", axes, A, p)
     specs = e.rotor_specs(p)
     if rotation_kind(a) == "elliptic" and rotation != "numerical":
         sol = solve_gyrostat(e.I_gyro, None, Q0, w0, rotors=specs)
-        return _Part("closed", sol, f"gyrostat (8.39): closed form {sol.method}", axes, A, p, specs)
+        return _Part("closed", sol, f"gyrostat (8.39): closed form {describe(sol)}", axes, A, p, specs)
     sol = integrate_gyrostat(e.I_gyro, None, Q0, w0, rotors=specs, a=a, rtol=rtol)
     why = ("rotation='numerical'" if rotation == "numerical" else
            "the potential is not isotropic, and Section 8 gives a gyrostat's closed form (8.39) only for a = c 1")
@@ -222,9 +225,10 @@ def solve_gyrostat_configuration(config: GyrostatConfiguration, a: Any, b: Any, 
         parts[n] = _part(e, a, Q0n, w0n, momenta[n], rotation, rtol)
         models[n] = parts[n].model
         energies[n] = float(gyrostat_energy(e.J, e.J_gyro, a, Q0n, w0n))
-    method = "split (Theorem 5): " + ", ".join(f"{n}={m}" for n, m in models.items())
     inv = {"rotor_momenta": momenta, "energies": energies, "mass_center": mc.invariants}
-    return GyrostatSplit(config, a, b, mc, parts, method, inv, {"models": models}, rtol)
+    diag = {"models": models, "parts": "Theorem 5: " + parts_text(mc, {n: p.sol for n, p in parts.items()}),
+            "error_estimate": worst_error([mc, *(p.sol for p in parts.values())])}
+    return GyrostatSplit(config, a, b, mc, parts, "split", inv, diag, rtol)
 
 
 # -- scene files ---------------------------------------------------------------------------------------
@@ -236,6 +240,8 @@ _SOLVER = {"rtol", "rotation", "check_multibody", "check_rtol", "check_t_end"}
 @dataclass(frozen=True, eq=False)
 class GyrostatScene:
     """A scene with rotors: configuration, potential, initial state, output times, solver options."""
+
+    model = "configuration"
 
     config: GyrostatConfiguration
     a: np.ndarray

@@ -36,8 +36,8 @@ from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.gravity_gradient import GravityGradientStability, gravity_gradient_stability, orbit_frame
-from thetasol.protocol import ClosedFormUnavailable
-from thetasol.scenes.pipeline import ConfigurationSolution
+from thetasol.protocol import ClosedFormUnavailable, describe, worst_error
+from thetasol.scenes.pipeline import ConfigurationSolution, parts_text
 from thetasol.scenes.values import numeric_array
 from thetasol.solutions.kepler import KeplerOrbit
 from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation
@@ -250,7 +250,7 @@ def solve_orbiting_configuration(config: Configuration, orbit: KeplerOrbit, Q0: 
     for i, (n, e) in enumerate(config.effective_bodies().items()):
         start = time.perf_counter()
         sol, closed, why = _orbiting_rotation(e.J, orbit, Qa[i], wa[i], rotation, rtol, method)
-        model = (f"gravity gradient (7.11): closed form {sol.method}" if closed else
+        model = (f"gravity gradient (7.11): closed form {describe(sol)}" if closed else
                  f"gravity gradient (7.11): numerical (integrate_orbiting_rotation {method}, rtol={rtol:g})")
         sols[n] = sol
         rot_diag[n] = {"model": model, "closed_form": closed, "reason": why,
@@ -259,9 +259,9 @@ def solve_orbiting_configuration(config: Configuration, orbit: KeplerOrbit, Q0: 
                    "rotation_kind": "gravity gradient (7.11), time-dependent", "rotations": rot_diag,
                    "mass_center_reason": "", "mass_center_setup_seconds": 0.0,
                    "setup_seconds": sum(r["setup_seconds"] for r in rot_diag.values())}
-    method_text = "split (Theorem 4): kepler; " + ", ".join(f"{n}={r.method}" for n, r in sols.items())
+    diagnostics.update(parts="Theorem 4: " + parts_text(orbit, sols), error_estimate=worst_error([orbit, *sols.values()]))
     invariants = {"orbit": orbit.invariants, "rotations": {n: s.invariants for n, s in sols.items()}}
     return OrbitingConfigurationSolution(
         config=config, a=_tidal_matrix(orbit.mu, orbit.r0), b=np.zeros(3), mass_center=orbit, rotations=sols,
-        method=method_text, invariants=invariants, diagnostics=diagnostics, orbit=orbit,
+        method="split", invariants=invariants, diagnostics=diagnostics, orbit=orbit,
         stability=station_stability(config, orbit, dict(zip(config.order, Qa, strict=True))))

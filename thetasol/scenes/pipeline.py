@@ -41,7 +41,7 @@ from thetasol.mechanics.constraints import Sphere
 from thetasol.mechanics.equations import inertia, invariants as rotation_invariants
 from thetasol.mechanics.potential import potential_kind
 from thetasol.mechanics.trajectories import Trajectories
-from thetasol.protocol import ClosedFormUnavailable, Solution
+from thetasol.protocol import ClosedFormUnavailable, Solution, describe, worst_error
 from thetasol.solutions.mass_center import MassCenterMotion
 from thetasol.solutions.neumann import NeumannSolution, solve_neumann
 
@@ -93,8 +93,9 @@ class ConfigurationSolution(Solution):
     rotations : dict name -> Solution
         The rotation of every effective body (3.3), root first: a closed form of
         ``solve_rotation`` or a :class:`~thetasol.integrators.rotation.NumericalRotation`.
-    method : str
-        ``"split: "``, the mass centre's method, then ``name=method`` per rotation.
+    model, method : str
+        ``"configuration"`` and ``"split"``; ``diagnostics["parts"]`` says how each part is solved
+        (the mass centre's model and method, then ``name=method`` per rotation).
     invariants : dict
         First integrals: ``energy`` (the whole system's, ``M E_q + sum_B E_B``),
         ``mass_center`` (per unit mass, the ``invariants`` of :attr:`mass_center`) and ``rotations``
@@ -104,10 +105,13 @@ class ConfigurationSolution(Solution):
         rotation), ``rotation_kind``,
         ``rotations`` (name -> ``model``, ``closed_form``, ``reason``, ``setup_seconds``),
         ``mass_center_setup_seconds``, ``mass_center_reason`` (why the mass centre is numerical,
-        or ""), ``setup_seconds`` (all set-up).
+        or ""), ``setup_seconds`` (all set-up), ``parts`` and ``error_estimate`` (the largest of the
+        parts').
     constraint : Sphere or None
         The constraint on the system mass centre (Theorem 3), if any.
     """
+
+    model = "configuration"
 
     config: Configuration
     a: np.ndarray
@@ -166,7 +170,7 @@ class ConfigurationSolution(Solution):
     def __call__(self, t: ArrayLike) -> Trajectories:
         """:class:`Trajectories` of every body at the 1-d times ``t``.
 
-        ``info`` holds ``models``, ``rotation_kind``, ``method`` and the seconds per part
+        ``info`` holds ``models``, ``rotation_kind``, ``method``, ``parts`` and the seconds per part
         (``mass_center_seconds`` and ``rotations[name]["seconds"]``: set-up plus this
         evaluation; ``evaluation_seconds`` alone).
         """
@@ -179,7 +183,7 @@ class ConfigurationSolution(Solution):
         d = self.diagnostics
         rot_info = {n: {"closed_form": r["closed_form"], "reason": r["reason"],
                         "seconds": r["setup_seconds"] + seconds[n]} for n, r in d["rotations"].items()}
-        info = {"models": d["models"], "rotation_kind": d["rotation_kind"], "method": self.method,
+        info = {"models": d["models"], "rotation_kind": d["rotation_kind"], "method": self.method, "parts": d["parts"],
                 "rotations": rot_info, "evaluation_seconds": seconds,
                 "mass_center_seconds": d["mass_center_setup_seconds"] + seconds["mass_center"]}
         return Trajectories(
@@ -193,6 +197,13 @@ class ConfigurationSolution(Solution):
     def evaluate(self, t: ArrayLike) -> Trajectories:
         """Alias of ``sol(t)``."""
         return self(t)
+
+
+def parts_text(mass_center: Solution | None, rotations: Mapping[str, Solution]) -> str:
+    """How each part of a split is solved: the mass centre's model and method (when it is a solution of
+    its own), then ``name=method`` per rotation."""
+    head = f"{mass_center.model}={describe(mass_center)}; " if mass_center is not None else ""
+    return head + ", ".join(f"{n}={describe(r)}" for n, r in rotations.items())
 
 
 def _check_arguments(config: Configuration, rotation: str, check_central: bool, constraint: Any) -> None:
@@ -222,7 +233,7 @@ def effective_rotations(config: Configuration, a: np.ndarray, Qa: np.ndarray, wa
             closed_form_rotation(e.J, a, Qa[i], wa[i])
         closed = sol is not None
         if closed:
-            model = f"{kind}: closed form {sol.method}"
+            model = f"{kind}: closed form {describe(sol)}"
         else:
             sol = integrate_rotation(e.I, a, Qa[i], wa[i], rtol=rtol, method=method)
             model = f"{kind}: numerical fallback (integrate_rotation {method}, rtol={rtol:g})"
@@ -245,7 +256,7 @@ def _mass_center(a: np.ndarray, b: np.ndarray, q0: ArrayLike, v0: ArrayLike, con
         head = f"Neumann's problem on |q| = {constraint.radius:g}: "
         try:
             mc = solve_neumann(a, q0, v0)
-            model = head + f"closed form {mc.method}"
+            model = head + f"closed form {describe(mc)}"
         except ClosedFormUnavailable as exc:
             why = str(exc)
             mc = integrate_neumann(a, q0, v0, rtol=rtol)
@@ -326,7 +337,7 @@ def solve_configuration(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     diagnostics = {"models": models, "rotation_kind": kind, "rotations": rot_diag, "mass_center_reason": mc_why,
                    "mass_center_setup_seconds": mc_seconds,
                    "setup_seconds": mc_seconds + sum(r["setup_seconds"] for r in rot_diag.values())}
-    method_text = "split: " + mc.method + "; " + ", ".join(f"{n}={r.method}" for n, r in rots.items())
-    return ConfigurationSolution(config=config, a=a, b=b, mass_center=mc, rotations=rots, method=method_text,
+    diagnostics.update(parts=parts_text(mc, rots), error_estimate=worst_error([mc, *rots.values()]))
+    return ConfigurationSolution(config=config, a=a, b=b, mass_center=mc, rotations=rots, method="split",
                                  invariants=_first_integrals(config, a, mc, Qa, wa), diagnostics=diagnostics,
                                  constraint=constraint)

@@ -132,7 +132,7 @@ class NeumannTorus:
     its gap), ``norm``, ``th0``, ``alpha0``, ``fbar``, ``drift``, :meth:`state`, :meth:`s_of_t`.
     """
 
-    method = "neumann/genus-2"
+    method, case = "fourier/genus-2", ""
 
     def __init__(self, k: np.ndarray, x0: np.ndarray, y0: np.ndarray):
         self._separation(k, x0, y0)

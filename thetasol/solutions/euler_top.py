@@ -15,9 +15,9 @@ Angular momentum
     with amplitudes, parameter and frequency computed from sums of positive terms (only the
     distance to the separatrix, ``mc = k'^2``, is a difference, and it is the problem's own
     conditioning).  Exactly on the separatrix (``G^2 = 2T I_mid``) ``cn, dn -> sech`` and
-    ``sn -> tanh`` ("euler-top/separatrix"); with two equal moments ``k = 0`` and the
-    functions are trigonometric ("euler-top/symmetric"); a momentum along a principal axis,
-    or a sphere, gives a steady rotation ("euler-top/steady"); ``m = 0`` is "rest".
+    ``sn -> tanh`` (method "elliptic", case "separatrix"); with two equal moments ``k = 0`` and
+    the functions are trigonometric ("elementary", case "symmetric"); a momentum along a principal
+    axis, or a sphere, gives a steady rotation ("elementary", "steady"); ``m = 0`` is "rest".
 
 Attitude
     As in Celledoni, Fasso, Safstrom & Zanna (SIAM J. Sci. Comput. 30, 2008) with the
@@ -545,12 +545,13 @@ def _steady_rate(c, omega0):
     return _norm(omega0) if c.kind == "steady" else 0.0
 
 
-def _method(c) -> str:
-    if c.kind == "rest":
-        return "rest"
-    if c.kind in ("steady", "separatrix"):
-        return "euler-top/" + c.kind
-    return "euler-top/symmetric" if c.symmetric else "euler-top/elliptic"
+def _method(c) -> tuple[str, str]:
+    """(method, case): rest, steady rotations and the symmetric top are elementary, the rest elliptic."""
+    if c.kind in ("rest", "steady"):
+        return "elementary", c.kind
+    if c.kind == "separatrix":
+        return "elliptic", "separatrix"
+    return ("elementary", "symmetric") if c.symmetric else ("elliptic", "")
 
 
 def solve_euler_top(Jm: np.ndarray, am: np.ndarray, Q0: np.ndarray, omega0: np.ndarray,
@@ -567,11 +568,11 @@ def solve_euler_top(Jm: np.ndarray, am: np.ndarray, Q0: np.ndarray, omega0: np.n
         # k'^2 underflows (momentum within ~1e-160 of the unstable axis): same closed form
         # in mpmath, results rounded to float64
         return _solve_mp(Jm, am, Q0, omega0, 30, inv, float_output=True)
-    method = _method(c)
+    method, case = _method(c)
     if c.kind in ("rest", "steady"):
-        diag = dict(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0)
+        diag = dict(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0, case=case)
         return EulerTopSolution(Jm, am, Q0, omega0, method, inv, None, diag, _c=c)
-    diag = dict(period=float(c.period), precession_rate=float(c.nu), m=float(c.m))
+    diag = dict(period=float(c.period), precession_rate=float(c.nu), m=float(c.m), case=case)
     P = R @ c.W
     Iw = np.array([float(v) for v in c.Iw])
     mw0, aux = _momentum_float(c, np.zeros(1))
@@ -620,11 +621,11 @@ def _solve_mp(Jm, am, Q0, omega0, dps, inv, float_output=False):
         w0 = mp.matrix([mp.mpf(float(v)) for v in omega0])
         store = {"Q0": Q0m, "w0": w0, "wdps": wdps}
         dps = None if float_output else dps
-        method = _method(c)
+        method, case = _method(c)
         if c.kind in ("rest", "steady"):
-            diag = dict(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0)
+            diag = dict(period=0.0, precession_rate=_steady_rate(c, omega0), m=0.0, case=case)
             return EulerTopSolution(Jm, am, Q0, omega0, method, inv, dps, diag, _c=c, _mp=store)
-        diag = dict(period=float(c.period), precession_rate=float(c.nu), m=float(c.m))
+        diag = dict(period=float(c.period), precession_rate=float(c.nu), m=float(c.m), case=case)
         Wm = mp.matrix(c.W.tolist())
         P = R * Wm
         mw0, aux = _momentum_mp(c, mp.mpf(0), mp)

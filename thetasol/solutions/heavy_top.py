@@ -5,12 +5,12 @@
 
 * mass centre at the fixed point, or no gravity: the Euler top, through
   :func:`thetasol.solutions.rotation.solve_rotation` with ``a = 0`` (second moments
-  ``J = tr(I)/2 1 - I``); its ``method`` starts with ``"euler-top"``;
+  ``J = tr(I)/2 1 - I``), still a heavy-top result (:class:`EulerHeavyTopSolution`, case ``"euler"``);
 * Lagrange's top, ``I`` symmetric about the axis through the mass centre: the closed form of
-  :mod:`thetasol.solutions.lagrange_top` (``method = "lagrange/elliptic"``);
+  :mod:`thetasol.solutions.lagrange_top` (``method = "elliptic"``);
 * Kovalevskaya's top (``I1 = I2 = 2 I3``, centre in the equatorial plane, any body frame): genus-2 theta
   functions, :mod:`thetasol.solutions.kovalevskaya_top` and :mod:`thetasol.solutions.kovalevskaya_attitude`
-  (``method = "kovalevskaya/genus-2"``);
+  (``method = "theta/genus-2"``);
 * anything else: :class:`~thetasol.protocol.ClosedFormUnavailable` naming
   :func:`thetasol.integrators.heavy_top.integrate_heavy_top`.
 
@@ -27,12 +27,13 @@ from numpy.typing import ArrayLike
 from thetasol.core.attitude import uniform_rotation
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants, kovalevskaya_integral
-from thetasol.protocol import ClosedFormUnavailable, RotationSolution
+from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.heavy_top_base import HeavyTopSolution
 from thetasol.solutions.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame, lagrange_state
 from thetasol.solutions.rotation import solve_rotation
 
-__all__ = ["solve_heavy_top", "LagrangeTopSolution", "SteadyRotationSolution", "KovalevskayaTopSolution"]
+__all__ = ["solve_heavy_top", "LagrangeTopSolution", "SteadyRotationSolution", "KovalevskayaTopSolution",
+           "EulerHeavyTopSolution"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -63,6 +64,27 @@ class KovalevskayaTopSolution(HeavyTopSolution):
         return self.constants(t)
 
 
+@dataclass(frozen=True, eq=False)
+class EulerHeavyTopSolution(HeavyTopSolution):
+    """A heavy top without torque (centre at the pivot, no gravity or no mass): Euler's top, evaluated by
+    the free rotation :attr:`rotation` of the same body (second moments ``J = tr(I)/2 1 - I``)."""
+
+    rotation: RotationSolution = field(default=None, repr=False)
+
+    _AT_ONCE = True  # the rotation chunks itself
+
+    def _evaluate(self, t):
+        return self.rotation(t)
+
+
+def _euler(Im, c, Q0m, w0, mass, g):
+    """The torque-free top: :func:`solve_rotation` of its inertia, as a heavy-top result."""
+    rot = solve_rotation(Im, np.zeros((3, 3)), Q0m, w0)
+    inv = {k: float(v) for k, v in heavy_top_invariants(Im, c, mass, g, w0, Q0m).items()}
+    diag = {**rot.diagnostics, "case": "euler" + (f"/{rot.case}" if rot.case else "")}
+    return EulerHeavyTopSolution(Im, c, mass, g, Q0m, w0, rot.method, inv, diag, rotation=rot)
+
+
 def _kovalevskaya(Im, c, Q0m, w0, mass, g):
     from thetasol.solutions.kovalevskaya_attitude import build_kovalevskaya_top
 
@@ -75,7 +97,8 @@ def _kovalevskaya(Im, c, Q0m, w0, mass, g):
     inv = heavy_top_invariants(Im, c, mass, g, w0, Q0m)
     inv = {"energy": float(inv["energy"]), "vertical_momentum": float(inv["vertical_momentum"]),
            "kovalevskaya_k2": float(kovalevskaya_integral(Im, c, mass, g, w0, Q0m))}
-    return KovalevskayaTopSolution(Im, c, mass, g, Q0m, w0, "kovalevskaya/genus-2", inv, diag, att)
+    diag = {**diag, "error_estimate": max(ROUNDOFF, diag["fit_residual"], diag["phase_tail"])}
+    return KovalevskayaTopSolution(Im, c, mass, g, Q0m, w0, "theta/genus-2", inv, diag, att)
 
 
 def _is_kovalevskaya(I, center, rtol=SYMMETRY_RTOL):
@@ -90,7 +113,7 @@ def _is_kovalevskaya(I, center, rtol=SYMMETRY_RTOL):
 
 @single_blas_thread
 def solve_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *, mass: float = 1.0,
-                    gravity: ArrayLike = (0.0, 0.0, -9.81)) -> HeavyTopSolution | RotationSolution:
+                    gravity: ArrayLike = (0.0, 0.0, -9.81)) -> HeavyTopSolution:
     """Exact motion of a heavy top (Section 5) when a closed form is known.
 
     Parameters
@@ -109,8 +132,9 @@ def solve_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: Arra
 
     Returns
     -------
-    HeavyTopSolution or RotationSolution
-        ``sol(t) -> (omega, Q)`` with shapes ``t.shape + (3,)`` and ``t.shape + (3, 3)``.
+    HeavyTopSolution
+        ``sol(t) -> (omega, Q)`` with shapes ``t.shape + (3,)`` and ``t.shape + (3, 3)``; ``model`` is
+        ``"heavy-top"`` in every case, the centre at the pivot included.
 
     Raises
     ------
@@ -124,15 +148,15 @@ def solve_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: Arra
     --------
     >>> import numpy as np
     >>> sol = solve_heavy_top([5.0, 5.0, 1.0], [0, 0, 1.0], np.eye(3), [0.3, 0, 50.0], mass=20, gravity=[0, 0, -1])
-    >>> sol.method
-    'lagrange/elliptic'
+    >>> sol.model, sol.method
+    ('heavy-top', 'elliptic')
     >>> sol(np.array([0.0, 1e6]))[1].shape
     (2, 3, 3)
     """
     Im, c, Q0m, w0, mass, g = heavy_top_data(I, center, Q0, omega0, mass, gravity)
     cn, gn = np.linalg.norm(c), np.linalg.norm(g)
     if cn == 0 or gn == 0 or mass == 0:
-        return solve_rotation(Im, np.zeros((3, 3)), Q0m, w0)
+        return _euler(Im, c, Q0m, w0, mass, g)
     frame = lagrange_frame(Im, c)
     if frame is None:
         if _is_kovalevskaya(Im, c):
@@ -144,7 +168,8 @@ def solve_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: Arra
     axis = Q0m @ (c / cn)
     if abs(axis @ up) == 1.0 and np.all(np.cross(Q0m @ w0, up) == 0):
         # axis exactly vertical, turning about it: no torque ever (the unstable upright one included)
-        return SteadyRotationSolution(Im, c, mass, g, Q0m, w0, "lagrange/steady-rotation", inv, {})
+        return SteadyRotationSolution(Im, c, mass, g, Q0m, w0, "elementary", inv,
+                                      {"case": "steady", "error_estimate": ROUNDOFF})
     consts, diag = build_lagrange_top(Im, c, Q0m, w0, mass * gn * cn, up)
-    method = "lagrange/separatrix" if diag["mc"] == 0 else "lagrange/elliptic"
-    return LagrangeTopSolution(Im, c, mass, g, Q0m, w0, method, inv, diag, consts)
+    diag.update(case="separatrix" if diag["mc"] == 0 else "", error_estimate=max(ROUNDOFF, diag["fit_residual"]))
+    return LagrangeTopSolution(Im, c, mass, g, Q0m, w0, "elliptic", inv, diag, consts)

@@ -6,6 +6,7 @@ A :class:`HeavyTopSolution` follows :class:`~thetasol.protocol.Solution` with th
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -31,15 +32,21 @@ class HeavyTopSolution(Solution):
         Gravity vector in space; potential ``V = -mass gravity . (Q center)``.
     Q0, omega0 : ndarray
         Initial attitude (body to space) and body angular velocity.
+    model : str
+        ``"heavy-top"`` (rotors along the axis of a Lagrange gyrostat included).
     method : str
-        ``"lagrange/..."``, ``"kovalevskaya/..."`` (the Euler top is returned by
-        :func:`thetasol.solutions.rotation.solve_rotation` itself).
+        ``"elliptic"`` (Lagrange's top, and Euler's when the centre is at the pivot), ``"theta/genus-2"``
+        (Kovalevskaya's top) or ``"elementary"`` (steady rotations, the symmetric Euler top, rest);
+        ``diagnostics["case"]`` names the special case (``"separatrix"``, ``"steady"``, ``"euler"``, ...).
     invariants : dict
         ``energy``, ``vertical_momentum``, ``axial_momentum`` (see
         :func:`thetasol.mechanics.heavy_top.heavy_top_invariants`).
     diagnostics : dict
-        Periods, the elliptic parameters, the turning points and the fit residual at ``t = 0``.
+        Periods, the elliptic parameters, the turning points, the fit residual at ``t = 0`` and
+        ``error_estimate``.
     """
+
+    model = "heavy-top"
 
     I: np.ndarray
     center: np.ndarray
@@ -65,3 +72,10 @@ class HeavyTopSolution(Solution):
     def m(self, t: ArrayLike) -> np.ndarray:
         """Body angular momentum about the fixed point ``I omega``, shape ``t.shape + (3,)``."""
         return self.omega(t) @ self.I.T
+
+    def fastest_frequency(self) -> float:
+        """The largest of the spin ``|omega0|``, ``2 pi / period`` and the pendulum rate of gravity
+        ``sqrt(mass |g| |center| / I_d)`` (``I_d`` the smallest diagonal moment), rad per unit time."""
+        pull = self.mass * float(np.linalg.norm(self.gravity)) * float(np.linalg.norm(self.center))
+        swing = math.sqrt(pull / float(np.diag(self.I).min())) if pull > 0 else 0.0
+        return max(float(np.linalg.norm(self.omega0)), swing, super().fastest_frequency())

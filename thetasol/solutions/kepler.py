@@ -44,7 +44,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.dd import two_prod
-from thetasol.protocol import Solution
+from thetasol.protocol import ROUNDOFF, Solution
 from thetasol.special.stumpff import stumpff, stumpff_float
 
 __all__ = ["KeplerOrbit", "solve_kepler"]
@@ -104,7 +104,7 @@ def _orbit_setup(mu: float, r0: np.ndarray, v0: np.ndarray) -> tuple[_Setup, dic
     n = float(np.sqrt(mu * abs(alpha) ** 3)) if alpha != 0 else 0.0
     diag = {"kind": kind, "a": (1.0 / alpha) if alpha != 0 else np.inf, "e": e, "i": i,
             "raan": raan, "argp": argp, "nu0": nu0, "p": p, "periapsis": p / (1.0 + e),
-            "period": T_hi, "mean_motion": n}
+            "period": T_hi, "mean_motion": n, "case": kind, "error_estimate": ROUNDOFF}
     setup = _Setup(np.sqrt(mu), r0n, float(r0 @ v0) / np.sqrt(mu), alpha, T_hi, T_lo, p / (1.0 + e), e)
     return setup, {"energy": energy, "h": h, "lrl": mu * evec}, diag
 
@@ -148,7 +148,8 @@ class KeplerOrbit(Solution):
     diagnostics : dict
         ``kind`` ("elliptic", "parabolic", "hyperbolic"), the elements ``a`` (inf if parabolic),
         ``e``, ``i``, ``raan``, ``argp``, ``nu0`` (radians; RAAN = 0 for equatorial orbits, argp = 0 for
-        circular ones), ``p`` (semi-latus rectum), ``periapsis``, ``period``, ``mean_motion``.
+        circular ones), ``p`` (semi-latus rectum), ``periapsis``, ``period``, ``mean_motion``, ``case``
+        (the kind) and ``error_estimate`` (float64 rounding: the time of flight is solved to it).
 
     Examples
     --------
@@ -161,7 +162,9 @@ class KeplerOrbit(Solution):
     mu: float
     r0: np.ndarray
     v0: np.ndarray
-    method: str = field(default="kepler/universal", init=False)
+    model = "kepler"
+
+    method: str = field(default="elementary", init=False)
     invariants: dict = field(default=None, init=False, repr=False)
     diagnostics: dict = field(default=None, init=False, repr=False)
     _s: _Setup = field(default=None, init=False, repr=False)
@@ -184,6 +187,12 @@ class KeplerOrbit(Solution):
         object.__setattr__(self, "_s", setup)
 
     # -- public views ------------------------------------------------------------------------
+    def fastest_frequency(self) -> float:
+        """The rate of the orbit's phase (the mean anomaly): the mean motion, ``sqrt(mu / p^3)`` for a
+        parabola.  A time error moves the body along its orbit by that phase, whatever its speed."""
+        n = self.diagnostics["mean_motion"]
+        return n if n > 0 else math.sqrt(self.mu / self.diagnostics["p"] ** 3)
+
     @property
     def period(self) -> float:
         """Orbital period (``inf`` for parabolic and hyperbolic orbits)."""

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
-from thetasol.protocol import ClosedFormUnavailable, RotationSolution
+from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.gyrostat import solve_gyrostat
 from thetasol.solutions.heavy_top import LagrangeTopSolution, SteadyRotationSolution, solve_heavy_top
 from thetasol.solutions.heavy_top_base import HeavyTopSolution
@@ -65,8 +65,8 @@ def solve_lagrange_gyrostat(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omeg
     Returns
     -------
     HeavyTopSolution or RotationSolution
-        ``sol(t) -> (omega, Q)``; ``method`` ``"lagrange-gyrostat/elliptic"`` (or ``/separatrix``,
-        ``/steady-rotation``); ``N = 0`` is :func:`thetasol.solutions.heavy_top.solve_heavy_top`, no gravity
+        ``sol(t) -> (omega, Q)``; model ``"heavy-top"``, method ``"elliptic"`` (case ``""`` or
+        ``"separatrix"``; ``"elementary"`` with case ``"steady"``) and ``diagnostics["rotor_momentum"]``; ``N = 0`` is :func:`thetasol.solutions.heavy_top.solve_heavy_top`, no gravity
         or the centre at the pivot :func:`thetasol.solve_gyrostat`.  ``invariants``: ``energy``
         (``1/2 omega . I omega - mass g . Q center``), ``vertical_momentum`` (``Q (m + N) . up``),
         ``axial_momentum`` (``(m + N) . e3``).
@@ -95,8 +95,9 @@ def solve_lagrange_gyrostat(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omeg
     inv = _invariants(Im, c, Nv, mass, g, w0, Q0m)
     up = -g / gn
     if abs((Q0m @ e3) @ up) == 1.0 and np.all(np.cross(Q0m @ w0, up) == 0):
-        return SteadyRotationSolution(Im, c, mass, g, Q0m, w0, "lagrange-gyrostat/steady-rotation", inv, {})
+        return SteadyRotationSolution(Im, c, mass, g, Q0m, w0, "elementary", inv,
+                                      {"case": "steady", "rotor_momentum": lam, "error_estimate": ROUNDOFF})
     consts, diag = build_lagrange_top(Im, c, Q0m, w0, mass * gn * cn, up, rotor_momentum=lam)
     diag["rotor_momentum"] = lam
-    method = "lagrange-gyrostat/separatrix" if diag["mc"] == 0 else "lagrange-gyrostat/elliptic"
-    return LagrangeTopSolution(Im, c, mass, g, Q0m, w0, method, inv, diag, consts)
+    diag.update(case="separatrix" if diag["mc"] == 0 else "", error_estimate=max(ROUNDOFF, diag["fit_residual"]))
+    return LagrangeTopSolution(Im, c, mass, g, Q0m, w0, "elliptic", inv, diag, consts)

@@ -30,6 +30,7 @@ result keeps that (unavoidable) absolute error.  Overflow raises ``OverflowError
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import mpmath
@@ -37,7 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
-from thetasol.protocol import Solution
+from thetasol.protocol import ROUNDOFF, Solution
 from thetasol.special.stumpff import stumpff
 
 __all__ = ["MassCenterMotion", "solve_mass_center"]
@@ -99,8 +100,9 @@ class MassCenterMotion(Solution):
     kinds : tuple of str
         ``"trigonometric"``, ``"hyperbolic"`` or ``"polynomial"`` per mode (``|lam|`` at the
         round-off level of ``eigh`` counts as zero; the formula is the same for all three).
-    method : str
-        ``"mass-center/"`` and the kinds present, e.g. ``"mass-center/trigonometric+hyperbolic"``.
+    model, method : str
+        ``"mass-center"`` and ``"elementary"``; ``case`` (``diagnostics["case"]``) joins the kinds present,
+        e.g. ``"trigonometric+hyperbolic"``.
     invariants : dict
         First integrals per unit mass, at ``t = 0`` (:meth:`first_integrals`): ``energy``,
         ``mode_energies`` (3,) and ``angular_momentum`` (k,), the components of ``(q - c) x v``
@@ -109,7 +111,8 @@ class MassCenterMotion(Solution):
     diagnostics : dict
         ``eigenvalues``, ``axes``, ``kinds``, and the symmetry axes and centres of the
         conserved angular momentum components (``angular_momentum_axes`` (k, 3),
-        ``angular_momentum_centers`` (k, 3)).
+        ``angular_momentum_centers`` (k, 3)), ``case`` and ``error_estimate`` (float64 rounding: the
+        formula is exact).
 
     Examples
     --------
@@ -118,9 +121,11 @@ class MassCenterMotion(Solution):
     >>> q, v = mc(np.pi)
     >>> np.round(q, 6).tolist()
     [-1.0, 1.0, 11.591953]
-    >>> mc.method
-    'mass-center/trigonometric+hyperbolic+polynomial'
+    >>> mc.model, mc.method, mc.case
+    ('mass-center', 'elementary', 'trigonometric+hyperbolic+polynomial')
     """
+
+    model = "mass-center"
 
     a: np.ndarray
     b: np.ndarray
@@ -146,13 +151,18 @@ class MassCenterMotion(Solution):
         tiny = 16 * np.finfo(float).eps * max(np.max(np.abs(lam)), np.finfo(float).tiny)
         kinds = tuple("polynomial" if abs(x) <= tiny else "trigonometric" if x > 0 else "hyperbolic" for x in lam)
         object.__setattr__(self, "kinds", kinds)
-        object.__setattr__(self, "method", "mass-center/" + "+".join(k for k in _KIND_ORDER if k in kinds))
+        object.__setattr__(self, "method", "elementary")
         L_axes, L_centers = _symmetry_axes(lam, Vec, 0.5 * (Vec.T @ self.b))
         object.__setattr__(self, "diagnostics", {
             "eigenvalues": lam, "axes": Vec, "kinds": kinds,
-            "angular_momentum_axes": L_axes, "angular_momentum_centers": L_centers})
+            "angular_momentum_axes": L_axes, "angular_momentum_centers": L_centers,
+            "case": "+".join(k for k in _KIND_ORDER if k in kinds), "error_estimate": ROUNDOFF})
         inv = self.first_integrals(self.q0, self.v0)
         object.__setattr__(self, "invariants", {**inv, "energy": float(inv["energy"])})
+
+    def fastest_frequency(self) -> float:
+        """The fastest mode's rate ``sqrt(max |eigenvalue|)`` (its growth rate for a hyperbolic one)."""
+        return math.sqrt(float(np.abs(self.eigenvalues).max()))
 
     def __call__(self, t: ArrayLike, dps: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Position and velocity at times ``t``.

@@ -10,9 +10,9 @@ Units.  With ``a = V diag(k) V^T``, ``x = V^T q / R`` is on the unit sphere and 
 scaled by ``sigma``, a power of 4 near ``k3 - k1`` (exact in binary, so is ``sqrt(sigma)``): the models
 below see ``x'' = -k x / sigma + ...`` in the time ``sqrt(sigma) t`` and never the user's units.
 
-The models (``method``), docs/neumann.md has the table:
+The models (``method``, and ``case`` where it is not the generic one), docs/neumann.md has the table:
 
-* ``neumann/genus-2`` (distinct eigenvalues): sphero-conical coordinates ``u1 < u2``
+* ``fourier/genus-2`` (distinct eigenvalues): sphero-conical coordinates ``u1 < u2``
   (``sum x_i^2 / (z - k_i) = (z - u1)(z - u2) / A(z)``, ``A = prod (z - k_i)``) separate with the time
   ``ds = dt / (u2 - u1)``: ``(du_k / ds)^2 = -4 A(u_k) B(u_k)``, ``B(z) = N(z) + sum_m L_m^2 (z - k_m)``,
   ``N(z) = sum_i x_i^2 prod_{j != i} (z - k_j)``, ``L = x cross xdot`` (Uhlenbeck's integrals
@@ -23,9 +23,9 @@ The models (``method``), docs/neumann.md has the table:
   ``x_i = prod_k sqrt(k_i - u_k) / sqrt(prod_{j != i} (k_i - k_j))`` (square roots smooth in theta).
   A time is mapped to ``s`` by safeguarded Newton: a far time costs what ``t = 1`` costs.  The model
   lives in :mod:`thetasol.solutions._neumann_torus` (:class:`NeumannTorus`, :class:`Oscillator`).
-* ``neumann/elliptic``, ``neumann/latitude`` (a repeated eigenvalue): ``z = x.n`` in a quartic well,
+* ``elliptic``, ``elementary`` with case ``latitude`` (a repeated eigenvalue): ``z = x.n`` in a quartic well,
   the azimuth about ``n`` a quadrature on the same circle, or a uniform circle of latitude.
-* ``neumann/planar-*`` (an invariant great circle, or an isotropic ``a``): a pendulum in twice the
+* case ``planar-*`` (an invariant great circle, or an isotropic ``a``): a pendulum in twice the
   angle, in Jacobi functions (:mod:`thetasol.special.pendulum`).
 
 Hand-written because no library has Neumann's problem in real time (the theta-function form of
@@ -33,6 +33,7 @@ Moser and Mumford's Tata lectures II needs the same curve and degenerates in the
 """
 from __future__ import annotations
 
+import math
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, field
@@ -53,7 +54,7 @@ from thetasol.core.periodic import (
 from thetasol.core.roots import quadratic_roots
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.constraints import point_on_sphere
-from thetasol.protocol import ClosedFormUnavailable, Solution
+from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, Solution
 from thetasol.solutions._neumann_torus import MIN_WIDTH, DegenerateTorus, NeumannTorus, Oscillator
 from thetasol.solutions._symmetry import SNAP_TOL
 
@@ -153,7 +154,7 @@ class _Axial:
 class LatitudeCircle:
     """A circle of latitude z0 about the symmetry axis run at a constant rate (a relative equilibrium)."""
 
-    method = "neumann/latitude"
+    method, case = "elementary", "latitude"
 
     def __init__(self, ax: _Axial, x0: np.ndarray):
         self.ax = ax
@@ -180,7 +181,7 @@ class EllipticNeumann:
     converge (a small ``ell`` near a pole: the azimuth turns by ~pi in a short time) the horizontal
     part ``rho e^{i lambda}``, smooth through the pole, is one instead (:meth:`_cartesian`)."""
 
-    method = "neumann/elliptic"
+    method, case = "elliptic", ""
 
     def __init__(self, ax: _Axial, roots, lo, hi, y0: np.ndarray):
         self.ax = ax
@@ -357,7 +358,8 @@ class PlanarNeumann:
         scale = abs(vdot0) + np.sqrt(np.abs(k).max())
         self.nu = 0.0 if isotropic or nu2 <= 4 * _EPS * scale ** 2 else float(np.sqrt(nu2))
         self.pend, self.kind = _pendulum(psi0, 2.0 * vdot0, self.nu)
-        self.method = f"neumann/planar-{self.kind}"
+        self.method = "elementary" if self.kind in ("rest", "uniform") else "elliptic"
+        self.case = f"planar-{self.kind}"
         x0n = x0 - (x0 @ n) * n
         self.x0n = x0n / np.linalg.norm(x0n)
         self.n = n
@@ -438,8 +440,11 @@ class NeumannSolution(Solution):
         The potential matrix (symmetrized).
     q0, v0 : ndarray, shape (3,)
         The initial position and (tangent) velocity.
+    model : str
+        ``"neumann"``.
     method : str
-        ``"neumann/genus-2"``, ``"neumann/elliptic"``, ``"neumann/latitude"`` or ``"neumann/planar-<kind>"``.
+        ``"fourier/genus-2"``, ``"elliptic"`` or ``"elementary"``; ``diagnostics["case"]`` is ``"latitude"``
+        or ``"planar-<kind>"`` for those models, ``""`` otherwise.
     invariants : dict
         ``energy`` (``1/2 |v|^2 + 1/2 q.aq``) and Uhlenbeck's integrals in the eigenbasis of ``a``
         (ascending eigenvalues), ``F_k = x_k^2 + sum_{j != k} (x_k y_j - x_j y_k)^2 / (a_k - a_j)`` with
@@ -449,8 +454,11 @@ class NeumannSolution(Solution):
     diagnostics : dict
         ``eigenvalues``, ``axes`` (columns, right-handed), ``radius``, ``time_scale`` (the unit of time
         of the models, ``1 / sqrt(sigma)``), ``branch_points`` of the genus-2 curve, the model's
-        periods and series sizes and ``fit_residual`` (the data reproduced at t = 0, unit sphere).
+        periods and series sizes, ``fit_residual`` (the data reproduced at t = 0, unit sphere) and
+        ``error_estimate`` (that residual, at least float64 rounding).
     """
+
+    model = "neumann"
 
     a: np.ndarray
     q0: np.ndarray
@@ -460,6 +468,11 @@ class NeumannSolution(Solution):
     diagnostics: dict = field(default_factory=dict, repr=False)
     _model: object = field(default=None, repr=False)
     _units: tuple = field(default=None, repr=False)
+
+    def fastest_frequency(self) -> float:
+        """The larger of the speed ``|v0| / R`` and the potential's rate ``sqrt(max |a_i - a_j|)``."""
+        ev = self.diagnostics["eigenvalues"]
+        return max(float(np.linalg.norm(self.v0)) / self.diagnostics["radius"], math.sqrt(float(ev.max() - ev.min())))
 
     def __call__(self, t: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
         """``(q(t), v(t))``, each of shape ``t.shape + (3,)``."""
@@ -555,5 +568,7 @@ def solve_neumann(a: ArrayLike, q0: ArrayLike, v0: ArrayLike) -> NeumannSolution
     if isinstance(model, NeumannTorus):
         diag["fit_residual"] = model.fit_residual
         diag["branch_points"] = np.sort(np.r_[k, model.zb * rate * rate + k[1]])
+    diag["case"] = model.case
+    diag["error_estimate"] = max(ROUNDOFF, diag.get("fit_residual", 0.0))
     return NeumannSolution(a=a, q0=q0, v0=v0, method=model.method, invariants=inv, diagnostics=diag,
                            _model=model, _units=(R, rate, axes))

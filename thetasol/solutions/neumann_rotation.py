@@ -31,7 +31,7 @@ import numpy as np
 from thetasol.core.attitude import principal_frame
 from thetasol.core.periodic import eval_series, integrated, powers, refined_fft, sum_series
 from thetasol.mechanics.equations import invariants as _invariants
-from thetasol.protocol import ClosedFormUnavailable, RotationSolution
+from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._symmetry import (
     symmetric_without_spin,
 )
@@ -196,13 +196,13 @@ class NeumannRotation(RotationSolution):
         unit moment of inertia.
     frame : ndarray, shape (3, 3)
         Their eigenvectors (columns, right-handed, space frame).
-    model : object
+    axis_model : object
         The point model of the axis in these eigen-coordinates (:func:`thetasol.solutions.neumann.neumann_model`).
     """
 
     k: np.ndarray = field(default=None, repr=False)
     frame: np.ndarray = field(default=None, repr=False)
-    model: object = field(default=None, repr=False)
+    axis_model: object = field(default=None, repr=False)
     _c: dict = field(default=None, repr=False)
 
     def _evaluate(self, t: np.ndarray):
@@ -368,5 +368,6 @@ def solve_neumann_rotation(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0:
         motion, info = _attitude_motion(model, r.x0, r.e10)
     inv.update(info)
     c = {"axis_motion": motion, "P": r.P, "axes": r.axes}
+    diag = {"case": model.case, "error_estimate": max(ROUNDOFF, getattr(model, "fit_residual", 0.0))}
     return NeumannRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=model.method, invariants=inv,
-                           k=r.k, frame=r.V, model=model, _c=c)
+                           diagnostics=diag, k=r.k, frame=r.V, axis_model=model, _c=c)

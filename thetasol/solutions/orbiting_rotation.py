@@ -3,7 +3,8 @@
 The rotation in the gravity-gradient torque (7.16) is not integrable in general (Boucher 2006 for a
 circular orbit; chaotic on elliptic ones, Wisdom-Peale-Mignard 1984).  What is solved here in closed
 form, with :func:`~thetasol.integrators.orbiting_rotation.integrate_orbiting_rotation` as the reference
-for everything else:
+for everything else (``sol.case`` names the motion; ``sol.method`` is ``"elementary"`` or, for the
+pendulum's libration, circulation and separatrix, ``"elliptic"``):
 
 ``"relative-equilibrium"``
     circular orbit, principal axes along the orbit frame (radial, along-track, normal), turning with
@@ -20,7 +21,7 @@ for everything else:
     solved in Jacobi elliptic functions by :mod:`thetasol.special.pendulum` (libration
     ``sin(psi/2) = k sn(nu t + u0 | k^2)``, ``nu = n sqrt(3 |K|)``; circulation in ``am``; the
     separatrix in ``tanh``).  The attitude is ``Q(t) = R_{e_n}(n t + theta(t) - theta0) Q0``.
-``"free/spherical"``
+``"spherical"``
     a body with equal principal moments on any orbit: no torque, uniform rotation.
 
 Angles are reduced modulo 2 pi with an exact product (:func:`thetasol.core.attitude.angle_mod_2pi`),
@@ -33,7 +34,7 @@ far times.
 
 A circular orbit means ``e <= 1e-13`` (``KeplerOrbit.diagnostics["e"]``; data rounded from a
 circular orbit give ~1e-16); the error that ``e`` leaves is of order ``e n t``, reported as
-``diagnostics["error_estimate"]`` per unit time.
+``diagnostics["error_estimate"]`` (at least float64 rounding) per unit time.
 """
 from __future__ import annotations
 
@@ -49,7 +50,7 @@ from thetasol.core.so3 import rotation_about
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.equations import inertia, second_moments
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability, orbit_frame
-from thetasol.protocol import ClosedFormUnavailable, RotationSolution
+from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit
 from thetasol.special.elliptic import ellipj, ellipk
 from thetasol.special.pendulum import pendulum_angle, pendulum_params
@@ -68,6 +69,8 @@ class OrbitingRotation(RotationSolution):
     ``a`` is the tidal matrix (7.11) ``-3 mu g g^T / |r|^3`` at ``t = 0``; :meth:`u` uses the one at
     each time.  ``orbit`` is the :class:`KeplerOrbit`.
     """
+
+    model = "orbiting-rotation"
 
     orbit: KeplerOrbit = field(default=None, repr=False)
     _c: dict = field(default=None, repr=False)
@@ -183,7 +186,7 @@ def solve_orbiting_rotation(I: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, ome
     Returns
     -------
     OrbitingRotation
-        ``sol(t) -> (omega, Q)``; ``method`` names the case (module docstring).
+        ``sol(t) -> (omega, Q)``; ``case`` names the motion (module docstring).
 
     Raises
     ------
@@ -203,8 +206,9 @@ def solve_orbiting_rotation(I: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, ome
     Ip = inertia(Jp)
     base = dict(J=Jm, a=_tidal_matrix(orbit), Q0=Q0, omega0=w0, orbit=orbit)
     if np.max(Ip) - np.min(Ip) <= 4 * _EPS * np.max(Ip):
-        return OrbitingRotation(method="free/spherical", invariants={"m": Im @ w0},
-                                diagnostics={"error_estimate": 0.0}, _c={"kind": "spherical"}, **base)
+        return OrbitingRotation(method="elementary", invariants={"m": Im @ w0},
+                                diagnostics={"case": "spherical", "error_estimate": ROUNDOFF}, _c={"kind": "spherical"},
+                                **base)
     d = orbit.diagnostics
     if d["kind"] != "elliptic" or d["e"] > _CIRCULAR_E:
         raise ClosedFormUnavailable(
@@ -220,19 +224,20 @@ def solve_orbiting_rotation(I: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, ome
             "rotation on a circular orbit is not integrable (Boucher 2006); use "
             "thetasol.integrators.orbiting_rotation.integrate_orbiting_rotation")
     k, s = found
-    c, method = _pitch_setup(Ip, k, s, Qp, wp, F0, n)
-    if method == "relative-equilibrium":
+    c, case = _pitch_setup(Ip, k, s, Qp, wp, F0, n)
+    if case == "relative-equilibrium":
         c["thetadot0"] = 0.0
     c.update(Q0p=Qp, P=P, F0=F0)
     diag = {"orbit_e": d["e"], "mean_motion": n, "K": c["K"], "theta0": c["theta0"],
-            "thetadot0": c["thetadot0"], "error_estimate": 4 * d["e"] * n}
+            "thetadot0": c["thetadot0"], "case": case, "error_estimate": max(ROUNDOFF, 4 * d["e"] * n)}
     if "period" in c:
         diag["period"] = c["period"]
-    if method == "relative-equilibrium":
+    if case == "relative-equilibrium":
         order = [int(np.argmax(np.abs(Qp.T @ F0[:, a]))) for a in range(3)]   # principal axis per orbit axis
         st = gravity_gradient_stability(Jp[order], n)
         diag.update(stability=st.region, stable=st.stable)
     inv = {"jacobi": _jacobi(Im, n, F0, Q0, w0)}
     if c["kind"] == "pendulum":
         inv["pitch_energy"] = 0.5 * c["thetadot0"] ** 2 - 0.75 * n * n * c["K"] * math.cos(2 * c["theta0"])
+    method = "elementary" if case in ("relative-equilibrium", "pitch/uniform") else "elliptic"
     return OrbitingRotation(method=method, invariants=inv, diagnostics=diag, _c=c, **base)

@@ -90,9 +90,9 @@ def solve_pendulum(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndar
     at_rest = w0 == 0 and B[j, k] == 0
     if at_rest or abs(kappa) <= 4 * _EPS * max(scale, np.finfo(float).tiny) ** 2:
         c["kind"] = "uniform"
-        method = "pendulum/uniform" if w0 != 0 else "rest"
-        return PendulumRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=method, invariants=inv,
-                                diagnostics={}, axis_body=P[:, i], _c=c)
+        case = "pendulum/uniform" if w0 != 0 else "rest"
+        return PendulumRotation(J=J, a=a, Q0=Q0, omega0=omega0, method="elementary", invariants=inv,
+                                diagnostics={"case": case}, axis_body=P[:, i], _c=c)
     # psi = 2 phi + delta - pi [kappa > 0] obeys psi'' = -nu^2 sin psi; phi(0) = 0
     psi0 = np.remainder(delta - (np.pi if kappa > 0 else 0.0) + np.pi, 2 * np.pi) - np.pi
     nu = np.sqrt(abs(kappa))
@@ -107,6 +107,6 @@ def solve_pendulum(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndar
         diag["period"] = float(4.0 * ellipk(c["m"], c["mc"]) / nu)
     elif c["kind"] == "circulation":
         diag["period"] = float(2.0 * ellipk(c["m"], c["mc"]) / (c["k"] * nu))
-    method = "pendulum/" + c["kind"]
-    return PendulumRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=method, invariants=inv,
+    diag["case"] = "pendulum/" + c["kind"]
+    return PendulumRotation(J=J, a=a, Q0=Q0, omega0=omega0, method="elliptic", invariants=inv,
                             diagnostics=diag, axis_body=P[:, i], _c=c)

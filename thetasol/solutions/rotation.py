@@ -31,6 +31,7 @@ and returns an object with the same protocol.
 """
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 
 import numpy as np
@@ -41,7 +42,7 @@ from thetasol.core.attitude import principal_frame
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.equations import second_moments
 from thetasol.mechanics.potential import potential_kind
-from thetasol.protocol import ClosedFormUnavailable, RotationSolution
+from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
 from thetasol.solutions._symmetry import SNAP_TOL, symmetric_without_spin, symmetry_axis
 
@@ -209,5 +210,16 @@ def _dispatch(J, a, Q0, omega0, dps) -> RotationSolution:
     for branch in _BRANCHES:
         sol = branch(J, a, Q0, omega0, dps)
         if sol is not None:
-            return sol
+            return _with_error_estimate(sol)
     raise AssertionError("unreachable: the last branch always answers")  # pragma: no cover
+
+
+def _with_error_estimate(sol: RotationSolution) -> RotationSolution:
+    """``sol`` with ``diagnostics["error_estimate"]`` when its branch has no check of its own (the Euler
+    top, the pendulum): the data reproduced at ``t = 0``, at least the rounding of the arithmetic
+    (float64, or a few units in the last of ``dps`` digits)."""
+    if "error_estimate" in sol.diagnostics:
+        return sol
+    floor = ROUNDOFF if sol.dps is None else 10.0 ** (1 - sol.dps)
+    est = floor if sol.dps is not None else max(floor, sol.initial_residual())
+    return dataclasses.replace(sol, diagnostics={**sol.diagnostics, "error_estimate": est})

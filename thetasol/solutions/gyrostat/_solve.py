@@ -40,6 +40,8 @@ class GyrostatSolution(RotationSolution):
     conserved ``p`` of (8.25)), ``rotor_angles(t)`` and ``rotor_rates(t)``.
     """
 
+    model = "gyrostat"
+
     N: np.ndarray = None
     rotors: tuple = ()
     _impl: object = field(default=None, repr=False)
@@ -93,11 +95,12 @@ class _Data:
 
 @dataclass(frozen=True)
 class _Form:
-    """A closed form: its method name, the implementation (``evaluate(t)``, ``omega(t)``), the
+    """A closed form: its method and case, the implementation (``evaluate(t)``, ``omega(t)``), the
     period of ``omega`` (0 when constant, ``inf`` on a separatrix), the mean precession rate and
     the relative error estimate of ``m(t)`` per period."""
 
     method: str
+    case: str
     impl: object
     period: float = 0.0
     rate: float = 0.0
@@ -128,13 +131,14 @@ def _degenerate_form(d: _Data) -> _Form | None:
         # a rotor momentum below the rounding of m: the Euler top of the same data (exact
         # to rounding; the rotor term's effect stays below eps |m| omega t)
         sol = solve_rotation(d.I, np.zeros((3, 3)), Q0m, w0)
-        return _Form(sol.method, Delegate(sol), sol.diagnostics["period"], sol.diagnostics["precession_rate"])
+        return _Form(sol.method, sol.case, Delegate(sol), sol.diagnostics["period"], sol.diagnostics["precession_rate"],
+                     err=sol.diagnostics["error_estimate"])
     if not np.any(m_body):
-        return _Form("rest", Steady(Q0m, np.zeros(3)))
+        return _Form("elementary", "rest", Steady(Q0m, np.zeros(3)))
     hdot0 = np.cross(m_body, w0) + np.cross(n_body, w0)
     if _norm(hdot0) <= 8 * _EPS * (_norm(m_body) + _norm(n_body)) * _norm(w0):
         # h x omega = 0 to the rounding of the data: a relative equilibrium (steady rotation)
-        return _Form("gyrostat/steady", Steady(Q0m, w0), rate=_norm(w0))
+        return _Form("elementary", "steady", Steady(Q0m, w0), rate=_norm(w0))
     Jp, R = _principal_frame(d.J)
     Ip = np.array([Jp[1] + Jp[2], Jp[0] + Jp[2], Jp[0] + Jp[1]])
     n = R.T @ n_body
@@ -142,7 +146,7 @@ def _degenerate_form(d: _Data) -> _Form | None:
     Q0p = Q0m @ R
     if Jp[0] == Jp[1] == Jp[2]:
         impl = BodyMap(Sphere(Ip[0], n, Q0p, w0 @ R), R)
-        return _Form("gyrostat/sphere", impl, period=2 * np.pi * Ip[0] / _norm(n), rate=_norm(m + n) / Ip[0])
+        return _Form("elementary", "spherical", impl, period=2 * np.pi * Ip[0] / _norm(n), rate=_norm(m + n) / Ip[0])
     for c in range(3):
         a_, b_ = [i for i in range(3) if i != c]
         # (a transverse rotor momentum below the rounding of N is the rounding of the data)
@@ -151,7 +155,7 @@ def _degenerate_form(d: _Data) -> _Form | None:
             n_ax[c] = n[c]
             impl = Axisymmetric(Ip, n_ax, m, c, Q0p, R)
             per = 2 * np.pi / abs(impl.Om) if impl.Om != 0 else 0.0
-            return _Form("gyrostat/axisymmetric", impl, period=per, rate=impl.psidot)
+            return _Form("elementary", "axisymmetric", impl, period=per, rate=impl.psidot)
     return None
 
 
@@ -197,8 +201,7 @@ def _elliptic_form(d: _Data) -> _Form:
         warnings.warn(f"solve_gyrostat: estimated relative error {err:.1e} per period of the "
                       "orbit (close to a separatrix); see "
                       "diagnostics['error_estimate']", RuntimeWarning, stacklevel=3)
-    method = "gyrostat/separatrix" if impl.separatrix else "gyrostat/elliptic"
-    return _Form(method, Scaled(impl, Gs), period=impl.T / Gs, rate=impl.nu * Gs, err=err)
+    return _Form("elliptic", "separatrix" if impl.separatrix else "", Scaled(impl, Gs), period=impl.T / Gs, rate=impl.nu * Gs, err=err)
 
 
 def _closed_form(d: _Data, rs) -> tuple[_Form, RotorAngles | None]:
@@ -258,9 +261,10 @@ def solve_gyrostat(I: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0: Arr
         ``precession_rate`` (the mean rate; on a separatrix the saddle's) and
         ``error_estimate`` (relative error of ``m(t)`` per period, see the package notes); with
         rotors ``rotor_mean_rates`` (the secular rates of ``phi_k``), ``rotor_series_terms`` and
-        ``rotor_series_tail`` (the Fourier series of ``omega . l_k``).  ``method`` is one of
-        ``gyrostat/elliptic``, ``gyrostat/separatrix``, ``gyrostat/steady``,
-        ``gyrostat/sphere``, ``gyrostat/axisymmetric``, ``rest`` or the Euler top's.
+        ``rotor_series_tail`` (the Fourier series of ``omega . l_k``).  ``model`` is
+        ``"gyrostat"``; ``method`` ``"elliptic"`` (``case`` ``""`` or ``"separatrix"``) or
+        ``"elementary"`` (``case`` ``"steady"``, ``"spherical"``, ``"axisymmetric"`` or ``"rest"``), or
+        the Euler top's when ``N`` is below the rounding of ``m``.
 
     Raises
     ------
@@ -287,7 +291,7 @@ def solve_gyrostat(I: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0: Arr
     inv = _first_integrals(d)
     form, angles = _closed_form(d, rs)
     diag = {"period": float(form.period), "precession_rate": float(form.rate),
-            "error_estimate": float(form.err)}
+            "case": form.case, "error_estimate": float(form.err)}
     if rs:
         inv["rotor_momenta"] = np.array([r.p for r in rs])
         diag.update(rotor_mean_rates=angles.drift.copy(), rotor_series_terms=int(angles.nterms),

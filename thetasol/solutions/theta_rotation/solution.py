@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core.attitude import principal_frame
 from thetasol.mechanics.equations import invariants as first_integrals
-from thetasol.protocol import ClosedFormUnavailable, RotationSolution
+from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._symmetry import symmetry_axis
 from thetasol.solutions.theta_rotation.divisors import eigenvector_divisors
 from thetasol.solutions.theta_rotation.evaluator import FlowEvaluator, flow_evaluator
@@ -126,7 +126,10 @@ def _build(J, a, Q0, omega0) -> ThetaRotation:
     }
     inv = {k: (float(v) if np.ndim(v) == 0 else v) for k, v in first_integrals(J, a, Q0, omega0).items()}
     kind = ("symmetric-" if frame.axis is not None else "") + ("nodal-" if curve.node is not None else "")
-    return ThetaRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=f"theta/{kind}genus-{curve.genus}",
+    diagnostics["case"] = kind.rstrip("-")
+    # the imaginary part Phi(0, t) must not have, at a far time, bounds the error of the set-up
+    diagnostics["error_estimate"] = max(ROUNDOFF, diagnostics["imaginary_residual_t1000"])
+    return ThetaRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=f"theta/genus-{curve.genus}",
                          invariants=inv, diagnostics=diagnostics, curve=curve, basis=sd.G,
                          riemann_matrix=sd.tau, U=sd.U, abel_divisor=dv.AD0, alpha=dv.alpha,
                          normalization=sd.Ainv, evaluator=ev)
