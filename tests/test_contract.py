@@ -37,3 +37,167 @@ def test_numbers_of_every_numeric_type_still_pass():
     assert V.finite_array(True, "x") == 1.0
     assert np.array_equal(V.finite_array(np.array([1, 2], dtype=object), "x"), [1.0, 2.0])
     assert V.times(3, "t") == 3.0
+
+
+# -- the vocabulary and the error estimate of every solution the library returns -----------------------
+#
+# Bodies are chosen valid whether the entry points read them as second moments or as inertia (both
+# satisfy the triangle inequalities), so the checks hold under either reading.
+
+def _rx(angle):
+    c, s = np.cos(angle), np.sin(angle)
+    return np.array([[1.0, 0.0, 0.0], [0.0, c, -s], [0.0, s, c]])
+
+
+def _closed_forms():
+    """(name, solution) for every closed form and every special case the dispatchers choose."""
+    from thetasol import (
+        MassCenterMotion,
+        reference,
+        solve_gyrostat,
+        solve_lagrange_gyrostat,
+        solve_neumann,
+        solve_orbiting_rotation,
+    )
+
+    Z, A = np.zeros((3, 3)), np.diag([1.0, 2.0, 3.0])
+    out = [(c.name, c.solution) for c in reference.cases()]
+    out += [("rest", solve_rotation(J_TRI, Z, np.eye(3), np.zeros(3))),
+            ("steady", solve_rotation(J_TRI, Z, np.eye(3), [0.0, 0.0, 2.0])),
+            ("symmetric", solve_rotation([1.0, 1.0, 1.5], Z, np.eye(3), W0)),
+            ("dps", solve_rotation(J_TRI, Z, np.eye(3), W0, dps=20)),
+            ("neumann-rotation", solve_rotation([1.0, 1.0, 1.5], A, np.eye(3), [0.1, 0.2, 0.0])),
+            ("scaled", solve_rotation(np.array(J_TRI) * 1e6, A, np.eye(3), W0)),
+            ("lagrange", solve_heavy_top([5.0, 5.0, 1.0], [0, 0, 1.0], np.eye(3), [0.3, 0, 5.0])),
+            ("sleeping", solve_heavy_top([5.0, 5.0, 1.0], [0, 0, 1.0], np.eye(3), [0, 0, 5.0])),
+            ("heavy-euler", solve_heavy_top([2.0, 3.0, 4.0], [0, 0, 0], np.eye(3), W0)),
+            ("kovalevskaya", solve_heavy_top([2.0, 2.0, 1.0], [0.3, 0.4, 0], _rx(0.3), [1, 2, 3.0])),
+            ("lagrange-gyrostat", solve_lagrange_gyrostat([5.0, 5.0, 1.0], [0, 0, 1.0], [0, 0, 0.5], np.eye(3),
+                                                          [0.3, 0, 5.0])),
+            ("gyrostat", solve_gyrostat(J_TRI, [0.1, 0.2, 0.3], np.eye(3), W0)),
+            ("gyrostat-rest", solve_gyrostat(J_TRI, [0.1, 0.2, 0.3], np.eye(3), np.zeros(3))),
+            ("gyrostat-sphere", solve_gyrostat([1.0, 1.0, 1.0], [0.1, 0.2, 0.3], np.eye(3), W0)),
+            ("gyrostat-euler", solve_gyrostat(J_TRI, [0.0, 0.0, 0.0], np.eye(3), W0)),
+            ("neumann-planar", solve_neumann(A, [1.0, 0.0, 0.0], [0.0, 0.5, 0.0])),
+            ("mass-center", MassCenterMotion(A, np.zeros(3), np.ones(3), np.zeros(3))),
+            ("orbiting-sphere", solve_orbiting_rotation([1.0, 1.0, 1.0], KeplerOrbit(1.0, [1.0, 0, 0], [0, 1.0, 0]),
+                                                        np.eye(3), W0))]
+    return out
+
+
+CLOSED = _closed_forms()
+
+
+@pytest.mark.parametrize("name, sol", CLOSED, ids=[n for n, _ in CLOSED])
+def test_every_closed_form_speaks_the_vocabulary(name, sol):
+    from thetasol.protocol import METHODS, MODELS, NUMERICAL, vocabulary_problem
+
+    assert vocabulary_problem(sol.model, sol.method) == ""
+    assert sol.model in MODELS and sol.method in METHODS and not sol.method.startswith(NUMERICAL)
+    est = sol.diagnostics["error_estimate"]
+    assert isinstance(est, float) and 0.0 < est < 1e-8
+    check = sol.check()
+    assert check and check.ok and check.estimate == est and str(check).startswith("ok: ")
+    assert sol.model in str(check) and sol.method in str(check)
+
+
+def test_vocabulary_names_what_is_wrong():
+    from thetasol.protocol import vocabulary_problem
+
+    assert vocabulary_problem("rotation", "numerical/DOP853") == ""
+    assert "model 'euler-top'" in vocabulary_problem("euler-top", "elliptic")
+    assert "method 'euler-top/elliptic'" in vocabulary_problem("rotation", "euler-top/elliptic")
+    assert "method 'numerical/'" in vocabulary_problem("rotation", "numerical/")
+
+
+def test_numerical_references_speak_the_vocabulary():
+    from thetasol.integrators.gyrostat import numerical_gyrostat
+    from thetasol.integrators.neumann import numerical_neumann
+    from thetasol.integrators.rotation import numerical_rotation
+    from thetasol.protocol import vocabulary_problem
+
+    A = np.diag([1.0, 2.0, 3.0])
+    for sol, model in ((numerical_rotation(J_TRI, A, np.eye(3), W0), "rotation"),
+                       (numerical_gyrostat(J_TRI, [0.1, 0.2, 0.3], np.eye(3), W0), "gyrostat"),
+                       (numerical_neumann(A, [1.0, 0.0, 0.0], [0.0, 0.5, 0.2]), "neumann")):
+        assert sol.model == model and sol.method == "numerical/DOP853"
+        assert vocabulary_problem(sol.model, sol.method) == ""
+
+
+def test_scenes_are_configurations_whose_estimate_is_their_worst_part():
+    from thetasol import load_scene
+    from thetasol.protocol import worst_error
+
+    for name in ("pivoted_top", "hooke"):
+        sol = load_scene(_scene_path(name)).solution()
+        assert (sol.model, sol.method) == ("configuration", "split")
+        parts = list(sol.rotations.values()) if hasattr(sol, "rotations") else [p.sol for p in sol.parts.values()]
+        assert sol.diagnostics["error_estimate"] == worst_error(parts + ([sol.mass_center]
+                                                                         if name == "hooke" else []))
+        assert "=" in sol.diagnostics["parts"]
+
+
+def _scene_path(name):
+    from pathlib import Path
+
+    import thetasol.scenes
+
+    return Path(thetasol.scenes.__file__).with_name("data") / f"{name}.toml"
+
+
+def test_check_says_not_ok_and_why():
+    sol = solve_rotation(J_TRI, np.zeros((3, 3)), np.eye(3), W0)
+    strict = sol.check(tol=1e-18)
+    assert not strict and "above the tolerance 1.0e-18" in str(strict) and str(strict).startswith("NOT ok: ")
+    far = sol.check(t=[0.0, 1e12])
+    assert not far and far.estimate > 1e-5 and "float64 times" in far.reason
+
+
+def test_a_heavy_top_at_its_pivot_is_a_heavy_top():
+    from thetasol import HeavyTopSolution
+
+    I, W = [2.0, 3.0, 4.0], [0.3, 1.2, -0.7]
+    sol = solve_heavy_top(I, [0.0, 0.0, 0.0], np.eye(3), W, mass=2.0)
+    lagrange = solve_heavy_top([5.0, 5.0, 1.0], [0, 0, 1.0], np.eye(3), [0.3, 0, 5.0])
+    assert isinstance(sol, HeavyTopSolution) and sol.model == lagrange.model == "heavy-top"
+    assert np.array_equal(sol.I, np.diag(I)) and np.array_equal(sol.center, np.zeros(3)) and sol.mass == 2.0
+    assert {"energy", "vertical_momentum", "axial_momentum"} <= set(sol.invariants)
+    t = np.linspace(0.0, 3.0, 7).reshape(7, 1)
+    w, Q = sol(t)
+    assert w.shape == (7, 1, 3) and Q.shape == (7, 1, 3, 3)
+    m = sol.m(t)
+    assert np.allclose(np.linalg.norm(m, axis=-1), np.linalg.norm(np.diag(I) @ W), rtol=1e-13)
+    # the same motion as the torque-free rotation, and as the heavy top without gravity
+    assert np.array_equal(w, sol.rotation(t)[0])
+    assert np.array_equal(w, solve_heavy_top(I, [0.0, 0.0, 0.3], np.eye(3), W, gravity=[0, 0, 0])(t)[0])
+
+
+# -- far times ----------------------------------------------------------------------------------------
+
+def test_far_times_warn_once_and_absurd_times_are_refused():
+    import warnings
+
+    sol = solve_rotation(J_TRI, np.zeros((3, 3)), np.eye(3), W0)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sol(np.array([0.0, 1e3]))                     # well within float64's reach: silent
+        assert caught == []
+        sol(1e12)
+        sol(np.array([1e12, 2e12]))
+    assert len(caught) == 1 and caught[0].category is RuntimeWarning
+    assert "relative error of about" in str(caught[0].message) and caught[0].filename == __file__
+    expected = 1e12 * np.finfo(float).eps * sol.fastest_frequency()
+    assert f"{expected:.1e}" in str(caught[0].message)
+    for t in (1e300, -1e300, [0.0, 1e20]):
+        with pytest.raises(ValueError, match="too far for float64"):
+            sol(t)
+    for t in (np.inf, np.nan, [0.0, -np.inf]):
+        with pytest.raises(ValueError, match="NaN or inf"):
+            sol(t)
+
+
+def test_every_model_has_a_fastest_frequency():
+    for name, sol in CLOSED:
+        f = sol.fastest_frequency()
+        assert np.isfinite(f) and f >= 0.0, name
+    assert solve_rotation(J_TRI, np.zeros((3, 3)), np.eye(3), [0.0, 0.0, 2.0]).fastest_frequency() == 2.0

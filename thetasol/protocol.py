@@ -215,9 +215,9 @@ class Solution:
             far = self.far_time_error(t)
             if far > est:
                 est, what = far, "float64 times up to the latest requested give a relative error of"
-        verdict = "within" if est <= tol else "above"
-        return Check(est <= tol, f"{self.model} by {self.method}: {what} {est:.1e}, {verdict} the tolerance "
-                                 f"{tol:.1e}", est, tol)
+        ok = bool(est <= tol)
+        reason = f"{self.model} by {self.method}: {what} {est:.1e}, {'within' if ok else 'above'} the tolerance {tol:.1e}"
+        return Check(ok, reason, est, tol)
 
     def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, ...]:  # pragma: no cover - abstract
         raise NotImplementedError
