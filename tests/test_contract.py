@@ -201,3 +201,14 @@ def test_every_model_has_a_fastest_frequency():
         f = sol.fastest_frequency()
         assert np.isfinite(f) and f >= 0.0, name
     assert solve_rotation(J_TRI, np.zeros((3, 3)), np.eye(3), [0.0, 0.0, 2.0]).fastest_frequency() == 2.0
+
+
+def test_results_page_lists_the_vocabulary():
+    """docs/results.md documents every model and method the protocol defines, in its tables."""
+    from pathlib import Path
+
+    from thetasol.protocol import METHODS, MODELS
+
+    page = (Path(__file__).parents[1] / "docs" / "results.md").read_text()
+    rows = {line.split("|")[1].strip().strip("`") for line in page.splitlines() if line.startswith("| `")}
+    assert set(MODELS) <= rows and set(METHODS) <= rows
