@@ -89,16 +89,16 @@ def split_table():
     t = np.linspace(0, 60, 241)
     try:
         import heyoka  # noqa: F401
-        ref = solve_configuration(cfg, a, b, rotation="numerical", method="heyoka", rtol=1e-16, **s)(t)
+        ref = solve_configuration(cfg, a, b, rotation="numerical", method="heyoka", rtol=1e-16, **s).trajectories(t)
         ref_name = "split with heyoka rotations (tol 1e-16)"
     except ImportError:
-        ref = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-14, **s)(t)
+        ref = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-14, **s).trajectories(t)
         ref_name = "split with DOP853 rotations (rtol 1e-14)"
     print(f"reference: {ref_name}\n")
     print("| solution | time (s) | RHS evals | max position / attitude deviation from the reference |")
     print("|---|---|---|---|")
     for rtol in (1e-10, 1e-12, 1e-13):
-        sec, sp = best_of(lambda rtol=rtol: solve_configuration(cfg, a, b, rotation="numerical", rtol=rtol, **s)(t), 1)
+        sec, sp = best_of(lambda rtol=rtol: solve_configuration(cfg, a, b, rotation="numerical", rtol=rtol, **s).trajectories(t), 1)
         d = sp.deviation(ref)
         print(f"| split, DOP853 rotations rtol={rtol:g} | {sec:.2f} | - | {d['position']:.1e} / {d['attitude']:.1e} |")
     for rtol in (1e-10, 1e-11, 1e-12, 1e-13):

@@ -617,9 +617,9 @@ def group_scene(rec):
     rec.guard("scene/demo/run", demo_run)
 
     def demo_numerical():
-        try:  # a callable solution: solve_configuration(...)(t)
+        try:  # a solution object: solve_configuration(...).trajectories(t)
             traj = solve_configuration(sc.config, sc.a, sc.b, sc.q0, sc.v0, sc.Q0, sc.omega0,
-                                       rotation="numerical")(sc.t[:61])
+                                       rotation="numerical").trajectories(sc.t[:61])
         except TypeError:  # the older form that took the times
             traj = solve_configuration(sc.config, sc.a, sc.b, sc.q0, sc.v0, sc.Q0, sc.omega0, sc.t[:61],
                                        rotation="numerical")

@@ -41,8 +41,8 @@ state = dict(q0=[0.5, 0.0, 0.0], v0=[0.0, 0.3, 0.0],
 t = np.linspace(0.0, 10.0, 101)
 
 solution = solve_configuration(cfg, a, b, **state)  # closed-form q(t) + one rotation per body
-print("method:", solution.method)
-split = solution(t)                                  # Trajectories at any times
+print("method:", solution.method, "-", solution.diagnostics["parts"])
+split = solution.trajectories(t)                     # Trajectories at any 1-d times (solution(t): arrays)
 print("models:", split.info["models"]["rotations"])
 unsplit = integrate_multibody(cfg, a, b, t=t, **state)      # the whole tree as one constrained system
 print("split vs unsplit:", {k: f"{v:.1e}" for k, v in split.deviation(unsplit).items()})

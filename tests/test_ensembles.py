@@ -169,7 +169,7 @@ def test_scenes_and_scene_files(tmp_path):
     path.write_text(SMALL_SCENE)
     scene = load_scene(path)
     trajs = solve_many([path, scene, str(path)], workers=1, t=scene.t)
-    ref = scene.solution()(scene.t)
+    ref = scene.solution().trajectories(scene.t)
     assert "base=elliptic" in scene.solution().diagnostics["parts"]
     for tr in trajs:
         assert np.array_equal(tr.position, ref.position) and np.array_equal(tr.attitude, ref.attitude)

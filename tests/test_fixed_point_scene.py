@@ -64,7 +64,7 @@ def random_tree(seed):
 def split_vs_unsplit(cfg, a, b, pivot, Q0, w0, t, mb_rtol=1e-12, **kw):
     sol = solve_fixed_point(cfg, a, b, pivot, Q0, w0, **kw)
     mb = integrate_multibody(cfg, a, b, None, None, Q0, w0, t, rtol=mb_rtol, constraint=pivot)
-    split = sol(t)
+    split = sol.trajectories(t)
     assert mb.info["pivot_residual"] < 1e-11 and mb.info["constraint_residual"] < 1e-11  # measured <= 1.9e-12
     return sol, split, split.deviation(mb)
 

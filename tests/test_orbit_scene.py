@@ -44,7 +44,7 @@ def test_example_models_and_stability_table():
     assert regions == {"core": "lagrange", "dock": "lagrange", "truss": "lagrange", "panel": "lagrange"}
     assert sol.stability["dock"].angle < 1e-12
     assert abs(sol.stability["panel"].angle - 0.3) < 1e-12     # pitched by 0.3 rad about a principal axis
-    traj = sol(scene.t)
+    traj = sol.trajectories(scene.t)
     # the system mass centre of the placed bodies is the Kepler orbit
     m = np.array([scene.config.bodies[n].mass for n in traj.names])
     q = np.einsum("n,nti->ti", m, traj.position) / m.sum()

@@ -69,16 +69,16 @@ def test_protocol_and_parts(closed, scene):
 def test_any_times_and_state_shapes(closed, numerical):
     """Unsorted and negative times; the closed-form split against the integrated one (DOP853, rtol 1e-13)."""
     t = np.array([-3.0, 5.0, 0.5, -1.0, 0.0, 12.0])
-    traj = closed(t)
+    traj = closed.trajectories(t)
     assert isinstance(traj, Trajectories) and np.array_equal(traj.t, t)
-    dev = traj.deviation(numerical(t))
+    dev = traj.deviation(numerical.trajectories(t))
     assert max(dev.values()) < 3e-12  # measured 2.9e-13 (attitude)
     # sorted times give the same values
     order = np.argsort(t)
-    again = closed(t[order])
+    again = closed.trajectories(t[order])
     assert np.allclose(again.position, traj.position[:, order], rtol=0, atol=1e-14)  # measured 0
-    # any shape through .state: t.shape leading, then the body axis
-    q, qd, x, v, Q, w = closed.state(t.reshape(2, 3))
+    # any shape: t.shape leading, then the body axis (.state is an alias)
+    q, qd, x, v, Q, w = closed(t.reshape(2, 3))
     assert q.shape == qd.shape == (2, 3, 3) and x.shape == v.shape == w.shape == (2, 3, 3, 3)
     assert Q.shape == (2, 3, 3, 3, 3)
     assert np.array_equal(x.reshape(6, 3, 3).swapaxes(0, 1), traj.position)
@@ -86,9 +86,10 @@ def test_any_times_and_state_shapes(closed, numerical):
     assert np.array_equal(q.reshape(6, 3), traj.mass_center)
     q1 = closed.state(0.5)[0]
     assert q1.shape == (3,) and np.array_equal(q1, traj.mass_center[2])
+    assert all(np.array_equal(a, b) for a, b in zip(closed.state(t), closed(t), strict=True))
     for bad in (t.reshape(2, 3), 0.5, np.array([])):
-        with pytest.raises(ValueError, match="state"):
-            closed(bad)
+        with pytest.raises(ValueError, match="any shape"):
+            closed.trajectories(bad)
 
 
 def test_energy_is_the_physical_bodies_energy(closed, numerical, scene):
@@ -100,11 +101,11 @@ def test_energy_is_the_physical_bodies_energy(closed, numerical, scene):
     assert numerical.invariants["energy"] == E0
     t = np.linspace(0.0, 12.0, 25)
     for sol, bound in ((closed, 3e-14), (numerical, 3e-13)):  # measured 4.5e-15, 7.4e-14
-        tr = sol(t)
+        tr = sol.trajectories(t)
         E = physical_energy(scene.config, scene.a, scene.b, tr.position, tr.velocity, tr.attitude, tr.omega)
         assert np.max(np.abs(E - E0)) < bound * abs(E0)
     # the rotations' first integrals along the closed forms (measured <= 8.7e-15, the root's curve)
-    tr = closed(t)
+    tr = closed.trajectories(t)
     for i, n in enumerate(tr.names):
         inv = invariants(scene.config.effective_body(n).J, scene.a, tr.attitude[i], tr.omega[i])
         for k in ("energy", "I2", "I3", "curve"):

@@ -54,7 +54,7 @@ def test_time_series_draws_the_solution():
     for k in range(3):
         assert np.array_equal(ax_w.lines[k].get_ydata(), omega[:, k])
         assert np.array_equal(ax_Q.lines[k].get_ydata(), Q[:, 2, k])     # vertical part of body axis k
-    assert fig.texts[0].get_text() == "euler-top/elliptic"
+    assert fig.texts[0].get_text() == "rotation: elliptic"
     with pytest.raises(ValueError, match="1 labels for 2 state arrays"):
         plot.time_series(sol, t, labels=["omega"])
 

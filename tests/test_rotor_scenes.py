@@ -128,7 +128,7 @@ def test_split_state_shapes_and_first_integrals():
         q, qd, pos, vel, att, om, phi = sol.state(t)
         assert q.shape == (2, 3, 3) and pos.shape == (2, 3, 7, 3) and att.shape == (2, 3, 7, 3, 3)
         assert phi.shape == (2, 3, 3)
-        traj = sol(t.ravel())
+        traj = sol.trajectories(t.ravel())
         assert np.array_equal(traj.position, np.moveaxis(pos.reshape(6, 7, 3), 0, 1))
         W, Qs, _, _ = sol.evaluate_parts(np.linspace(0.0, 10.0, 51))
         for n, e in scene.config.effective_gyrostats().items():

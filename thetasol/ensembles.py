@@ -73,6 +73,7 @@ def _solve_one(task: _Task, t: np.ndarray | None) -> Any:
     else:
         scene = load_scene(task.payload) if task.kind == "path" else task.payload
         sol = scene.solution()
+        return sol if t is None else sol.trajectories(t)
     return sol if t is None else sol(t)
 
 

@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability
 from thetasol.mechanics.trajectories import Trajectories
+from thetasol.protocol import Solution, describe
 
 __all__ = ["time_series", "on_sphere", "body_axes", "trajectories", "error_against_time", "branch_points",
            "stability_diagram", "stability_grid", "STABILITY_REGIONS"]
@@ -115,7 +116,8 @@ def time_series(sol, t: ArrayLike, *, labels: Sequence[str] | None = None, verti
     for ax, x, label in zip(axs, states, labels):
         _draw_state(ax, tt, np.asarray(x, dtype=float), label, up)
     axs[-1].set_xlabel("t")
-    fig.suptitle(getattr(sol, "method", type(sol).__name__), fontsize=10)
+    title = f"{sol.model}: {describe(sol)}" if isinstance(sol, Solution) else type(sol).__name__
+    fig.suptitle(title, fontsize=10)
     fig.tight_layout()
     return fig
 

@@ -99,8 +99,8 @@ class Scene:
                                    method=s.get("method", "DOP853"), constraint=self.constraint)
 
     def solve(self, rotation: str | None = None) -> Trajectories:
-        """The split solution on the output times: ``self.solution(rotation)(self.t)``."""
-        return self.solution(rotation)(self.t)
+        """The split solution on the output times: ``self.solution(rotation).trajectories(self.t)``."""
+        return self.solution(rotation).trajectories(self.t)
 
     @classmethod
     def from_dict(cls, d: Mapping[str, Any], source: str = "scene") -> Scene:

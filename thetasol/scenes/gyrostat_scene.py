@@ -83,11 +83,12 @@ class _Part:
 
 @dataclass(frozen=True, eq=False)
 class GyrostatSplit(Solution):
-    """A CR^n-central configuration by the split of Theorem 5; ``sol(t)`` -> :class:`Trajectories`.
+    """A CR^n-central configuration by the split of Theorem 5.
 
-    ``sol(t)`` takes 1-d times and returns :class:`Trajectories` of every body with mass
-    (:attr:`GyrostatConfiguration.body_names`), with ``info["rotor_angles"]`` (rotor -> ``phi(t)``) and
-    ``info["carrier_attitudes"]`` (massless carriers included); :meth:`state` takes any shape.
+    ``sol(t)`` takes times of any shape and returns the state of every body with mass
+    (:attr:`GyrostatConfiguration.body_names`) and the rotor angles, time first; :meth:`trajectories`
+    gives :class:`Trajectories` at 1-d times, with ``info["rotor_angles"]`` (rotor -> ``phi(t)``) and
+    ``info["carrier_attitudes"]`` (massless carriers included).
 
     Attributes
     ----------
@@ -151,16 +152,26 @@ class GyrostatSplit(Solution):
                          for k in ("position", "velocity", "attitude", "omega")),
                 np.stack([phi[r] for r in rot], axis=1) if rot else np.zeros((t.size, 0)))
 
-    def state(self, t: Any) -> tuple[np.ndarray, ...]:
+    def __call__(self, t: Any) -> tuple[np.ndarray, ...]:
         """``(q, qdot, position, velocity, attitude, omega, rotor_angles)`` at times of any shape: ``t.shape``
         leading, then the body axis (``body_names``) or the rotor axis (``config.rotors`` order)."""
         return super().__call__(t)
 
-    def __call__(self, t: Any) -> Trajectories:
-        tt = V.times(t, "t")
+    def state(self, t: Any) -> tuple[np.ndarray, ...]:
+        """Alias of ``sol(t)``: the state at times of any shape, time first."""
+        return self(t)
+
+    def fastest_frequency(self) -> float:
+        """The fastest of the parts' frequencies."""
+        return max([self.mass_center.fastest_frequency(), *(p.sol.fastest_frequency() for p in self.parts.values())])
+
+    def trajectories(self, t: Any) -> Trajectories:
+        """:class:`Trajectories` of every body with mass at the 1-d times ``t`` (body axis first), with
+        ``info["rotor_angles"]`` (rotor -> ``phi(t)``) and ``info["carrier_attitudes"]``."""
+        tt, _ = self._times(t)
         if tt.ndim != 1 or tt.size == 0:
             raise ValueError(f"t must be a non-empty 1-d array for Trajectories, got shape {tt.shape}; "
-                             "use .state(t) for other shapes")
+                             "sol(t) takes any shape")
         start = time.perf_counter()
         q, qd = self.mass_center(tt)
         W, Qs, phi, phid = self.evaluate_parts(tt)
@@ -173,10 +184,6 @@ class GyrostatSplit(Solution):
                             attitude=np.array([placed[n]["attitude"] for n in names]),
                             omega=np.array([placed[n]["omega"] for n in names]),
                             mass_center=q, mass_center_velocity=qd, info=info)
-
-    def evaluate(self, t: Any) -> Trajectories:
-        """Alias of ``sol(t)``."""
-        return self(t)
 
 
 def _part(e, a, Q0, w0, p, rotation, rtol) -> _Part:
@@ -262,8 +269,8 @@ class GyrostatScene:
                                             rotation=rotation or s.get("rotation", "auto"), rtol=s.get("rtol", 1e-12))
 
     def solve(self, rotation: str | None = None) -> Trajectories:
-        """The split on the output times."""
-        return self.solution(rotation)(self.t)
+        """The split on the output times (:meth:`GyrostatSplit.trajectories`)."""
+        return self.solution(rotation).trajectories(self.t)
 
 
 def _arr(x, where, shape=None):
@@ -477,7 +484,7 @@ def run_gyrostat_scene(scene: GyrostatScene, check: bool = True, out: TextIO | N
                         if part.kind == "numerical" or "numerical" in part.model},
                        float(scene.t[-1]), note)
     start = time.perf_counter()
-    traj = sol(scene.t)
+    traj = sol.trajectories(scene.t)
     split_seconds = setup_seconds + time.perf_counter() - start
     _describe(scene, sol, say)
     _drift(scene, sol, traj, say)

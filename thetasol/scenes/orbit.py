@@ -189,8 +189,8 @@ def station_stability(config: Configuration, orbit: KeplerOrbit, Q0: Mapping[str
 class OrbitingConfigurationSolution(ConfigurationSolution):
     """A C^k-central station on a Kepler orbit, split by Theorem 4 (module docstring).
 
-    As :class:`~thetasol.scenes.pipeline.ConfigurationSolution` (``sol(t)`` -> Trajectories,
-    ``sol.state(t)`` any shape), with ``mass_center`` the :class:`KeplerOrbit`, ``a`` the tidal
+    As :class:`~thetasol.scenes.pipeline.ConfigurationSolution` (``sol(t)`` the state at any shape of
+    ``t``, ``sol.trajectories(t)`` -> Trajectories), with ``mass_center`` the :class:`KeplerOrbit`, ``a`` the tidal
     matrix (7.11) at ``t = 0`` and ``b = 0``.  ``invariants``: ``orbit`` (Kepler's first integrals)
     and ``rotations`` (name -> the rotation's first integrals: the Jacobi integral (7.18) on a
     circular orbit).  ``stability``: name -> :class:`BodyStability` (empty unless circular).

@@ -175,7 +175,7 @@ def _full_gravity_check(scene, sol, traj, split_seconds, say) -> list[Check]:
     for scale in (1.0, 0.5):
         cfg, pts = scaled_station(scene.config, scene.orbit.points, scale)
         # the rotations do not depend on the size (torque and inertia both scale as L^2): only the placing does
-        from_split = replace(sol, config=cfg)(tt)
+        from_split = replace(sol, config=cfg).trajectories(tt)
         mb = _unsplit(scene, cfg, pts, tt, s.get("check_rtol", 1e-12))
         L = station_size(cfg, pts, from_split)
         dpos = float(np.max(np.abs(from_split.position - mb.position)))
@@ -230,7 +230,7 @@ def run_orbit(scene, check: bool = True, out: TextIO | None = None, *,
 
     start = time.perf_counter()
     sol = scene.solution()
-    traj = sol(scene.t)
+    traj = sol.trajectories(scene.t)
     split_seconds = time.perf_counter() - start
     _describe(scene, sol, say)
     _stability_table(sol, say)

@@ -76,11 +76,13 @@ def closed_form_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: Arra
 class ConfigurationSolution(Solution):
     """Every body of a C^k-central configuration, by the split (3.1), at any times.
 
-    ``sol(t)`` takes 1-d times (any order, negative allowed) and returns a
-    :class:`~thetasol.mechanics.trajectories.Trajectories` (its layout has one time axis);
-    other shapes of ``t`` are refused with a ``ValueError`` that points to :meth:`state`, which
-    takes any shape.  Each part is evaluated once per call (the closed forms in their own
-    chunks; a numerical rotation integrates from 0 to the requested times).
+    A :class:`~thetasol.protocol.Solution` like every other: ``sol(t)`` (alias :meth:`state`) takes
+    times of any shape (any order, negative allowed) and returns the state with ``t.shape`` leading
+    and the body axis next: ``(q, qdot, position, velocity, attitude, omega)``.  :meth:`trajectories`
+    gives the same motion at 1-d times as a :class:`~thetasol.mechanics.trajectories.Trajectories`
+    record (the layout of the multibody reference and of the output files).  Each part is evaluated
+    once per call (the closed forms in their own chunks; a numerical rotation integrates from 0 to the
+    requested times).
 
     Attributes
     ----------
@@ -151,7 +153,7 @@ class ConfigurationSolution(Solution):
                 np.stack([placed[n]["velocity"] for n in names], axis=1),
                 np.stack([Qs[n] for n in names], axis=1), np.stack([Ws[n] for n in names], axis=1))
 
-    def state(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
+    def __call__(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
         """The state at times ``t`` of any shape, ``t.shape`` leading and the body axis next.
 
         Returns
@@ -166,18 +168,28 @@ class ConfigurationSolution(Solution):
         """
         return super().__call__(t)
 
+    def state(self, t: ArrayLike) -> tuple[np.ndarray, ...]:
+        """Alias of ``sol(t)``: the state at times of any shape, time first."""
+        return self(t)
+
+    def fastest_frequency(self) -> float:
+        """The fastest of the parts' frequencies."""
+        parts = [self.mass_center, *self.rotations.values()]
+        return max((p.fastest_frequency() for p in parts if isinstance(p, Solution)), default=0.0)
+
     @single_blas_thread
-    def __call__(self, t: ArrayLike) -> Trajectories:
-        """:class:`Trajectories` of every body at the 1-d times ``t``.
+    def trajectories(self, t: ArrayLike) -> Trajectories:
+        """:class:`Trajectories` of every body at the 1-d times ``t`` (body axis first, as the multibody
+        reference and the output files have them).
 
         ``info`` holds ``models``, ``rotation_kind``, ``method``, ``parts`` and the seconds per part
         (``mass_center_seconds`` and ``rotations[name]["seconds"]``: set-up plus this
         evaluation; ``evaluation_seconds`` alone).
         """
-        tt = V.times(t, "t")
+        tt, _ = self._times(t)
         if tt.ndim != 1 or tt.size == 0:
             raise ValueError(f"t must be a non-empty 1-d array for Trajectories, got shape {tt.shape}; "
-                             "use .state(t) for other shapes")
+                             "sol(t) takes any shape")
         q, qd, Qs, Ws, placed, seconds = self._parts(tt)
         names = self.names
         d = self.diagnostics
@@ -193,10 +205,6 @@ class ConfigurationSolution(Solution):
             attitude=np.array([Qs[n] for n in names]),
             omega=np.array([Ws[n] for n in names]),
             mass_center=q, mass_center_velocity=qd, info=info)
-
-    def evaluate(self, t: ArrayLike) -> Trajectories:
-        """Alias of ``sol(t)``."""
-        return self(t)
 
 
 def parts_text(mass_center: Solution | None, rotations: Mapping[str, Solution]) -> str:
@@ -314,8 +322,8 @@ def solve_configuration(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     Returns
     -------
     ConfigurationSolution
-        ``sol(t)`` gives the :class:`Trajectories` at 1-d times ``t``; ``sol.state(t)`` arrays
-        for any shape.
+        ``sol(t)`` the state arrays at times of any shape (time first); ``sol.trajectories(t)`` the
+        :class:`Trajectories` at 1-d times ``t``.
 
     Examples
     --------
@@ -323,7 +331,9 @@ def solve_configuration(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     >>> cfg = Configuration([Body(mass=1.0, J=[1.0, 2.0, 3.0], name="solo")])
     >>> sol = solve_configuration(cfg, np.diag([1.0, 2.0, 3.0]), [0, 0, 0], [1, 0, 0], [0, 0, 0],
     ...                           {}, {}, rotation="numerical")
-    >>> sol([0.0, 1.0]).position.shape
+    >>> sol([0.0, 1.0])[2].shape
+    (2, 1, 3)
+    >>> sol.trajectories([0.0, 1.0]).position.shape
     (1, 2, 3)
     """
     _check_arguments(config, rotation, check_central, constraint)

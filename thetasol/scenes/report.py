@@ -422,7 +422,7 @@ def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = N
     setup_seconds = time.perf_counter() - start
     announce_fallbacks(_fallbacks(sol), float(scene.t[-1]), note if progress is not None else None)
     start = time.perf_counter()
-    traj = sol(scene.t)
+    traj = sol.trajectories(scene.t)
     split_seconds = setup_seconds + time.perf_counter() - start
     _describe_models(sol, say)
 
