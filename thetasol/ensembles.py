@@ -304,8 +304,8 @@ def solve_many(items: Iterable[Any], *, t: Any = None, solver: Callable | None =
     >>> import numpy as np
     >>> bodies = [dict(I=[5.5, 4.5, 3.0], a=np.zeros((3, 3)), Q0=np.eye(3), omega0=[0.1, 1.0, w])
     ...           for w in (0.2, 0.3)]
-    >>> [s.method for s in solve_many(bodies, workers=1)]
-    ['euler-top/elliptic', 'euler-top/elliptic']
+    >>> [(s.model, s.method) for s in solve_many(bodies, workers=1)]
+    [('rotation', 'elliptic'), ('rotation', 'elliptic')]
     """
     if errors not in ("raise", "return"):
         raise ValueError(f"errors must be 'raise' or 'return', got {errors!r}")

@@ -155,7 +155,9 @@ def solve_rotation(I: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike,
     -------
     RotationSolution
         ``sol(t) -> (omega, Q)``, ``sol.omega(t)``, ``sol.Q(t)``, ``sol.M(t)``, ``sol.u(t)``,
-        ``sol.method``, ``sol.invariants`` (first integrals), ``sol.diagnostics`` (self-checks).  Data
+        ``sol.model`` (``"rotation"``), ``sol.method`` (``"elliptic"``, ``"elementary"``, ``"theta/genus-4"``,
+        ...; docs/results.md), ``sol.invariants`` (first integrals), ``sol.diagnostics`` (self-checks,
+        ``error_estimate`` among them), ``sol.check()``.  Data
         of order one (scales within ``2^+-4`` of 1, no dominant isotropic part) get the branch's own
         solution object; others a :class:`~thetasol.solutions._scaling.ScaledRotation` around the
         solution of the dimensionless problem (``sol.diagnostics["scales"]``), with the user's body
@@ -186,8 +188,8 @@ def solve_rotation(I: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike,
     --------
     >>> import numpy as np
     >>> sol = solve_rotation([5.5, 4.5, 3.0], np.zeros((3, 3)), np.eye(3), [0.1, 1.0, 0.2])
-    >>> sol.method
-    'euler-top/elliptic'
+    >>> sol.model, sol.method
+    ('rotation', 'elliptic')
     >>> sol.omega(np.array([0.0, 1e6])).shape
     (2, 3)
     """

@@ -46,7 +46,7 @@ geometrically; the number of terms is chosen adaptively).
 
 Separatrix: when the cubic has a double root the parameter is ``m = 1`` exactly (or ``m = 0``:
 a regular orbit on a level set with a relative equilibrium elsewhere): ``sn = tanh``,
-``cn = dn = sech`` and the orbit is homoclinic to the saddle ("gyrostat/separatrix", period
+``cn = dn = sech`` and the orbit is homoclinic to the saddle (method "elliptic", case "separatrix", period
 ``inf``).  ``psi'`` is then a rational function of ``s = tanh(u)`` equal to the saddle's rate at
 ``s = +-1``; ``psi - nu t`` is the integral of a Chebyshev series in ``s`` (the interpolant of
 ``psi'``, less its values at ``+-1``, divided exactly by ``1 - s^2``).
