@@ -30,6 +30,12 @@ def test_text_refused_at_the_entry_points():
         solve_heavy_top([5.0, 5.0, 1.0], [0.5, 0.0, "12"], np.eye(3), [0.3, 0, 5.0])
     with pytest.raises(ValueError, match="mu must be numeric"):
         KeplerOrbit("1", [1.0, 0, 0], [0, 1.0, 0])
+    from thetasol import solve_gyrostat
+
+    with pytest.raises(ValueError, match=r"rotors\[0\]\['A'\] must be numeric"):
+        solve_gyrostat(J_TRI, None, np.eye(3), W0, rotors=[dict(axis=[0.0, 0.0, 1.0], A="0.1", B=0.0, p=0.5)])
+    with pytest.raises(ValueError, match="tol must be numeric"):
+        sol.check(tol="1e-10")
 
 
 def test_numbers_of_every_numeric_type_still_pass():

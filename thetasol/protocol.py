@@ -48,7 +48,7 @@ from thetasol.core.so3 import hat
 from thetasol.core.threads import blas_threads
 from thetasol.mechanics.equations import inertia_from_moments
 
-__all__ = ["ClosedFormUnavailable", "Solution", "RotationSolution", "Check", "CHUNK", "MODELS", "METHODS",
+__all__ = ["ClosedFormUnavailable", "Solution", "RotationSolution", "SelfCheck", "CHUNK", "MODELS", "METHODS",
            "NUMERICAL", "CHECK_TOL", "ROUNDOFF", "PHASE_LIMIT", "vocabulary_problem", "describe", "worst_error"]
 
 #: Times evaluated per chunk by :meth:`Solution.__call__` (bounded memory on long time arrays).
@@ -142,7 +142,7 @@ def worst_error(parts: Iterable[Solution]) -> float:
 
 
 @dataclass(frozen=True)
-class Check:
+class SelfCheck:
     """The verdict of :meth:`Solution.check`: true when the expected error is within the tolerance.
 
     Attributes
@@ -203,13 +203,13 @@ class Solution:
         tt = V.times(t, "t")
         return float(np.max(np.abs(tt), initial=0.0)) * _EPS * self.fastest_frequency()
 
-    def check(self, tol: float = CHECK_TOL, t: ArrayLike | None = None) -> Check:
+    def check(self, tol: float = CHECK_TOL, t: ArrayLike | None = None) -> SelfCheck:
         """Whether the solution's own error estimate (and, given ``t``, the far-time error at ``t``) is
         within ``tol``; ``str()`` of the answer says it in one sentence, ``bool()`` is the verdict."""
         tol = float(V.finite_array(tol, "tol", ()))
         est = self._diagnostics().get("error_estimate")
         if est is None or not math.isfinite(est):
-            return Check(False, f"{self.model} by {self.method} reports no finite error_estimate", math.inf, tol)
+            return SelfCheck(False, f"{self.model} by {self.method} reports no finite error_estimate", math.inf, tol)
         est, what = float(est), "its own check estimates a relative error of"
         if t is not None:
             far = self.far_time_error(t)
@@ -217,7 +217,7 @@ class Solution:
                 est, what = far, "float64 times up to the latest requested give a relative error of"
         ok = bool(est <= tol)
         reason = f"{self.model} by {self.method}: {what} {est:.1e}, {'within' if ok else 'above'} the tolerance {tol:.1e}"
-        return Check(ok, reason, est, tol)
+        return SelfCheck(ok, reason, est, tol)
 
     def _evaluate(self, t: np.ndarray) -> tuple[np.ndarray, ...]:  # pragma: no cover - abstract
         raise NotImplementedError

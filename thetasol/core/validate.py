@@ -53,6 +53,19 @@ def finite_array(x: ArrayLike, name: str, shape: Sequence[int] | None = None, dt
     return arr
 
 
+def number(x: object, name: str) -> float:
+    """A finite real number (a Python or numpy scalar, or a 0-d array), not text."""
+    if not_numbers(x):
+        raise ValueError(f"{name} must be numeric, got {x!r} (text is not read as a number)")
+    try:
+        v = float(np.asarray(x, dtype=float).reshape(()))
+    except (TypeError, ValueError):
+        raise ValueError(f"{name} must be a real number, got {x!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name} must be finite, got {v}")
+    return v
+
+
 def symmetric_matrix(a: ArrayLike, name: str = "a", rtol: float = SYM_RTOL) -> np.ndarray:
     """A real symmetric 3x3 matrix; rejects asymmetry beyond ``rtol`` (relative to max |a_ij|)."""
     a = finite_array(a, name, (3, 3))

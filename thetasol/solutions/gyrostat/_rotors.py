@@ -50,12 +50,7 @@ class Rotor:
 
 
 def _scalar(x, what, positive=False, nonnegative=False):
-    try:
-        v = float(x)
-    except (TypeError, ValueError):
-        raise ValueError(f"{what} must be a real number, got {x!r}") from None
-    if not np.isfinite(v):
-        raise ValueError(f"{what} must be finite, got {v}")
+    v = V.number(x, what)
     if positive and not v > 0:
         raise ValueError(f"{what} must be > 0, got {v}")
     if nonnegative and not v >= 0:
