@@ -45,7 +45,8 @@ from thetasol.protocol import ClosedFormUnavailable, Solution, describe, worst_e
 from thetasol.solutions.mass_center import MassCenterMotion
 from thetasol.solutions.neumann import NeumannSolution, solve_neumann
 
-__all__ = ["ConfigurationSolution", "solve_configuration", "rotation_kind", "closed_form_rotation", "effective_rotations"]
+__all__ = ["ConfigurationSolution", "solve_configuration", "rotation_kind", "closed_form_rotation", "effective_rotations",
+           "parts_text"]
 
 
 def rotation_kind(a: ArrayLike) -> str:
