@@ -68,7 +68,7 @@ def test_property_invariants_and_orthogonality(axis, angle, spin, jj):
     w0 = np.zeros(3)
     w0[axis] = spin
     sol = solve_rotation(inertia(Jr), A, rodrigues(rot), w0)
-    assert sol.method.startswith("pendulum") or label(sol) == "elementary:rest"
+    assert sol.case.startswith("pendulum") or label(sol) == "elementary:rest"
     t = np.linspace(0.0, 40.0, 81)
     w, Q = sol(t)
     assert np.abs(np.swapaxes(Q, -1, -2) @ Q - np.eye(3)).max() < 1e-14
