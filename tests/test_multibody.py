@@ -52,7 +52,7 @@ def test_split_matches_unsplit_over_many_periods():
     cfg, a, b, s = make_system(11)
     assert len(cfg) >= 4 and cfg.depth == 2 and cfg.is_central()
     t = np.linspace(0.0, 60.0, 241)  # mass-centre periods 4.4, 6.3, 9.9; rotation rates O(1)
-    split = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-13, **s)(t)
+    split = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-13, **s).trajectories(t)
     mb = integrate_multibody(cfg, a, b, t=t, rtol=1e-12, **s)
     dev = split.deviation(mb)  # measured 3e-12, 5e-12, 4e-12, 6e-12, 3e-14
     assert dev["position"] < 5e-11
@@ -81,7 +81,7 @@ def test_non_central_tree_does_not_split():
         assert not bad.is_central()
         with pytest.raises(ValueError, match="not C\\^k-central"):
             solve_configuration(bad, a, b, **s)
-        split = solve_configuration(bad, a, b, rotation="numerical", check_central=False, **s)(t)
+        split = solve_configuration(bad, a, b, rotation="numerical", check_central=False, **s).trajectories(t)
         mb = integrate_multibody(bad, a, b, t=t, rtol=1e-11, **s)
         dev = split.deviation(mb)
         devs.append(max(dev["position"], dev["attitude"]))
@@ -95,7 +95,7 @@ def test_mixed_sign_potential_and_four_bodies():
     edges = [("A", "B"), ("A", "C"), ("C", "D")]
     cfg, a, b, s = make_system(3, eig=(1.5, 0.0, -0.3), edges=edges)
     t = np.linspace(0.0, 15.0, 61)
-    split = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-13, **s)(t)
+    split = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-13, **s).trajectories(t)
     mb = integrate_multibody(cfg, a, b, t=t, rtol=1e-12, **s)
     dev = split.deviation(mb)  # measured 1.5e-12 with positions up to 500 (hyperbolic mode)
     assert max(dev["position"], dev["attitude"], dev["velocity"], dev["omega"]) < 5e-11
@@ -110,7 +110,7 @@ def test_single_body_is_a_free_body_in_the_potential():
     s = dict(q0=rng.normal(size=3), v0=rng.normal(size=3), Q0={"solo": rodrigues(rng.normal(size=3))},
              omega0={"solo": rng.normal(size=3)})
     t = np.linspace(0, 10, 21)
-    dev = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-13, **s)(t).deviation(
+    dev = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-13, **s).trajectories(t).deviation(
         integrate_multibody(cfg, a, b, t=t, rtol=1e-12, **s))
     assert max(dev.values()) < 1e-10
 
@@ -167,7 +167,7 @@ def test_gap_is_the_multibody_integration_error():
     """Over t <= 200 the split/unsplit gap falls with the multibody tolerance: model error would not."""
     cfg, a, b, s = make_system(11)
     t = np.linspace(0.0, 200.0, 401)
-    split = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-13, **s)(t)
+    split = solve_configuration(cfg, a, b, rotation="numerical", rtol=1e-13, **s).trajectories(t)
     gaps = []
     for rtol in (1e-10, 1e-12):
         dev = split.deviation(integrate_multibody(cfg, a, b, t=t, rtol=rtol, **s))
