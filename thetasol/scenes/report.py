@@ -221,7 +221,26 @@ def _drift(scene: Scene, traj: Trajectories, say: ReportText) -> None:
             f"spectral curve (4.12) {cd:.1e}")
 
 
-def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say: ReportText,
+#: Fewest times a multibody comparison samples: where the scene's output times are sparser on the checked
+#: horizon (a far ``t_end``), the split is evaluated on this many evenly spaced times there instead.
+MIN_CHECK_TIMES = 101
+
+
+def _restricted(traj: Trajectories, tc: np.ndarray) -> Trajectories:
+    """The first ``tc.size`` output times of ``traj`` (those are ``tc``)."""
+    n = tc.size
+    return Trajectories(t=tc, names=traj.names, position=traj.position[:, :n], velocity=traj.velocity[:, :n],
+                        attitude=traj.attitude[:, :n], omega=traj.omega[:, :n], mass_center=traj.mass_center[:n],
+                        mass_center_velocity=traj.mass_center_velocity[:n])
+
+
+def _check_times(t: np.ndarray, t_end: float) -> np.ndarray:
+    """The scene's output times up to ``t_end``, or :data:`MIN_CHECK_TIMES` even ones when they are fewer."""
+    sel = t[t <= t_end]
+    return sel if sel.size >= MIN_CHECK_TIMES else np.linspace(0.0, t_end, MIN_CHECK_TIMES)
+
+
+def _multibody_check(scene: Scene, sol, traj: Trajectories, split_seconds: float, say: ReportText,
                      note: Callable[[str], None] | None = None) -> tuple[Check, float, float] | None:
     """The split against the unsplit multibody integration up to the scene's ``check_t_end``, or up to the
     output time it reaches in :data:`~thetasol.scenes.references.BUDGET_SECONDS` (from a timed probe;
@@ -241,26 +260,20 @@ def _multibody_check(scene: Scene, traj: Trajectories, split_seconds: float, say
     rate = probe_rate(unsplit, t_end)
     cut = ""
     if rate * t_end > BUDGET_SECONDS:
-        reach = t[t <= BUDGET_SECONDS / rate]
-        cut = (f"checked on t <= {reach[-1]:.4g} only: to check_t_end = {t_end:g} it would take about "
+        reach = BUDGET_SECONDS / rate
+        cut = (f"checked on t <= {reach:.4g} only: to check_t_end = {t_end:g} it would take about "
                f"{rate * t_end:.2g} s (set check_t_end or --no-check)")
-        if reach.size < 2:
-            say()
-            say(f"the split against the unsplit multibody system: not run ({cut.split(': ', 1)[1]})")
-            return None
-        t_end = float(reach[-1])
+        t_end = reach
     if note is not None and rate * t_end > ANNOUNCE_SECONDS:
         note(f"to t = {t_end:g}, expected about {rate * t_end:.2g} s")
-    sel = t <= t_end
+    tc = _check_times(t, t_end)
     say()
-    say(f"the split against the unsplit multibody system (maximal coordinates, KKT, t <= {t_end:g}"
-        + (", the pivot a spherical joint to the ground):" if pivot is not None else "):"))
-    mb = unsplit(t[sel])
-    sub = Trajectories(t=t[sel], names=traj.names, position=traj.position[:, sel],
-                       velocity=traj.velocity[:, sel], attitude=traj.attitude[:, sel], omega=traj.omega[:, sel],
-                       mass_center=traj.mass_center[sel], mass_center_velocity=traj.mass_center_velocity[sel])
+    say(f"the split against the unsplit multibody system (maximal coordinates, KKT, t <= {t_end:g}, "
+        f"{tc.size} times" + (", the pivot a spherical joint to the ground):" if pivot is not None else "):"))
+    mb = unsplit(tc)
+    sub = _restricted(traj, tc) if tc.size <= t.size and np.array_equal(tc, t[:tc.size]) else sol.trajectories(tc)
     dv = sub.deviation(mb)
-    size = 1.0 + float(np.max(np.abs(traj.position[:, sel])))
+    size = 1.0 + float(np.max(np.abs(sub.position)))
     # The gap is the multibody integrator's error (it falls with check_rtol; docs/mechanics.md):
     # measured <= ~0.3 rtol (1 + t) |x|; a split that does not hold is off by ~ the joint offsets.
     tol = 10.0 * s.get("check_rtol", 1e-12) * (1.0 + t_end) * size
@@ -442,7 +455,7 @@ def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = N
     mb_cost = None
     if multibody:
         step()
-        result = _multibody_check(scene, traj, split_seconds, say, note)
+        result = _multibody_check(scene, sol, traj, split_seconds, say, note)
         if result is not None:
             mb_check, *mb_cost = result
             checks.append(mb_check)
