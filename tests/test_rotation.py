@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from conftest import label
 
-from thetasol import RotationSolution, inertia, integrate_rotation, solve_rotation
+from thetasol import RotationSolution, inertia, integrate_rotation, second_moments, solve_gyrostat, solve_rotation
 from thetasol.core.so3 import hat, vee
 
 Z = np.zeros((3, 3))
@@ -144,6 +144,17 @@ def test_inertia_valid_either_way_is_the_inertia():
     t = np.array([0.0, 1.3, 17.0])
     assert np.allclose(rot.omega(t), sol.omega(t) @ R.T, rtol=0, atol=1e-12)
     assert np.allclose(rot.I, R @ np.diag(I) @ R.T, rtol=0, atol=1e-14)
+
+
+@pytest.mark.parametrize("I", [np.array([2.7, 2.3, 1.6]), np.array([75.6, 97.5, 57.2])])   # the second is rescaled
+@pytest.mark.parametrize("solve", [lambda I: solve_rotation(I, Z, np.eye(3), W0),
+                                   lambda I: solve_rotation(I, np.diag([0.3, -0.2, 0.5]), np.eye(3), W0),
+                                   lambda I: solve_gyrostat(I, [0.0, 0.0, 0.3], np.eye(3), W0)])
+def test_I_is_the_inertia_given(I, solve):
+    """``sol.I`` is the inertia passed, bit for bit (principal values as a diagonal), not ``tr(J) 1 - J``
+    recomputed from the second moments, which for these bodies is an ulp off in an entry."""
+    assert not np.array_equal(inertia(second_moments(I)), I)   # the round trip is not exact here
+    assert np.array_equal(solve(I).I, np.diag(I))
 
 
 def test_bad_times():

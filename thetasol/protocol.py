@@ -327,6 +327,9 @@ class RotationSolution(Solution):
     diagnostics : dict
         How the solution checked itself: error estimates, periods and the characteristic
         constants of the closed form, and ``error_estimate`` (see the module docstring).
+    I_given : ndarray, shape (3, 3), or None
+        The inertia tensor as the entry point received it (checked, principal values as a diagonal);
+        the property ``I`` returns it.
     """
 
     model = "rotation"
@@ -339,6 +342,7 @@ class RotationSolution(Solution):
     invariants: dict = field(repr=False)
     dps: int | None = None
     diagnostics: dict = field(default_factory=dict, repr=False)
+    I_given: np.ndarray | None = field(default=None, repr=False)
 
     # -- to implement ------------------------------------------------------------------------
     def _evaluate(self, t: np.ndarray):  # pragma: no cover - abstract
@@ -383,13 +387,14 @@ class RotationSolution(Solution):
 
     @property
     def I(self) -> np.ndarray:
-        """Inertia tensor ``I = tr(J) 1 - J`` in the body frame, shape (3, 3): the body as every entry
-        point takes it, so that results of different models compare."""
-        return inertia_from_moments(self.J)
+        """Inertia tensor in the body frame, shape (3, 3): the body as every entry point takes it, so that
+        results of different models compare.  The inertia the entry point was given (``I_given``) when
+        it stored it, else ``tr(J) 1 - J`` (the round trip through ``J`` may differ from it by an ulp)."""
+        return self.I_given if self.I_given is not None else inertia_from_moments(self.J)
 
     def m(self, t: ArrayLike) -> np.ndarray:
         """Body angular momentum ``m = I omega``, shape ``t.shape + (3,)``."""
-        return self.omega(t) @ inertia_from_moments(self.J).T
+        return self.omega(t) @ self.I.T
 
     def M(self, t: ArrayLike) -> np.ndarray:
         """The paper's skew matrix ``M = J hat(omega) + hat(omega) J = hat(I omega)`` (4.5)."""

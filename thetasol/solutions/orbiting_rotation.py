@@ -204,7 +204,7 @@ def solve_orbiting_rotation(I: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, ome
     w0 = V.vector3(omega0, "omega0")
     Jp, P = principal_frame(Jm)
     Ip = inertia(Jp)
-    base = dict(J=Jm, a=_tidal_matrix(orbit), Q0=Q0, omega0=w0, orbit=orbit)
+    base = dict(J=Jm, a=_tidal_matrix(orbit), Q0=Q0, omega0=w0, orbit=orbit, I_given=Im)
     if np.max(Ip) - np.min(Ip) <= 4 * _EPS * np.max(Ip):
         return OrbitingRotation(method="elementary", invariants={"m": Im @ w0},
                                 diagnostics={"case": "spherical", "error_estimate": ROUNDOFF}, _c={"kind": "spherical"},

@@ -193,7 +193,8 @@ def solve_rotation(I: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike,
     >>> sol.omega(np.array([0.0, 1e6])).shape
     (2, 3)
     """
-    Jm = second_moments(V.inertia(I, "I"))
+    Im = V.inertia(I, "I")
+    Jm = second_moments(Im)
     am = V.symmetric_matrix(a, "a")
     Q0m = V.rotation_matrix(Q0, "Q0")
     w0 = V.vector3(omega0, "omega0")
@@ -203,9 +204,11 @@ def solve_rotation(I: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike,
     am_solve = np.zeros((3, 3)) if potential_kind(am) == "isotropic" else am
     sc = choose_scales(Jm, am_solve, w0)
     if sc.trivial:
-        return _dispatch(Jm, am, Q0m, w0, dps)
-    Js, as_, ws = dimensionless_data(Jm, am_solve, w0, sc)
-    return scaled_solution(_dispatch(Js, as_, Q0m, ws, dps), Jm, am, Q0m, w0, sc)
+        sol = _dispatch(Jm, am, Q0m, w0, dps)
+    else:
+        Js, as_, ws = dimensionless_data(Jm, am_solve, w0, sc)
+        sol = scaled_solution(_dispatch(Js, as_, Q0m, ws, dps), Jm, am, Q0m, w0, sc)
+    return dataclasses.replace(sol, I_given=Im)   # sol.I is the body as given, not tr(J) 1 - J again
 
 
 def _dispatch(J, a, Q0, omega0, dps) -> RotationSolution:

@@ -297,4 +297,4 @@ def solve_gyrostat(I: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0: Arr
         diag.update(rotor_mean_rates=angles.drift.copy(), rotor_series_terms=int(angles.nterms),
                     rotor_series_tail=float(angles.tail))
     return GyrostatSolution(d.J, np.zeros((3, 3)), d.Q0, d.omega0, form.method, inv, None,
-                            diag, N=d.N, rotors=rs, _impl=form.impl, _rotor_angles=angles)
+                            diag, I_given=d.I, N=d.N, rotors=rs, _impl=form.impl, _rotor_angles=angles)
