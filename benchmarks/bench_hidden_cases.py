@@ -15,8 +15,8 @@ import numpy as np
 from _common import machine_info
 
 import thetasol as ts
+from thetasol.core.inertia import inertia
 from thetasol.core.so3 import rodrigues
-from thetasol.mechanics.equations import inertia
 
 T = np.array([0.7, 3.1, 17.3, 102.0, 997.0, 4002.0])
 KINDS = ["generic", "saddle", "fast", "slow", "nearly-symmetric", "rank-one", "near-eq", "symmetric",

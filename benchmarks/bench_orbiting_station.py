@@ -19,10 +19,10 @@ import numpy as np
 sys.path.insert(0, os.path.dirname(__file__))
 from _common import best_of, machine_info  # noqa: E402
 
+from thetasol.core.inertia import inertia
 from thetasol.core.so3 import rodrigues  # noqa: E402
 from thetasol.integrators.multibody_gravity import integrate_multibody_gravity  # noqa: E402
 from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation  # noqa: E402
-from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.gravity_gradient import orbit_frame  # noqa: E402
 from thetasol.scenes.format import load_scene  # noqa: E402
 from thetasol.solutions.kepler import KeplerOrbit  # noqa: E402

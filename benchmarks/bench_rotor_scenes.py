@@ -27,8 +27,8 @@ import test_gyrostat_potential as P  # noqa: E402
 import test_rotor_scenes as S  # noqa: E402
 from conftest import rand_Q  # noqa: E402
 
+from thetasol.core.inertia import inertia
 from thetasol.integrators.gyrostat import integrate_gyrostat, integrate_heavy_gyrostat  # noqa: E402
-from thetasol.mechanics.equations import inertia
 from thetasol.scenes.gyrostat_scene import run_gyrostat_scene  # noqa: E402
 from thetasol.solutions.lagrange_gyrostat import solve_lagrange_gyrostat  # noqa: E402
 

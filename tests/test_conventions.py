@@ -9,8 +9,8 @@ import pytest
 from scipy.integrate import solve_ivp
 
 from thetasol import integrate_rotation, invariants
+from thetasol.core.inertia import inertia
 from thetasol.core.so3 import hat
-from thetasol.mechanics.equations import inertia
 
 
 def point_mass_body(rng, n=6):
@@ -95,3 +95,27 @@ def test_so3_helpers_match_numpy():
     R = rodrigues(u)
     assert np.allclose(np.swapaxes(R, -1, -2) @ R, np.eye(3), atol=1e-15)
     assert np.allclose((R @ u[..., None])[..., 0], u, atol=1e-15)  # the axis is fixed
+
+
+def test_one_implementation_of_the_body_conversions():
+    """``thetasol.inertia``/``thetasol.second_moments`` are thetasol.core.inertia's, invert each other (to
+    rounding) on principal values and tensors alike, and no other module writes ``tr(J) 1 - J`` or
+    ``tr(I)/2 1 - I`` inline."""
+    import pathlib
+    import re
+
+    import thetasol
+    from thetasol.core import inertia as conv
+
+    assert thetasol.inertia is conv.inertia and thetasol.second_moments is conv.second_moments
+    J = np.array([0.6, 1.0, 1.7])
+    assert np.allclose(conv.second_moments(conv.inertia(J)), J, rtol=0, atol=4e-16)
+    R = np.linalg.qr(np.array([[1.0, 0.3, -0.2], [0.1, 1.0, 0.4], [0.5, -0.2, 1.0]]))[0]
+    Jt = R @ np.diag(J) @ R.T
+    assert np.allclose(conv.inertia(Jt), R @ np.diag(conv.inertia(J)) @ R.T, rtol=0, atol=1e-15)
+    assert np.array_equal(conv.inertia(Jt), conv.inertia_from_moments(Jt))
+    inline = re.compile(r"np\.trace\([^()]*\) \* np\.eye\(3\) -|0\.5 \* [A-Za-z_]+\.sum\(\) - ")
+    root = pathlib.Path(thetasol.__file__).parent
+    found = [str(p.relative_to(root)) for p in root.rglob("*.py")
+             if p.name != "inertia.py" and inline.search(p.read_text())]
+    assert found == []

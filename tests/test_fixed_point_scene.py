@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from conftest import label
 
+from thetasol.core.inertia import inertia
 from thetasol.core.so3 import rodrigues
 from thetasol.integrators.fixed_point import fixed_point_energy, integrate_fixed_point
 from thetasol.integrators.heavy_top import integrate_heavy_top
@@ -19,7 +20,6 @@ from thetasol.integrators.multibody import integrate_multibody
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.mechanics.constraints import Pivot
-from thetasol.mechanics.equations import inertia
 from thetasol.scenes.fixed_point import pivoted_body, solve_fixed_point
 from thetasol.scenes.format import load_scene
 from thetasol.scenes.report import run

@@ -155,7 +155,7 @@ def test_shapes_and_negative_times():
 
 # -- closed forms --------------------------------------------------------------------------------
 
-from thetasol.mechanics.equations import inertia
+from thetasol.core.inertia import inertia
 from thetasol.protocol import ClosedFormUnavailable  # noqa: E402
 from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation  # noqa: E402
 

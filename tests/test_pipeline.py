@@ -12,9 +12,10 @@ import pytest
 from conftest import label
 from test_scene import SMALL
 
+from thetasol.core.inertia import inertia
 from thetasol.integrators.multibody import initial_state
 from thetasol.integrators.rotation import NumericalRotation, integrate_rotation
-from thetasol.mechanics.equations import inertia, invariants
+from thetasol.mechanics.equations import invariants
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import Solution
 from thetasol.scenes.format import Scene

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from thetasol import integrate_rotation, second_moments
+from thetasol.core.inertia import inertia
 from thetasol.integrators.multibody import initial_state
-from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.trajectories import Trajectories, write_trajectories
 from thetasol.scenes.format import Scene, demo_scene_path, load_scene
 from thetasol.scenes.pipeline import rotation_kind

@@ -415,8 +415,8 @@ def test_node_velocity_closed_form_against_a_contour_integral():
     the node's branches lose 5e-12 of it."""
     import sympy as sp
 
+    from thetasol.core.inertia import inertia_from_moments
     from thetasol.curves.spectral import spectral_curve
-    from thetasol.mechanics.equations import inertia_from_moments
     from thetasol.solutions.theta_rotation.infinity import (
         infinity_data as _infinity_data,
         velocity_at_infinity as _velocity_at_infinity,

@@ -39,7 +39,8 @@ _group("thetasol.mechanics.trajectories", "Trajectories")
 _group("thetasol.mechanics.constraints", "Sphere", "Pivot")
 _group("thetasol.mechanics.rotors", "Rotor", "MasslessCarrier", "GyrostatConfiguration", "EffectiveGyrostat",
        "EffectiveRotor", "gyrostat_energy")
-_group("thetasol.mechanics.equations", "inertia", "second_moments", "invariants", "spectral_coefficients", "torque")
+_group("thetasol.core.inertia", "inertia", "second_moments")
+_group("thetasol.mechanics.equations", "invariants", "spectral_coefficients", "torque")
 _group("thetasol.mechanics.heavy_top", "heavy_top_invariants", "kovalevskaya_integral")
 _group("thetasol.mechanics.gravity_gradient", "gravity_gradient_stability", "GravityGradientStability",
        "gravity_gradient_torque", "orbit_frame")
@@ -92,6 +93,7 @@ def __dir__() -> list[str]:
 
 if TYPE_CHECKING:
     from thetasol import reference
+    from thetasol.core.inertia import inertia, second_moments
     from thetasol.curves.hyperelliptic import HyperellipticCurve
     from thetasol.curves.plane_curve import Numerator, Place, PlaneCurve
     from thetasol.curves.protocol import Curve
@@ -110,7 +112,7 @@ if TYPE_CHECKING:
     from thetasol.mechanics.bodies import Body
     from thetasol.mechanics.configuration import Configuration, Joint
     from thetasol.mechanics.constraints import Pivot, Sphere
-    from thetasol.mechanics.equations import inertia, invariants, second_moments, spectral_coefficients, torque
+    from thetasol.mechanics.equations import invariants, spectral_coefficients, torque
     from thetasol.mechanics.gravity_gradient import (
         GravityGradientStability,
         gravity_gradient_stability,

@@ -32,6 +32,7 @@ except ImportError as exc:  # pragma: no cover - exercised in a subprocess witho
 import numpy as np
 from numpy.typing import ArrayLike
 
+from thetasol.core.inertia import second_moments
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import Solution, describe
@@ -359,7 +360,7 @@ def _region(k1: float, k3: float) -> str:
         return "non-physical"
     I1 = (1.0 - k1) / (1.0 - k3)
     I = np.array([I1, 1.0, I1 + k1])          # k1 = I3 - I1, k3 = (I3 - 1) / I1
-    J = 0.5 * I.sum() - I                      # J >= 0: the triangle inequalities of the inertia
+    J = second_moments(I)                      # J >= 0: the triangle inequalities of the inertia
     if np.any(I <= 0) or np.any(J < 0):
         return "non-physical"
     return gravity_gradient_stability(J, 1.0).region

@@ -44,9 +44,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.inertia import inertia_from_moments
 from thetasol.core.so3 import hat
 from thetasol.core.threads import blas_threads
-from thetasol.mechanics.equations import inertia_from_moments
 
 __all__ = ["ClosedFormUnavailable", "Solution", "RotationSolution", "SelfCheck", "CHUNK", "MODELS", "METHODS",
            "NUMERICAL", "CHECK_TOL", "ROUNDOFF", "PHASE_LIMIT", "vocabulary_problem", "describe", "worst_error"]

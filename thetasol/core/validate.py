@@ -11,6 +11,7 @@ from collections.abc import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, DTypeLike
 
+from thetasol.core.inertia import inertia_from_moments, moments_from_inertia
 from thetasol.core.so3 import polar_orthonormalize
 
 #: Relative tolerance on symmetry of a potential matrix or tensor.
@@ -132,7 +133,7 @@ def inertia(I: ArrayLike, name: str = "I") -> np.ndarray:
         try:
             second_moments(arr, name)
             hint = ("; these look like second moments J = sum m r r^T (the paper's J), not an inertia: "
-                    f"pass thetasol.inertia(J) = {_plain(np.trace(arr) * np.eye(3) - arr)}")
+                    f"pass thetasol.inertia(J) = {_plain(inertia_from_moments(arr))}")
         except ValueError:
             pass
         raise ValueError(f"inertia {name} violates the triangle inequality I_i <= I_j + I_k (eigenvalues {ev}): "
@@ -158,7 +159,7 @@ def inertia_to_moments(I: ArrayLike, name: str = "I") -> np.ndarray:
     ev = np.linalg.eigvalsh(arr)
     if ev[0] <= 0:
         raise ValueError(f"inertia {name} must be positive definite, eigenvalues {ev}")
-    J = 0.5 * np.trace(arr) * np.eye(3) - arr
+    J = moments_from_inertia(arr)
     return second_moments(J, f"second moments from {name}")
 
 

@@ -11,7 +11,7 @@ from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
-from thetasol.mechanics.equations import second_moments
+from thetasol.core.inertia import second_moments
 
 
 def both_ways(t: np.ndarray, m0: np.ndarray, Q0: np.ndarray,

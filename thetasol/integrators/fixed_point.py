@@ -25,9 +25,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.inertia import second_moments
 from thetasol.core.so3 import cross, hat, polar_orthonormalize
 from thetasol.integrators._common import SCIPY_METHODS, Settings, body_inertia, both_ways, settings, solve_ivp_mQ
-from thetasol.mechanics.equations import second_moments, torque
+from thetasol.mechanics.equations import torque
 from thetasol.protocol import RotationSolution
 
 __all__ = ["integrate_fixed_point", "fixed_point_energy", "NumericalFixedPoint"]

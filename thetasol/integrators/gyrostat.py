@@ -32,9 +32,9 @@ from numpy.typing import ArrayLike
 from scipy.integrate import solve_ivp
 
 from thetasol.core import validate as V
+from thetasol.core.inertia import inertia_from_moments, second_moments
 from thetasol.core.so3 import cross, hat, polar_orthonormalize, vee
 from thetasol.integrators._common import Settings, body_inertia, extended_inertia, heyoka_and_type, heyoka_tol, settings
-from thetasol.mechanics.equations import inertia_from_moments, second_moments
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
 from thetasol.mechanics.orbit import Orbit, check_orbit
 from thetasol.protocol import RotationSolution

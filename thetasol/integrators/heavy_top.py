@@ -25,6 +25,7 @@ from typing import Any, ClassVar
 import numpy as np
 from numpy.typing import ArrayLike
 
+from thetasol.core.inertia import second_moments
 from thetasol.core.so3 import cross, hat, polar_orthonormalize
 from thetasol.integrators._common import (
     Settings,
@@ -35,7 +36,6 @@ from thetasol.integrators._common import (
     settings,
     solve_ivp_mQ,
 )
-from thetasol.mechanics.equations import second_moments
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
 from thetasol.protocol import RotationSolution
 

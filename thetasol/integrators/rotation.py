@@ -28,6 +28,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.attitude import principal_frame
+from thetasol.core.inertia import inertia
 from thetasol.core.so3 import polar_orthonormalize
 from thetasol.integrators._common import (
     SCIPY_METHODS,
@@ -169,7 +170,7 @@ def _yoshida_weights(order: int) -> list[float]:
 def _splitting(Jm, am, Q0, m0, tgrid, rtol, step, w0):
     # Work in the principal frame: J = P diag(Jp) P^T, Q' = Q P, m' = P^T m.
     Jp, P = principal_frame(Jm, ascending=True)  # right-handed: the flows use cross products
-    Ip = Jp.sum() - Jp
+    Ip = inertia(Jp)
     Qp = Q0 @ P
     mp = P.T @ m0
     direction = 1.0 if tgrid[-1] >= 0 else -1.0

@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
-from thetasol.mechanics.equations import inertia_from_moments
+from thetasol.core.inertia import inertia_from_moments
 
 __all__ = ["Body", "principal_axes"]
 

@@ -31,9 +31,9 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.inertia import inertia, inertia_from_moments
 from thetasol.core.so3 import hat
 from thetasol.mechanics.bodies import Body, principal_axes
-from thetasol.mechanics.equations import inertia_from_moments
 
 __all__ = ["CENTRAL_RTOL", "Joint", "EffectiveBody", "JointViolation", "Configuration", "initial_attitudes"]
 
@@ -97,7 +97,7 @@ class EffectiveBody:
     @property
     def principal_inertia(self) -> np.ndarray:
         """Principal moments of inertia ``I_i = tr(J) - J_i`` in the order of ``axes``."""
-        return self.principal_moments.sum() - self.principal_moments
+        return inertia(self.principal_moments)
 
 
 @dataclass(frozen=True)

@@ -20,55 +20,17 @@ All functions broadcast over leading axes of ``Q`` and ``omega``.
 from __future__ import annotations
 
 import numpy as np
-from numpy.typing import ArrayLike
 
+from thetasol.core.inertia import inertia_from_moments
 from thetasol.core.so3 import cross, hat, vee
 
 __all__ = [
-    "inertia",
-    "second_moments",
-    "inertia_from_moments",
     "torque",
     "rotation_rhs",
     "paper_variables",
     "invariants",
     "spectral_coefficients",
 ]
-
-
-def inertia_from_moments(J: np.ndarray) -> np.ndarray:
-    """Inertia tensor ``I = tr(J) 1 - J`` (4.5) of a second-moment tensor ``J`` (3x3)."""
-    return np.trace(J, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) - J
-
-
-def _principal_or_tensor(x: ArrayLike, name: str) -> np.ndarray:
-    arr = np.asarray(x, dtype=float)
-    if arr.shape not in ((3,), (3, 3)):
-        raise ValueError(f"{name} must be 3 principal values or a 3x3 tensor, got shape {arr.shape}")
-    return arr
-
-
-def inertia(J: ArrayLike) -> np.ndarray:
-    """The inertia tensor ``I = tr(J) 1 - J`` of second moments ``J = sum m r r^T`` (the paper's (4.5)).
-
-    Principal values give principal values (shape (3,)), a 3x3 tensor a 3x3 tensor.  Every public
-    entry point of thetasol takes ``I``; this converts the paper's second moments to it.
-    """
-    arr = _principal_or_tensor(J, "J")
-    if arr.ndim == 1:
-        return arr.sum() - arr
-    return inertia_from_moments(arr)
-
-
-def second_moments(I: ArrayLike) -> np.ndarray:  # noqa: E741 - the inertia tensor's usual name
-    """The second moments ``J = tr(I)/2 1 - I`` (the paper's ``J``) of an inertia tensor ``I``.
-
-    The inverse of :func:`inertia`, with the same shapes.
-    """
-    arr = _principal_or_tensor(I, "I")
-    if arr.ndim == 1:
-        return 0.5 * arr.sum() - arr
-    return 0.5 * np.trace(arr) * np.eye(3) - arr
 
 
 def torque(J: np.ndarray, a: np.ndarray, Q: np.ndarray) -> np.ndarray:
@@ -131,7 +93,7 @@ def invariants(J: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray) -
     ``m2``      ``|m|^2 = -1/2 tr(M^2)`` ((4.7), conserved only when ``a`` is isotropic or zero);
     ``curve``   all coefficients of the spectral curve (4.12), see :func:`spectral_coefficients`.
 
-    ``J`` is the paper's second moments (of an inertia ``I``: :func:`second_moments`), three principal
+    ``J`` is the paper's second moments (of an inertia ``I``: :func:`thetasol.second_moments`), three principal
     values (a list or a 1-D array) or a 3x3 tensor; ``a`` a 3x3 matrix.
     """
     J = _moments_matrix(J)

@@ -41,6 +41,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.inertia import inertia_from_moments
 from thetasol.core.so3 import cross
 
 __all__ = ["gravity_gradient_torque", "orbit_frame", "GravityGradientStability", "gravity_gradient_stability"]
@@ -64,7 +65,7 @@ def gravity_gradient_torque(J: np.ndarray, Q: np.ndarray, r: np.ndarray, mu: flo
     -------
     ndarray, shape ``broadcast(Q.shape[:-2], r.shape[:-1]) + (3,)``
     """
-    I = np.trace(J) * np.eye(3) - J
+    I = inertia_from_moments(J)
     rb = np.einsum("...ji,...j->...i", Q, r)             # Q^T r
     rn2 = np.sum(r * r, axis=-1)[..., None]
     return 3.0 * mu / (rn2 * rn2 * np.sqrt(rn2)) * cross(rb, rb @ I.T)

@@ -49,10 +49,10 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.inertia import inertia_from_moments
 from thetasol.core.so3 import complete_frame, hat
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import CENTRAL_RTOL, Joint
-from thetasol.mechanics.equations import inertia_from_moments
 
 __all__ = ["Rotor", "MasslessCarrier", "EffectiveRotor", "EffectiveGyrostat", "GyrostatConfiguration",
            "axis_rotation", "gyrostat_energy", "ROTOR_RTOL"]

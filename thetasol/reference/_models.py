@@ -8,8 +8,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from thetasol.core.inertia import inertia_from_moments
 from thetasol.core.so3 import cross, hat
-from thetasol.mechanics.equations import inertia_from_moments, invariants, rotation_rhs
+from thetasol.mechanics.equations import invariants, rotation_rhs
 from thetasol.mechanics.heavy_top import heavy_top_invariants
 from thetasol.reference._case import Group
 

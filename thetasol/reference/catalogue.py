@@ -12,8 +12,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from thetasol.core.inertia import inertia, second_moments
 from thetasol.core.so3 import rodrigues
-from thetasol.mechanics.equations import inertia, second_moments
 from thetasol.reference import _models as mdl
 from thetasol.reference._case import Case, Group
 

@@ -37,11 +37,12 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
+from thetasol.core.inertia import inertia_from_moments
 from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.fixed_point import fixed_point_energy, integrate_fixed_point
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Pivot, pivot_mass_center
-from thetasol.mechanics.equations import inertia_from_moments, invariants as rotation_invariants
+from thetasol.mechanics.equations import invariants as rotation_invariants
 from thetasol.protocol import ClosedFormUnavailable, describe, worst_error
 from thetasol.scenes.pipeline import (
     ConfigurationSolution,

@@ -34,6 +34,7 @@ from typing import Any, TextIO
 import numpy as np
 
 from thetasol.core import validate as V
+from thetasol.core.inertia import inertia
 from thetasol.core.so3 import rodrigues
 from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.gyrostat import integrate_gyrostat
@@ -41,7 +42,6 @@ from thetasol.integrators.multibody_rotors import integrate_gyrostat_multibody, 
 from thetasol.integrators.rotation import integrate_rotation
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Joint
-from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.rotors import GyrostatConfiguration, MasslessCarrier, Rotor, axis_rotation, gyrostat_energy
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import Solution, describe, worst_error

@@ -30,11 +30,11 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from thetasol.core.inertia import inertia
 from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.multibody_gravity import box_mass_points
 from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
-from thetasol.mechanics.equations import inertia
 from thetasol.mechanics.gravity_gradient import GravityGradientStability, gravity_gradient_stability, orbit_frame
 from thetasol.protocol import ClosedFormUnavailable, describe, worst_error
 from thetasol.scenes.pipeline import ConfigurationSolution, parts_text

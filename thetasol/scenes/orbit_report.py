@@ -26,10 +26,10 @@ from typing import TextIO
 
 import numpy as np
 
+from thetasol.core.inertia import inertia_from_moments
 from thetasol.integrators.multibody_gravity import integrate_multibody_gravity, mass_points
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
-from thetasol.mechanics.equations import inertia_from_moments
 from thetasol.mechanics.gravity_gradient import orbit_frame
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.scenes.checks import Check, ReportText, verdict

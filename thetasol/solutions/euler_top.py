@@ -66,6 +66,7 @@ from thetasol.core.attitude import (
     unit_rows as _unit,
 )
 from thetasol.core.dd import two_prod, two_sum
+from thetasol.core.inertia import inertia_from_moments
 from thetasol.protocol import RotationSolution
 from thetasol.special.elliptic import reduce_period, sncndn_quarter
 
@@ -535,7 +536,7 @@ class EulerTopSolution(RotationSolution):
 
 def _basic_invariants(Jm, am, omega0) -> dict:
     """energy = T + V (V = c tr(J)/2 is constant for a = c 1), H = -2 energy (4.9), m2 = |m|^2."""
-    I = np.trace(Jm) * np.eye(3) - Jm
+    I = inertia_from_moments(Jm)
     m = I @ omega0
     energy = 0.5 * float(omega0 @ m) + 0.5 * float(np.trace(am) / 3.0 * np.trace(Jm))
     return {"energy": energy, "H": -2.0 * energy, "m2": _norm(m) ** 2}

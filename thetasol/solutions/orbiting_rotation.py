@@ -46,9 +46,9 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.attitude import angle_mod_2pi, principal_frame, uniform_rotation
+from thetasol.core.inertia import inertia, second_moments
 from thetasol.core.so3 import rotation_about
 from thetasol.core.threads import single_blas_thread
-from thetasol.mechanics.equations import inertia, second_moments
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability, orbit_frame
 from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.kepler import KeplerOrbit

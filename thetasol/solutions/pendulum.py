@@ -21,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from thetasol.core.attitude import principal_frame
+from thetasol.core.inertia import inertia
 from thetasol.core.so3 import rotation_about
 from thetasol.mechanics.equations import invariants as _invariants
 from thetasol.protocol import RotationSolution
@@ -77,7 +78,7 @@ def solve_pendulum(J: np.ndarray, a: np.ndarray, Q0: np.ndarray, omega0: np.ndar
         return None
     i, Jp, P, Qp, wp, B = found
     j, k = (i + 1) % 3, (i + 2) % 3
-    Ii = Jp.sum() - Jp[i]
+    Ii = inertia(Jp)[i]
     half = 0.5 * (B[k, k] - B[j, j])
     rho = np.hypot(half, B[j, k])
     kappa = 2.0 * (Jp[k] - Jp[j]) * rho / Ii          # psi'' = kappa sin(psi), psi = 2 phi + delta

@@ -39,8 +39,8 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.attitude import principal_frame
+from thetasol.core.inertia import second_moments
 from thetasol.core.threads import single_blas_thread
-from thetasol.mechanics.equations import second_moments
 from thetasol.mechanics.potential import potential_kind
 from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution

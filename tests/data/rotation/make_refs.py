@@ -15,8 +15,8 @@ import pathlib
 import numpy as np
 
 from thetasol import integrate_rotation
+from thetasol.core.inertia import inertia
 from thetasol.core.so3 import rodrigues
-from thetasol.mechanics.equations import inertia
 
 TIMES = [0.7, 3.1, 17.3, 102.0, 997.0, 4002.0]
 

@@ -16,9 +16,9 @@ from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
 from thetasol.core.attitude import norm3 as _norm, principal_frame as _principal_frame
+from thetasol.core.inertia import second_moments
 from thetasol.core.periodic import SeriesNotConverged
 from thetasol.core.threads import single_blas_thread
-from thetasol.mechanics.equations import second_moments
 from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions.gyrostat._elliptic import elliptic_motion, elliptic_orbit, reanchor
 from thetasol.solutions.gyrostat._forms import Axisymmetric, BodyMap, Delegate, Scaled, Sphere, Steady

@@ -17,9 +17,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from thetasol.core.attitude import principal_frame
+from thetasol.core.inertia import inertia_from_moments
 from thetasol.core.so3 import hat
 from thetasol.curves.spectral import farthest_branch_point
-from thetasol.mechanics.equations import inertia_from_moments
 from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions._symmetry import SNAP_TOL, symmetry_axis
 
