@@ -3,7 +3,7 @@ check(), the refusal of text where numbers are expected, and the warning at far 
 import numpy as np
 import pytest
 
-from thetasol import KeplerOrbit, solve_heavy_top, solve_rotation
+from thetasol import KeplerOrbit, solve_gyrostat, solve_heavy_top, solve_rotation
 from thetasol.core import validate as V
 
 W0 = [0.3, 1.2, -0.7]
@@ -213,6 +213,24 @@ def test_far_times_warn_once_and_absurd_times_are_refused():
     for t in (np.inf, np.nan, [0.0, -np.inf]):
         with pytest.raises(ValueError, match="NaN or inf"):
             sol(t)
+
+
+@pytest.mark.parametrize("build", [
+    lambda: solve_heavy_top([2.7, 2.3, 1.6], [0.0, 0.0, 0.0], np.eye(3), [0.1, 1.0, 0.2]),   # its free rotation
+    lambda: solve_rotation([75.6, 97.5, 57.2], np.zeros((3, 3)), np.eye(3), [0.1, 1.0, 0.2]),  # rescaled
+    lambda: solve_gyrostat([2.7, 2.3, 1.6], [0.0, 0.0, 1e-14], np.eye(3), [0.1, 1.0, 0.2]),  # the Euler top's
+])
+def test_a_composite_warns_once_in_its_own_name(build):
+    """A solution evaluated through another (the heavy top with its centre at the pivot, a rescaled
+    rotation, a gyrostat with a negligible rotor) warns about far times once, naming its own model."""
+    import warnings
+
+    sol = build()
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sol(1e11)
+        sol(np.array([1e11, 2e11]))
+    assert len(caught) == 1 and str(caught[0].message).startswith(f"{sol.model}: at |t| = 1e+11")
 
 
 def test_every_model_has_a_fastest_frequency():

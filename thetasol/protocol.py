@@ -49,7 +49,8 @@ from thetasol.core.so3 import hat
 from thetasol.core.threads import blas_threads
 
 __all__ = ["ClosedFormUnavailable", "Solution", "RotationSolution", "SelfCheck", "CHUNK", "MODELS", "METHODS",
-           "NUMERICAL", "CHECK_TOL", "ROUNDOFF", "PHASE_LIMIT", "vocabulary_problem", "describe", "worst_error"]
+           "NUMERICAL", "CHECK_TOL", "ROUNDOFF", "PHASE_LIMIT", "vocabulary_problem", "describe", "worst_error",
+           "quiet_far_times"]
 
 #: Times evaluated per chunk by :meth:`Solution.__call__` (bounded memory on long time arrays).
 CHUNK = 4096
@@ -111,6 +112,15 @@ def _first_far_warning(sol: object) -> bool:
         return False
     _FAR_WARNED[key] = weakref.ref(sol, lambda _r, key=key: _FAR_WARNED.pop(key, None))
     return True
+
+
+def quiet_far_times(part: Solution) -> Solution:
+    """``part``, marked as evaluated only through a composite solution (a heavy top with its centre at
+    the pivot around its free rotation, a rescaled rotation around the dimensionless one) that checks
+    the times and warns about far times itself, so that the user gets that warning once, in the
+    composite's name.  Times past :data:`PHASE_LIMIT` are still refused by both."""
+    _first_far_warning(part)
+    return part
 
 
 def _user_stacklevel() -> int:

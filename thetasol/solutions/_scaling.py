@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from thetasol.mechanics.equations import invariants as _invariants
-from thetasol.protocol import RotationSolution
+from thetasol.protocol import RotationSolution, quiet_far_times
 
 __all__ = ["Scales", "choose_scales", "dimensionless_data", "ScaledRotation", "scaled_solution"]
 
@@ -170,4 +170,4 @@ def scaled_solution(inner: RotationSolution, J, a, Q0, omega0, sc: Scales) -> Sc
     diag = _in_user_units(inner.diagnostics, sc)
     diag.update(scales=sc.as_dict(), dimensionless_invariants=inner.invariants)
     return ScaledRotation(J=J, a=a, Q0=Q0, omega0=omega0, method=inner.method, invariants=inv,
-                          dps=inner.dps, diagnostics=diag, inner=inner, scales=sc)
+                          dps=inner.dps, diagnostics=diag, inner=quiet_far_times(inner), scales=sc)

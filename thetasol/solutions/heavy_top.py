@@ -27,7 +27,7 @@ from numpy.typing import ArrayLike
 from thetasol.core.attitude import uniform_rotation
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants, kovalevskaya_integral
-from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
+from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution, quiet_far_times
 from thetasol.solutions.heavy_top_base import HeavyTopSolution
 from thetasol.solutions.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame, lagrange_state
 from thetasol.solutions.rotation import solve_rotation
@@ -82,7 +82,7 @@ def _euler(Im, c, Q0m, w0, mass, g):
     rot = solve_rotation(Im, np.zeros((3, 3)), Q0m, w0)
     inv = {k: float(v) for k, v in heavy_top_invariants(Im, c, mass, g, w0, Q0m).items()}
     diag = {**rot.diagnostics, "case": "euler" + (f"/{rot.case}" if rot.case else "")}
-    return EulerHeavyTopSolution(Im, c, mass, g, Q0m, w0, rot.method, inv, diag, rotation=rot)
+    return EulerHeavyTopSolution(Im, c, mass, g, Q0m, w0, rot.method, inv, diag, rotation=quiet_far_times(rot))
 
 
 def _kovalevskaya(Im, c, Q0m, w0, mass, g):

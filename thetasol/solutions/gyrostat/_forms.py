@@ -13,6 +13,7 @@ from thetasol.core.attitude import (
     uniform_rotation as _uniform_rotation,
     unit_rows as _unit,
 )
+from thetasol.protocol import quiet_far_times
 
 __all__ = ["frame_with_e3", "Steady", "Sphere", "Axisymmetric", "Delegate", "Scaled", "BodyMap"]
 
@@ -114,10 +115,10 @@ class Axisymmetric:
 
 class Delegate:
     """Another closed form's motion (the Euler top of a negligible rotor momentum), through its public
-    calls: ``sol(t)`` and ``sol.omega(t)`` on the flat times."""
+    calls: ``sol(t)`` and ``sol.omega(t)`` on the flat times (the gyrostat warns about far times for it)."""
 
     def __init__(self, sol):
-        self.sol = sol
+        self.sol = quiet_far_times(sol)
 
     def evaluate(self, t):
         return self.sol(t)
