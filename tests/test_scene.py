@@ -142,7 +142,8 @@ def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
     traj, report, checks = run(sc, check=False)
     assert len(calls) == 3
     assert all("closed form elliptic (fake)" in m for m in traj.info["models"]["rotations"].values())
-    assert sum("vs integrate_rotation" in c.what for c in checks) == 3 and all(c.ok for c in checks)
+    assert sum("rotation by elliptic (fake) vs integrate_rotation" in c.what for c in checks) == 3   # model, method, case
+    assert all(c.ok for c in checks)
     # a generic a falls back to numerics and says why
     sc2 = load_scene(write(tmp_path, SMALL, "generic.toml"))
     traj2, report2, _ = run(sc2, check=False)

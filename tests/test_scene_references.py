@@ -85,7 +85,7 @@ def test_pivoted_top_long_horizon_does_not_blame_the_closed_form():
     traj, report, checks = run(sc, check=False)
     assert all(c.status == "ok" for c in checks), report
     top = checks[0]
-    assert "pivot: elliptic vs integrate_heavy_top (heyoka 80-bit" in top.what
+    assert "pivot: heavy-top by elliptic vs integrate_heavy_top (heyoka 80-bit" in top.what
     assert top.deviation < 1e-11 and top.reference_error < top.tolerance
 
 

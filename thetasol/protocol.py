@@ -141,9 +141,11 @@ def vocabulary_problem(model: object, method: object) -> str:
     return ""
 
 
-def describe(sol: Solution) -> str:
-    """How one part of a composite was solved: its ``method``, the case in parentheses if any."""
-    return sol.method + (f" ({sol.case})" if sol.case else "")
+def describe(sol: Solution, *, with_model: bool = False) -> str:
+    """How one part of a composite was solved: its ``method``, the case in parentheses if any, and with
+    ``with_model`` the model first (``"heavy-top by elliptic (lagrange)"``), for a line read on its own."""
+    text = sol.method + (f" ({sol.case})" if sol.case else "")
+    return f"{sol.model} by {text}" if with_model else text
 
 
 def worst_error(parts: Iterable[Solution]) -> float:

@@ -32,6 +32,7 @@ from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.mechanics.gravity_gradient import orbit_frame
 from thetasol.mechanics.trajectories import Trajectories
+from thetasol.protocol import describe
 from thetasol.scenes.checks import Check, ReportText, verdict
 from thetasol.scenes.orbit import OrbitingConfigurationSolution
 from thetasol.scenes.references import Part, horizon_tolerance, reference
@@ -143,7 +144,7 @@ def _reference_checks(scene, sol, traj, say, note=None) -> list[Check]:
         wscale = float(np.linalg.norm(scene.omega0[n])) + n_mean
         dev = max(float(np.max(np.abs(Q - ref.state[1]))), float(np.max(np.abs(w - ref.state[0]))) / wscale)
         fastest = float(np.max(np.linalg.norm(ref.state[0], axis=-1))) + n_mean
-        checks.append(Check(f"rotation of {n}: {sol.rotations[n].method} vs integrate_orbiting_rotation "
+        checks.append(Check(f"rotation of {n}: {describe(sol.rotations[n], with_model=True)} vs integrate_orbiting_rotation "
                             f"({ref.label.split(';')[0]})", dev, horizon_tolerance(1.0, fastest, float(ref.t[-1])),
                             f"{r['seconds'] * 1e3:.1f} ms vs {ref.seconds * 1e3:.1f} ms",
                             reference_error=ref.error / min(1.0, wscale), note=ref.note))

@@ -36,6 +36,7 @@ from thetasol.integrators.fixed_point import fixed_point_energy
 from thetasol.integrators.multibody import integrate_multibody
 from thetasol.mechanics.equations import invariants
 from thetasol.mechanics.trajectories import Trajectories
+from thetasol.protocol import describe
 from thetasol.scenes.checks import Check, ReportText, verdict
 from thetasol.scenes.fixed_point import pivoted_body
 from thetasol.scenes.format import Scene
@@ -173,7 +174,7 @@ def _rotation_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectorie
             continue
         e = scene.config.effective_body(n)
         part = Part(f"rotation of {n}", "rotation", {"I": e.I, "a": scene.a}, (scene.omega0[n], scene.Q0[n]))
-        checks.append(_check(part, sol.rotations[n], (traj.omega[i], traj.attitude[i]), sol.rotations[n].method,
+        checks.append(_check(part, sol.rotations[n], (traj.omega[i], traj.attitude[i]), describe(sol.rotations[n], with_model=True),
                              scene.t, r["seconds"], None, note, body=n))
     return checks
 
@@ -195,7 +196,7 @@ def _pivot_checks(scene: Scene, sol: ConfigurationSolution, traj: Trajectories,
         else:
             part = Part(f"rotation of {n} about the pivot", "fixed_point",
                         {"I": pb.I, "R": pb.R, "a": scene.a, "b": pb.b}, state0)
-        checks.append(_check(part, sol.rotations[n], (traj.omega[0], traj.attitude[0]), sol.rotations[n].method,
+        checks.append(_check(part, sol.rotations[n], (traj.omega[0], traj.attitude[0]), describe(sol.rotations[n], with_model=True),
                              scene.t, r["seconds"], None, note))
     return checks + _rotation_checks(scene, sol, traj, skip_root=True, note=note)
 
