@@ -29,7 +29,7 @@ from thetasol.core.attitude import angle_mod_2pi as _angle_mod_2pi
 from thetasol.core.periodic import adaptive_series
 from thetasol.protocol import ClosedFormUnavailable
 
-__all__ = ["Rotor", "parse_rotors", "RotorAngles", "AXIS_TOL", "N_RTOL"]
+__all__ = ["Rotor", "parse_rotors", "RotorAngles", "rotor_angles", "AXIS_TOL", "N_RTOL"]
 
 _EPS = np.finfo(float).eps
 #: A rotor axis is accepted (and normalized) when its norm is within this of 1.
@@ -130,60 +130,30 @@ def _chebyshev_series(f, nmax=2 ** 14):
     return (c, 0.0) if tail == 0 and not np.any(c) else (_trim(c, np.max(np.abs(c))), tail)
 
 
+@dataclass(frozen=True, eq=False)
 class RotorAngles:
     """``phi_k(t) = (p_k / A_k - nu_k) t - (S_k(t) - S_k(0))``: ``nu_k`` the mean of
     ``omega . l_k`` (on a separatrix its value at the saddle), ``S_k`` the integral of the rest.
+    Built by :func:`rotor_angles`.
 
     ``impl`` is the motion (``omega(t)`` on flat times, body frame; on a separatrix also
-    ``separatrix_argument(t)``, ``omega_at_tanh(s)`` and ``du_dt``), ``period`` its period (0:
-    constant ``omega``; ``inf``: a separatrix).  Periodic motion: ``S_k`` is a Fourier series in
-    ``2 pi t / T``.  Separatrix: in ``s = tanh(u)`` (``u`` the elliptic argument) the integrand
-    ``omega . l_k`` is a rational function equal to the saddle's value ``nu_k`` at ``s = +-1``, and
-    ``S_k`` is the integral of ``(omega . l_k - nu_k) / (du/dt (1 - s^2))`` in ``s``: its Chebyshev
-    interpolant, less its linear part at ``+-1`` (the rounding at the saddle), divided exactly by
-    ``1 - s^2`` and integrated term by term (as for the precession angle)."""
+    ``separatrix_argument(t)``), ``L`` the rotor axes (rows), ``rate`` the rotors' ``p_k / A_k``, ``drift`` the secular rate of
+    each ``phi_k``.  Periodic motion: ``S_k`` is the Fourier series ``sum_j 2 Re d_j z^j`` in
+    ``z = exp(i Om t)`` (``d_sum`` its value at ``t = 0``).  Separatrix: ``S_k`` is the Chebyshev series
+    ``cheb`` in ``s = tanh(u)`` (``u`` the elliptic argument; ``s0`` its value at ``t = 0``)."""
 
-    def __init__(self, rotors, impl, period, omega0):
-        self.L = np.array([r.axis for r in rotors]).reshape(-1, 3)
-        self.rate = np.array([r.p / r.A for r in rotors])
-        self.period = float(period)
-        self.impl = impl
-        self.nterms, self.tail, self.cheb = 0, 0.0, None
-        self.d = np.zeros((0, len(self.rate)), dtype=complex)
-        if self.period == np.inf:
-            self._separatrix()
-        elif self.period == 0.0:  # constant omega: the integral is exact
-            self.nu = self.L @ np.asarray(omega0, dtype=float)
-            self.Om = 0.0
-        else:
-            c, self.tail = _fourier_series(lambda t: impl.omega(t) @ self.L.T, self.period)
-            self.nu = c[0].real
-            self.Om = 2 * np.pi / self.period
-            k = np.arange(1, len(c) - 1)
-            self.d = c[1:-1] / (1j * self.Om * k)[:, None]  # drop the Nyquist term
-            self.nterms = len(self.d)
-        # S(0) by the same Horner recursion as S(t) at z = 1: phi_k(0) = 0 exactly
-        self.d_sum = np.zeros(len(self.rate), dtype=complex)
-        for dk in self.d[::-1]:
-            self.d_sum = self.d_sum + dk
-        self.drift = self.rate - self.nu  # the secular rate of each phi_k
-
-    def _separatrix(self):
-        impl = self.impl
-        if not hasattr(impl, "separatrix_argument"):
-            raise ClosedFormUnavailable("solve_gyrostat: rotor angles on this separatrix (the Euler top's) "
-                                      "are not supported; use thetasol.integrate_multibody")
-        C = np.polynomial.chebyshev
-        c, self.tail = _chebyshev_series(lambda s: impl.omega_at_tanh(s) @ self.L.T)
-        p1, m1 = C.chebval(1.0, c), C.chebval(-1.0, c)
-        self.nu = 0.5 * (p1 + m1)
-        c[0] -= self.nu
-        c[1] -= 0.5 * (p1 - m1)
-        self.cheb = np.stack([C.chebint(C.chebdiv(c[:, j], [0.5, 0.0, -0.5])[0]) / impl.du_dt
-                              for j in range(c.shape[1])], axis=1)
-        self.nterms = len(self.cheb)
-        self.s0 = impl.separatrix_argument(np.zeros(1))
-        self.Om = 0.0
+    impl: object
+    L: np.ndarray
+    rate: np.ndarray
+    nu: np.ndarray
+    drift: np.ndarray
+    Om: float = 0.0
+    d: np.ndarray | None = None
+    d_sum: np.ndarray | None = None
+    cheb: np.ndarray | None = None
+    s0: np.ndarray | None = None
+    nterms: int = 0
+    tail: float = 0.0
 
     def periodic(self, t):
         """``-(S_k(t) - S_k(0))``, shape (n, k)."""
@@ -215,3 +185,55 @@ class RotorAngles:
     def rates(self, omega_t):
         """phidot_k = p_k / A_k - omega . l_k (8.28) from omega at the times, shape (n, k)."""
         return self.rate - omega_t @ self.L.T
+
+
+def rotor_angles(rotors, impl, period, omega0) -> RotorAngles:
+    """The rotor angles of the motion ``impl`` of period ``period`` (0: constant ``omega``, ``inf``: a
+    separatrix) from the body angular velocity ``omega0`` at ``t = 0`` (:class:`RotorAngles`).
+
+    Periodic motion: ``omega . l_k`` as a Fourier series in ``2 pi t / T``, integrated term by term.
+    Separatrix: in ``s = tanh(u)`` the integrand ``omega . l_k`` is a rational function equal to the
+    saddle's value ``nu_k`` at ``s = +-1``, and ``S_k`` is the integral of ``(omega . l_k - nu_k) /
+    (du/dt (1 - s^2))`` in ``s``: its Chebyshev interpolant, less its linear part at ``+-1`` (the
+    rounding at the saddle), divided exactly by ``1 - s^2`` and integrated term by term (as for the
+    precession angle).
+    """
+    L = np.array([r.axis for r in rotors]).reshape(-1, 3)
+    rate = np.array([r.p / r.A for r in rotors])
+    period = float(period)
+    if period == np.inf:
+        return _separatrix_angles(impl, L, rate)
+    d = np.zeros((0, len(rate)), dtype=complex)
+    tail, Om = 0.0, 0.0
+    if period == 0.0:  # constant omega: the integral is exact
+        nu = L @ np.asarray(omega0, dtype=float)
+    else:
+        c, tail = _fourier_series(lambda t: impl.omega(t) @ L.T, period)
+        nu = c[0].real
+        Om = 2 * np.pi / period
+        k = np.arange(1, len(c) - 1)
+        d = c[1:-1] / (1j * Om * k)[:, None]  # drop the Nyquist term
+    # S(0) by the same Horner recursion as S(t) at z = 1: phi_k(0) = 0 exactly
+    d_sum = np.zeros(len(rate), dtype=complex)
+    for dk in d[::-1]:
+        d_sum = d_sum + dk
+    return RotorAngles(impl=impl, L=L, rate=rate, nu=nu, drift=rate - nu, Om=Om, d=d, d_sum=d_sum,
+                       nterms=len(d), tail=tail)
+
+
+def _separatrix_angles(impl, L, rate) -> RotorAngles:
+    """:func:`rotor_angles` on a separatrix: the Chebyshev series of ``S_k`` in ``s = tanh(u)``."""
+    if not hasattr(impl, "separatrix_argument"):
+        raise ClosedFormUnavailable("solve_gyrostat: rotor angles on this separatrix (the Euler top's) "
+                                    "are not supported; use thetasol.integrate_multibody")
+    C = np.polynomial.chebyshev
+    c, tail = _chebyshev_series(lambda s: impl.omega_at_tanh(s) @ L.T)
+    p1, m1 = C.chebval(1.0, c), C.chebval(-1.0, c)
+    nu = 0.5 * (p1 + m1)
+    c[0] -= nu
+    c[1] -= 0.5 * (p1 - m1)
+    cheb = np.stack([C.chebint(C.chebdiv(c[:, j], [0.5, 0.0, -0.5])[0]) / impl.du_dt
+                     for j in range(c.shape[1])], axis=1)
+    return RotorAngles(impl=impl, L=L, rate=rate, nu=nu, drift=rate - nu, d=np.zeros((0, len(rate)), dtype=complex),
+                       d_sum=np.zeros(len(rate), dtype=complex), cheb=cheb,
+                       s0=impl.separatrix_argument(np.zeros(1)), nterms=len(cheb), tail=tail)

@@ -22,7 +22,7 @@ from thetasol.core.threads import single_blas_thread
 from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions.gyrostat._elliptic import elliptic_motion, elliptic_orbit, reanchor
 from thetasol.solutions.gyrostat._forms import Axisymmetric, BodyMap, Delegate, Scaled, Sphere, Steady
-from thetasol.solutions.gyrostat._rotors import RotorAngles, parse_rotors
+from thetasol.solutions.gyrostat._rotors import RotorAngles, parse_rotors, rotor_angles
 from thetasol.solutions.rotation import RotationSolution, solve_rotation
 
 __all__ = ["GyrostatSolution", "solve_gyrostat"]
@@ -209,7 +209,7 @@ def _closed_form(d: _Data, rs) -> tuple[_Form, RotorAngles | None]:
     close to a separatrix) puts the data outside the closed form."""
     try:
         form = _degenerate_form(d) or _elliptic_form(d)
-        return form, (RotorAngles(rs, form.impl, form.period, d.omega0) if rs else None)
+        return form, (rotor_angles(rs, form.impl, form.period, d.omega0) if rs else None)
     except SeriesNotConverged as exc:
         raise ClosedFormUnavailable(f"{exc}; use thetasol.integrators.gyrostat.integrate_gyrostat") from exc
 
