@@ -173,3 +173,18 @@ def test_both_curve_classes_satisfy_one_protocol():
     for i, (n_pc, n_hc) in enumerate(zip(pc.holomorphic_numerators(), hc.holomorphic_numerators(), strict=True)):
         assert n_pc.monomials == n_hc.monomials == [(i, 0)]
         assert n_hc.coefficient(i, 0) == 2 * n_pc.coefficient(i, 0)
+
+
+@pytest.mark.parametrize("roots", [[-2.1, -0.6, 0.4, 1.3, 2.7],                                # genus 2
+                                   [-2.1, -0.7 + 0.5j, -0.7 - 0.5j, 0.9, 2.4],                 # genus 2, complex pair
+                                   [-2.3, -1.1, -0.2, 0.5, 1.4, 2.2, 3.1]])                    # genus 3
+def test_one_theta_call_chooses_as_the_pruned_two(roots, monkeypatch):
+    """The chooser scores few points (candidates x test divisors) in one theta call and many in two (the
+    second only for the candidates that vanish at the first divisor): the same K either way, bit for bit."""
+    import thetasol.curves.riemann_constant as R
+
+    def K(fold):
+        monkeypatch.setattr(R, "FOLD_POINTS", fold)
+        return HyperellipticCurve.from_roots(np.array(roots, complex), -4.0).riemann_constant()
+
+    assert np.array_equal(K(0), K(10 ** 6))

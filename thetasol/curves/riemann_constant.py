@@ -26,7 +26,7 @@ from numpy.typing import ArrayLike
 
 from thetasol.theta.riemann import RiemannTheta, riemann_theta_separated
 
-__all__ = ["PRUNE", "SEPARATION", "TEST_POINTS", "VANISH", "half_period_candidates", "riemann_constant_vector",
+__all__ = ["FOLD_POINTS", "PRUNE", "SEPARATION", "TEST_POINTS", "VANISH", "half_period_candidates", "riemann_constant_vector",
            "test_abscissae", "theta_normalized_abs"]
 
 #: theta at the right candidate vanishes to the accuracy of the Abel images: the rounding level, 1e-10..1e-9
@@ -37,6 +37,9 @@ SEPARATION = 10.0
 #: Candidates scoring above this at the first test divisor can be neither chosen nor the runner-up that
 #: decides (both need a score below VANISH or above SEPARATION x the best): the other divisors skip them.
 PRUNE = 1e-7
+#: Points (candidates x test divisors) up to which all are evaluated in one theta call: a call's fixed cost
+#: exceeds that of these points, so one call beats the pruned two.
+FOLD_POINTS = 64
 
 #: The points of the test divisors, one per row, for up to three divisors of degree g - 1 <= 7:
 #: ``(radius fraction, turn, sheet index)`` (uniform, uniform, one of three: pseudo-random draws kept as
@@ -98,12 +101,21 @@ def half_period_candidates(canonical_image: ArrayLike, tau: np.ndarray) -> np.nd
 
 
 def _scores(theta: RiemannTheta, cands: np.ndarray, ADs: np.ndarray) -> np.ndarray:
-    """max over the test divisors of the separated |theta(cand + A(D))|: every candidate at the first
-    divisor, the candidates within :data:`PRUNE` at the others (in one call)."""
+    """max over the test divisors of the separated |theta(cand + A(D))|.
+
+    Up to :data:`FOLD_POINTS` points (genus 2: 16 candidates at 4 divisors) every candidate at every
+    divisor, in one call; above, every candidate at the first divisor and the candidates within
+    :data:`PRUNE` at the others, in a second call.  The choice is the same: a pruned candidate's score
+    is above PRUNE either way, so it is never the best and always a separated runner-up.
+    """
+    g = cands.shape[1]
+    if len(cands) * len(ADs) <= FOLD_POINTS:
+        z = (cands[None, :, :] + ADs[:, None, :]).reshape(-1, g)
+        return np.abs(theta.separated(z)[1]).reshape(len(ADs), len(cands)).max(axis=0)
     score = np.abs(theta.separated(cands + ADs[0][None, :])[1])
     live = np.flatnonzero(score <= PRUNE)
     if len(ADs) > 1 and len(live):
-        z = (cands[live][None, :, :] + ADs[1:, None, :]).reshape(-1, cands.shape[1])
+        z = (cands[live][None, :, :] + ADs[1:, None, :]).reshape(-1, g)
         v = np.abs(theta.separated(z)[1]).reshape(len(ADs) - 1, len(live))
         score[live] = np.maximum(score[live], v.max(axis=0))
     return score
