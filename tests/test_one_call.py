@@ -102,9 +102,10 @@ def _drift(J, a, Q0, w0, w, Q) -> float:
                                   "symmetric_fast_spin",
                                   pytest.param("fast_spin", marks=pytest.mark.xfail(strict=True, reason=(
                                       "the body given as its inertia has second moments one ulp from the "
-                                      "recorded J = (0.6, 1, 1.7); on that body the drift is near the bound at "
-                                      "T = 0 and just above it far out, without growth (the code path is the "
-                                      "one that met it on J): the bound's margin needs a decision")))])
+                                      "recorded J = (0.6, 1, 1.7), and no float64 inertia has exactly these "
+                                      "(J_1 = tr(I)/2 - I_1 lies on the spacing of I_1 near 2.7, four times "
+                                      "that of 0.6); on that body the drift is near the bound at T = 0 and just "
+                                      "above it far out, without growth: the bound's margin needs a decision")))])
 def test_far_times_keep_the_first_integrals(name):
     """The phases ``nu_sk t`` are integer combinations of the rates' turns reduced modulo 1 exactly
     (:class:`thetasol.solutions.theta_rotation.exponents.PhaseRates`), and so are the theta flow's
