@@ -1,10 +1,9 @@
 """One call on a few times (a far time): the theta-function rotation's evaluation of few times against
 the same times in a batch, and its phases far out.
 
-One implementation serves every number of times; with few times the phases of the Fourier flow gather
-all their factors at once (``thetasol.theta.flow.FEW_PRODUCTS``; the same operations in the same order:
-bit-identical).  A product with one row (gemv) sums in another order than with many (gemm), so one time
-and the same time in a batch agree to rounding.
+One implementation serves every number of times: the compiled kernel (thetasol.core.kernels) runs the
+same operations per time whatever the batch, so one time and the same time in a batch agree (the bounds
+below are those of the former numpy path, whose matrix products summed in another order for one row).
 """
 import json
 import pathlib
@@ -14,7 +13,6 @@ import pytest
 
 from thetasol import inertia, invariants, solve_rotation
 from thetasol.core import validate as V
-from thetasol.theta import flow as F
 
 REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
 TIMES = np.array([0.0, 0.7, 3.1, 17.3, 102.0, 997.0, 4002.0, 1e6])
@@ -25,20 +23,6 @@ TIMES = np.array([0.0, 0.7, 3.1, 17.3, 102.0, 997.0, 4002.0, 1e6])
 def sol(request):
     r = REFS[request.param]
     return solve_rotation(inertia(np.diag(r["J"])), np.array(r["a"]), np.array(r["Q0"]), np.array(r["omega0"]))
-
-
-@pytest.mark.parametrize("n", [1, 3, 16])
-def test_few_time_phases_equal_the_prefix_products(sol, n, monkeypatch):
-    """The one gather and multiply.reduce of few times against the products over prefixes of the modes
-    (the path of many times), each forced with FEW_PRODUCTS: the same bits (measured on all 13 bodies)."""
-    flow = sol.evaluator.flow
-    t = np.linspace(1e6, 1e6 + 37.0, n)
-    phi = np.multiply.outer(t, flow.u)
-    phi -= np.rint(phi)
-    monkeypatch.setattr(F, "FEW_PRODUCTS", 10**9)
-    few = flow.phases(phi)
-    monkeypatch.setattr(F, "FEW_PRODUCTS", 0)
-    assert np.array_equal(flow.phases(phi), few)
 
 
 def test_one_call_against_the_batch(sol):
@@ -109,7 +93,7 @@ def _drift(J, a, Q0, w0, w, Q) -> float:
 def test_far_times_keep_the_first_integrals(name):
     """The phases ``nu_sk t`` are integer combinations of the rates' turns reduced modulo 1 exactly
     (:class:`thetasol.solutions.theta_rotation.exponents.PhaseRates`), and so are the theta flow's
-    phases ``t u`` (:meth:`thetasol.theta.flow.FlowTheta.turns`): the nine exponents keep their exact
+    phases ``t u`` (:class:`thetasol.theta.flow.FlowTheta`): the nine exponents keep their exact
     relations far out (the form ``F_s - G_k``, the lattice rate U), still combine into an orthogonal
     Phi(0, t), and energy and I2 do not drift.  Measured on [T, T + 100] at T = 0, 1e6, 1e9: <= 3.0e-14
     on these bodies (fast_spin at 1e9; 2.3e-14 at T = 0).  With the rounded floats nu_sk in place of
@@ -158,15 +142,14 @@ def test_fitted_exponents_keep_their_own_rates(sol):
     and the state agrees with the exact combinations' up to the exponents' last bits times t.  Measured
     on the 13 reference bodies: turns <= 1.1e-16 off, states at t <= 4002 <= 1.9e-13 apart; bounds
     5e-16 and 1e-12."""
-    import dataclasses
-
     import mpmath
 
-    from thetasol.solutions.theta_rotation.evaluator import phase_turns
+    from thetasol.solutions.theta_rotation.evaluator import build_evaluator
     from thetasol.solutions.theta_rotation.exponents import PhaseRates
 
     ev = sol.evaluator
-    fit = dataclasses.replace(ev, turns=phase_turns(PhaseRates.of_fit(ev.nu)))
+    fit = build_evaluator(ev.flow, ev.nu, PhaseRates.of_fit(ev.nu), ev.amp, ev.X0inv, ev.B, ev.Q0p, ev.P, ev.spin,
+                          ev.axis)
     assert fit.phase.lattice.size == 0 and np.array_equal(fit.phase.e, np.eye(9))
     times = [0.7, 4002.0, 1e6 + 0.3, 1e9 + 0.5]
     with mpmath.workdps(40):

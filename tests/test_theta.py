@@ -409,7 +409,7 @@ def test_flow_theta_against_riemann_theta(g, r):
     U = np.concatenate([u, np.zeros(g - r)])
     th = RiemannTheta(tau)
     # theta at s + t u: only the phases t u mod 1 matter (integer shifts of a real argument); the
-    # reference takes them exactly (mpmath), as FlowTheta.turns does
+    # reference takes them exactly (mpmath), as the compiled flow does
     with mpmath.workdps(40):
         ph = np.array([[float(mpmath.frac(mpmath.mpf(x) * mpmath.mpf(float(c)))) for c in U] for x in t])
     for j, s in enumerate(shifts):

@@ -5,6 +5,7 @@ import json
 import pathlib
 
 import numpy as np
+import oracle_theta_evaluation as oracle
 import pytest
 
 from thetasol import inertia, solve_rotation
@@ -26,34 +27,20 @@ def sol(request):
 
 @pytest.mark.parametrize("many", [False, True])
 def test_real_form_of_the_flow_against_the_complex_series(sol, many):
-    """FlowTheta sums cos/sin of the modes up to sign; the complex series over every mode m with the
-    coefficients D(m), D(m) 2 pi i m.u gives the same values (measured <= 1.2e-15 of the sum of |D|), for
-    a few times and for 300 (the phases then formed as rows, FlowTheta.phase_rows, where the modes are
-    few enough: the generic and symmetric bodies)."""
-    from thetasol.theta.flow import ROWS_MIN
-
+    """FlowTheta (its compiled kernel) sums cos/sin of the modes up to sign; the complex series over every
+    mode m with the coefficients D(m), D(m) 2 pi i m.u gives the same values (measured <= 1.2e-15 of the
+    sum of |D|), for a few times and for 300."""
     flow = sol.evaluator.flow
     t = np.concatenate([TIMES, np.linspace(-7.0, 3e3, 300)]) if many else TIMES
-    assert (len(t) >= ROWS_MIN) == many
     _, v, dv = flow(t)
-    X = np.exp(2j * np.pi * flow.turns(t) @ flow.modes.T)
+    X = np.exp(2j * np.pi * oracle.flow_turns(flow, t) @ flow.modes.T)
     scale = np.abs(flow.D).sum(axis=1).max()
     assert np.abs(v - X @ flow.D.T).max() <= 1e-14 * scale
     assert np.abs(dv - X @ flow.Dd.T).max() <= 1e-14 * np.abs(flow.Dd).sum(axis=1).max()
 
 
-def test_phase_rows_are_the_phases(sol):
-    """FlowTheta.phase_rows (contiguous products along the times) against FlowTheta.phases (gathers per
-    time): the same products of the same table entries, to the rounding of the powers (<= 4 ulp)."""
-    flow = sol.evaluator.flow
-    phi = flow.turns(np.linspace(-7.0, 3e3, 150))
-    rows, cols = flow.phase_rows(phi), flow.phases(phi)
-    assert rows.shape == (flow.n_phases, len(phi))
-    assert np.abs(rows.T - cols).max() <= 4 * np.finfo(float).eps * np.abs(flow.table_columns()[1]).max()
-
-
 def test_flow_turns_against_mpmath(sol):
-    """FlowTheta.turns: ``t u`` modulo 1 against mpmath at 40 digits, for one time and in a batch, up to
+    """The turns of the flow (the oracle's, which the kernel repeats operation for operation): ``t u`` modulo 1 against mpmath at 40 digits, for one time and in a batch, up to
     |t| = 2e9, and one time beyond 2^31 (the plain product there).  Measured on the 13 reference bodies:
     <= 6.3e-17 max(1, |u|) off for |t| < 2^31 (the rounded product ``t u``: 1.4e-7); bound 4 eps max(1, |u|)."""
     import mpmath
@@ -64,13 +51,14 @@ def test_flow_turns_against_mpmath(sol):
         ref = np.array([[float(mpmath.frac(mpmath.mpf(t) * mpmath.mpf(float(u)) + mpmath.mpf(0.5)) - 0.5)
                          for u in flow.u] for t in times])
     bound = 4 * np.finfo(float).eps * max(1.0, float(np.abs(flow.u).max()))
-    batch = flow.turns(times)
-    np.testing.assert_array_equal(batch, np.concatenate([flow.turns(times[i:i + 1]) for i in range(len(times))]))
+    batch = oracle.flow_turns(flow, times)
+    np.testing.assert_array_equal(batch, np.concatenate([oracle.flow_turns(flow, times[i:i + 1])
+                                                         for i in range(len(times))]))
     d = batch - ref
     assert np.abs(d - np.rint(d)).max() <= bound
     far = np.array([3e9 + 0.5])
     plain = np.multiply.outer(far, flow.u)
-    np.testing.assert_array_equal(flow.turns(far), plain - np.rint(plain))
+    np.testing.assert_array_equal(oracle.flow_turns(flow, far), plain - np.rint(plain))
 
 
 def test_folded_evaluation_against_phi0(sol):
@@ -130,8 +118,8 @@ def test_polar_near_orthogonal_against_long_double():
 
 
 def test_flow_tables_against_mpmath(sol):
-    """FlowTheta.tables: exp(2 pi i k phi) as powers of exp(2 pi i phi) against mpmath at 64 and 160 far
-    times (the two ways of forming the powers).
+    """The flow's tables (the oracle's, which the kernel repeats operation for operation): exp(2 pi i k phi)
+    as powers of exp(2 pi i phi) against mpmath at 160 far times.
     The error grows with |k| either way (the rounded argument 2 pi phi, times k); measured max
     |error| / max(1, |k|): 3.4e-16 (generic, |k| <= 6), 4.0e-16 (near_unstable_equilibrium, |k| <= 12,
     and symmetric_oblate), and max |error| 0.64-0.84 x that of the direct exp(2 pi i fl(k phi)); bounds
@@ -140,16 +128,13 @@ def test_flow_tables_against_mpmath(sol):
 
     import mpmath
 
-    from thetasol.theta.flow import COLUMN_POWERS
-
     flow = sol.evaluator.flow
-    phi = flow.turns(np.linspace(1e6, 1e6 + 50.0, COLUMN_POWERS + 32))
-    owner, k = flow.table_columns()
+    phi = oracle.flow_turns(flow, np.linspace(1e6, 1e6 + 50.0, 160))
+    owner, k = oracle.table_columns(flow)
     with mpmath.workdps(30):
         ref = np.array([[complex(mpmath.expjpi(2 * mpmath.mpf(row[owner[j]]) * int(k[j]))) for j in range(k.size)]
                         for row in phi])
     direct = np.abs(np.exp(2j * math.pi * (phi.take(owner, axis=1) * k)) - ref)
-    for n in (64, len(phi)):           # powers by cumprod along the rows, and column by column
-        err = np.abs(flow.tables(phi[:n]) - ref[:n])
-        assert (err / np.maximum(1.0, np.abs(k))).max() <= 7e-16
-        assert err.max() <= direct[:n].max()
+    err = np.abs(oracle.flow_tables(flow, phi) - ref)
+    assert (err / np.maximum(1.0, np.abs(k))).max() <= 7e-16
+    assert err.max() <= direct.max()

@@ -16,6 +16,12 @@ sin x i (D(p) - D(-p))``, so the product runs over the float view ``(cos, sin)``
 and the t-derivatives of every shift together: half the phases and half the multiplications of the
 complex series over m'.  Integer shifts of ``phi`` leave theta unchanged, so far times cost what t = 1 costs
 and need no quasi-periodicity factors.
+
+The per-time evaluation is compiled (:class:`thetasol.core.kernels.FlowKernel`, src/kernels.cpp): the turns
+``t u`` reduced exactly (:mod:`thetasol.core.turns`), the tables ``exp(2 pi i k phi_i)`` as powers of
+``exp(2 pi i phi_i)`` outwards from ``k = 0`` (one exponential per phase, and more accurate than
+``exp(2 pi i fl(k phi))``), the products of the tables per mode and the real matrix product.  This module
+sums the coefficients and builds the frozen tables it computes from.
 """
 from __future__ import annotations
 
@@ -23,32 +29,12 @@ import math
 
 import numpy as np
 
-from thetasol.core.turns import rate_turns, split_rate
+from thetasol.core.kernels import FlowKernel
+from thetasol.core.turns import split_rate
 from thetasol.theta.lattice import unique_rows
 
 __all__ = ["FlowTheta", "ellipsoid_candidates", "ellipsoid_candidates_many", "lower_factor", "row_sums"]
 
-#: Bytes of phase products per block of times in :meth:`FlowTheta.__call__`, and the most times per
-#: block: the real matrix (2 x phases, 4 x shifts) is read once per block, so larger blocks pay off until
-#: the products leave the cache (benchmarks/bench_theta_rotation.py measures the dense evaluation).
-BLOCK_BYTES = 1 << 22
-BLOCK_CAP = 1024
-#: Up to this many products (times x phases) :meth:`FlowTheta.phases` gathers all factors at once
-#: instead of forming the products over prefixes of the modes (the same products in the same order):
-#: fewer numpy calls, more multiplications, which pays off for a few times on a few hundred phases.
-FEW_PRODUCTS = 512
-#: From this many times on, :meth:`FlowTheta.tables` forms its powers along the times
-#: (:meth:`FlowTheta.table_rows`, one numpy call per power) instead of by cumprod along short rows: the
-#: same products, cheaper on long blocks of times and dearer on short ones.
-COLUMN_POWERS = 128
-#: From this many times on, and for up to :data:`ROWS_MAX_PHASES` phases, :meth:`FlowTheta.__call__`
-#: forms the phases as rows, one per phase along the times (:meth:`FlowTheta.phase_rows`), and the matrix
-#: product from their real and imaginary planes, in blocks of up to 1024 times: contiguous products instead
-#: of gathers along short rows, which stop paying off when the rows of a block leave the cache.
-ROWS_MIN = 64
-ROWS_MAX_PHASES = 512
-#: ``2 pi i``: the tables are ``exp(2 pi i k phi)``.
-TWO_PI_I = 2j * math.pi
 
 
 def lower_factor(Y: np.ndarray) -> np.ndarray:
@@ -117,13 +103,6 @@ def row_sums(P: np.ndarray) -> np.ndarray:
     for i in range(1, n):
         acc = acc + P[:, i]
     return acc
-
-
-def _sorted_unique_rows(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """``np.unique(a, axis=0, return_inverse=True)`` for rows already in lexicographic order (runs of
-    equal rows, no sort)."""
-    new = np.concatenate([[True], (a[1:] != a[:-1]).any(axis=1)]) if len(a) else np.zeros(0, bool)
-    return a[new], np.cumsum(new) - 1
 
 
 def _surely_inside(Y: np.ndarray, bound: float) -> float:
@@ -212,7 +191,6 @@ class FlowTheta:
         self.Dd = D * (2j * math.pi * (self.modes @ u))[None, :]
         self.u = u
         self.r = r
-        self._u_pieces = (*split_rate(u), u)
         self._pair(self.modes, D, self.Dd)
 
     def _pair(self, modes: np.ndarray, D: np.ndarray, Dd: np.ndarray) -> None:
@@ -229,7 +207,7 @@ class FlowTheta:
         for i in range(modes.shape[1] - 1, -1, -1):      # sign of the first non-zero index
             sign = np.where(modes[:, i] != 0, np.sign(modes[:, i]), sign)
         canon = modes * np.where(sign < 0, -1, 1)[:, None]
-        # the box holds k = 0 in every coordinate: the tables are powers outwards from it (:meth:`tables`)
+        # the box holds k = 0 in every coordinate: the tables are powers outwards from it (the kernel's tables)
         lo = np.minimum(canon.min(axis=0), 0)
         span = np.maximum(canon.max(axis=0), 0) - lo + 1
         pm, inv = unique_rows(canon, lo, span)
@@ -248,188 +226,19 @@ class FlowTheta:
         W[0::2, 0::2], W[0::2, 1::2] = A.real, A.imag
         W[1::2, 0::2], W[1::2, 1::2] = Bs.real, Bs.imag
         self.W = W
-        self._WT = np.ascontiguousarray(W.T)
-        self._lo, self._span = lo, span
-        self._k = [np.arange(span[i]) + lo[i] for i in range(len(span))]
-        self._idx = [pm[:, i] - lo[i] for i in range(len(span))]
-        # the products over the first r - 1 phases are formed once per distinct prefix of the modes
-        # (fewer than the modes) and then gathered: the same products in the same order
-        self._pre_inv, self._pre_idx = None, []
-        r = len(span)
-        if r > 1:
-            pre, inv = _sorted_unique_rows(pm[:, :r - 1])
-            self._pre_inv = inv.ravel()
-            self._pre_idx = [pre[:, i] - lo[i] for i in range(r - 1)]
+        #: the modes up to sign
         self.n_phases = len(pm)
-        self._runs = _runs(self._idx, self._pre_inv)
-        self._k_all = np.concatenate(self._k).astype(float)
-        self._k_owner = np.repeat(np.arange(r), span)
-        ends = np.cumsum(span)
-        self._k_slices = [slice(int(e - w), int(e)) for e, w in zip(ends, span, strict=True)]
-        self._pm_rel = np.ascontiguousarray(pm - lo)
-        # the few-times path gathers every factor from the one table at once: row i, column p holds
-        # the column of the table of phase i that mode p multiplies
-        self._gather = (self._pm_rel + (ends - span)[None, :]).T.ravel()
-        self._blk = int(min(BLOCK_CAP, max(16, BLOCK_BYTES // (16 * max(1, self.n_phases)))))
-        # per table: its slice and the column of k = 0
-        self._zero_cols = [(sl, int(sl.start - lo[i])) for i, sl in enumerate(self._k_slices)]
-
-    def phases(self, phi: np.ndarray, work: np.ndarray | None = None) -> np.ndarray:
-        """``exp(2 pi i p.phi)`` (n, P) for the phases phi (n, r) reduced mod 1.  ``work``: a complex array
-        (2, >= n, P) the products of many times are formed in (and the result is a view of);
-        :meth:`__call__` passes one for all its blocks."""
-        tab = self.tables(phi)
-        n = phi.shape[0]
-        if self.r > 1 and n * self.n_phases <= FEW_PRODUCTS:
-            # every factor in one gather, multiplied in the order of the prefix products below (the
-            # same values)
-            g = tab.take(self._gather, axis=1).reshape(n, self.r, self.n_phases)
-            return np.multiply.reduce(g, axis=1)
-        X = None
-        for i in range(self.r - 1):
-            col = tab[:, self._k_slices[i]].take(self._pre_idx[i], axis=1)
-            X = col if X is None else X * col
-        last = tab[:, self._k_slices[-1]]
-        if work is None:
-            work = np.empty((2, n, self.n_phases), complex)
-        out, other = work[0, :n], work[1, :n]
-        # (mode="clip": the indices are in range, and take's default mode buffers an out= argument)
-        last.take(self._idx[-1], axis=1, out=out, mode="clip")
-        if X is None:
-            return out
-        X.take(self._pre_inv, axis=1, out=other, mode="clip")
-        return np.multiply(other, out, out=out)
-
-    def table_columns(self) -> tuple[np.ndarray, np.ndarray]:
-        """``(i, k)`` of the columns of :meth:`tables`: column j holds ``exp(2 pi i k[j] phi_{i[j]})``."""
-        return self._k_owner.copy(), self._k_all.copy()
-
-    def tables(self, phi: np.ndarray) -> np.ndarray:
-        """The r tables ``exp(2 pi i k phi_i)``, ``k = lo_i .. lo_i + span_i - 1``, side by side (n, sum span).
-
-        Powers of ``exp(2 pi i phi_i)`` outwards from ``k = 0`` (``exp(-i x) = conj(exp(i x))``): one
-        exponential per phase instead of one per entry, which cost as much as the flow's matrix product.
-        The powers are also the more accurate: ``exp(2 pi i fl(k phi))`` carries the rounding of its
-        argument, about ``|k phi| 2 pi eps``, which the powers do not (tests/test_theta_evaluation.py
-        compares both with mpmath).  One time is formed as a block of one.
-        """
-        n = phi.shape[0]
-        if n >= COLUMN_POWERS:     # the same products along the times (cumprod's rows are short)
-            return self.table_rows(phi).T
-        base = np.exp(TWO_PI_I * phi)                                   # (n, r)
-        tab = np.empty((n, self._k_all.size), complex)
-        for i, (sl, z) in enumerate(self._zero_cols):
-            tab[:, z] = 1.0
-            col = base[:, i:i + 1]
-            if sl.stop > z + 1:
-                np.cumprod(np.broadcast_to(col, (n, sl.stop - z - 1)), axis=1, out=tab[:, z + 1:sl.stop])
-            if z > sl.start:
-                tab[:, sl.start:z] = np.cumprod(np.broadcast_to(col.conj(), (n, z - sl.start)), axis=1)[:, ::-1]
-        return tab
-
-    def turns(self, t: np.ndarray) -> np.ndarray:
-        """``t u`` modulo 1 (n, r) in ``[-1/2, 1/2]``, exact before its last roundings for ``|t| < 2^31``
-        (:mod:`thetasol.core.turns`).  The plain product ``t u`` carries ``|t u| eps / 2`` into the
-        phases, which the exponents of a theta quotient (reduced exactly the same way) then no longer
-        match: the first integrals of the fast-spin bodies would drift far out (tests/test_one_call.py)."""
-        x = np.ascontiguousarray(rate_turns(t, *self._u_pieces).T)
-        x -= np.rint(x)
-        return x
-
-    def table_rows(self, phi: np.ndarray) -> np.ndarray:
-        """:meth:`tables` transposed, formed as rows (sum span, n): each power one product along the times."""
-        n = phi.shape[0]
-        base = np.exp(TWO_PI_I * np.ascontiguousarray(phi.T))           # (r, n)
-        tab = np.empty((self._k_all.size, n), complex)
-        for i, (sl, z) in enumerate(self._zero_cols):
-            tab[z] = 1.0
-            for step, stop, e in ((1, sl.stop, base[i]), (-1, sl.start - 1, base[i].conj())):
-                if stop != z + step:
-                    tab[z + step] = e
-                for k in range(z + 2 * step, stop, step):
-                    np.multiply(tab[k - step], e, out=tab[k])
-        return tab
-
-    def phase_rows(self, phi: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-        """:meth:`phases` transposed (P, n), into ``out`` if given: the prefix products as rows, then one
-        product of a prefix row with a block of the last table per run of modes (:func:`_runs`)."""
-        tab = self.table_rows(phi)
-        if out is None:
-            out = np.empty((self.n_phases, phi.shape[0]), complex)
-        X = None
-        for i in range(self.r - 1):
-            row = tab[self._k_slices[i]].take(self._pre_idx[i], axis=0)
-            X = row if X is None else X * row
-        last = tab[self._k_slices[-1]]
-        for j, s, e, a in self._runs:
-            if X is None:
-                out[s:e] = last[a:a + e - s]
-            else:
-                np.multiply(X[j], last[a:a + e - s], out=out[s:e])
-        return out
-
-    def _by_rows(self, phi: np.ndarray) -> np.ndarray:
-        """The float view of ``[v | dv]`` (n, 4S) from :meth:`phase_rows`, in blocks of times: each block's
-        rows split into real and imaginary planes (2P, m), and ``W^T`` times them (4S, m)."""
-        n, P = phi.shape[0], self.n_phases
-        blk = min(n, BLOCK_CAP, max(ROWS_MIN, 4 * BLOCK_BYTES // (16 * P)))
-        out = np.empty((n, self.W.shape[1]))
-        # the rows and their planes in one workspace (MBs): separate fresh arrays of that size come from
-        # mmap in a new process, and their page faults would cost more than the products
-        work = np.empty(4 * P * blk)
-        rows = work[:2 * P * blk].view(complex).reshape(P, blk)
-        planes = work[2 * P * blk:].reshape(P, 2, blk)
-        outT = np.empty((self.W.shape[1], blk))
-        for a in range(0, n, blk):
-            m = min(n, a + blk) - a
-            R = self.phase_rows(phi[a:a + m], rows[:, :m])
-            pl = planes[:, :, :m]
-            np.copyto(pl, R.view(float).reshape(P, m, 2).transpose(0, 2, 1))
-            np.matmul(self._WT, pl.reshape(2 * P, m), out=outT[:, :m])
-            out[a:a + m] = outT[:, :m].T
-        return out
+        #: the turn rates ``u`` as ``u1 + u2 + u3`` (:func:`thetasol.core.turns.split_rate`) and ``u``: (4, r)
+        self.u_pieces = np.array([*split_rate(self.u), self.u]).reshape(4, len(span))
+        self.lo, self.span = lo.astype(np.int64), span.astype(np.int64)
+        #: per mode up to sign, its column in the table of each phase: ``k - lo`` (P, r)
+        self.table_modes = np.ascontiguousarray(pm - lo, dtype=np.int64)
+        self.kernel = FlowKernel(self.u_pieces, self.lo, self.span, self.table_modes, np.ascontiguousarray(W))
 
     def __call__(self, t: np.ndarray, derivative: bool = True) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """(e (S,), v (n, S), dv (n, S) or None): theta = exp(e) v, d/dt theta = exp(e) dv.
-
-        Many times (:data:`ROWS_MIN`, up to :data:`ROWS_MAX_PHASES` phases) go through
-        :meth:`phase_rows` in blocks of up to 1024 times; otherwise the phases are gathered per time, in
-        blocks of :data:`BLOCK_BYTES` of phase products.  The derivative is computed in the same product
-        whether asked or not (its columns cost a quarter of the product).
-        """
-        t = np.asarray(t, float)
-        phi = self.turns(t)
-        n, S = t.shape[0], self.D.shape[0]
-        blk = self._blk
-        if n >= ROWS_MIN and self.n_phases <= ROWS_MAX_PHASES:
-            vd = self._by_rows(phi).view(complex)
-            return self.e, vd[:, :S], (vd[:, S:] if derivative else None)
-        if n <= blk:
-            vd = np.matmul(self.phases(phi).view(float), self.W).view(complex)
-            return self.e, vd[:, :S], (vd[:, S:] if derivative else None)
-        out = np.empty((n, 4 * S))
-        # the blocks' phase products (MBs) in one workspace: fresh arrays of that size come from mmap or
-        # from the heap as glibc's adaptive threshold stands after the set-up, and from mmap their page
-        # faults would cost as much as the products
-        work = np.empty((2, blk, self.n_phases), complex)
-        for a in range(0, n, blk):
-            b = min(n, a + blk)
-            np.matmul(self.phases(phi[a:b], work).view(float), self.W, out=out[a:b])
-        vd = out.view(complex)
+        """(e (S,), v (n, S), dv (n, S) or None) at the flat times ``t``: theta = exp(e) v,
+        d/dt theta = exp(e) dv (the compiled kernel; the derivative costs a quarter of the product and is
+        formed whether asked or not)."""
+        S = self.D.shape[0]
+        vd = self.kernel(np.ascontiguousarray(t, dtype=float)).view(complex)
         return self.e, vd[:, :S], (vd[:, S:] if derivative else None)
-
-
-def _runs(idx: list, pre_inv: np.ndarray | None) -> list[tuple[int, int, int, int]]:
-    """The modes (lexicographic; ``idx[i]`` their table columns of phase i, ``pre_inv`` their prefix of the
-    first r - 1 phases) as runs of consecutive last columns under one prefix:
-    ``(prefix, first mode, end mode, first column)``.  An ellipsoid meets a line in an interval, so there
-    are as many runs as prefixes, far fewer than the modes."""
-    last = idx[-1]
-    new = np.ones(len(last), bool)
-    new[1:] = last[1:] != last[:-1] + 1
-    if pre_inv is not None:
-        new[1:] |= pre_inv[1:] != pre_inv[:-1]
-    starts = np.flatnonzero(new)
-    ends = np.append(starts[1:], len(last))
-    pre = pre_inv[starts] if pre_inv is not None else np.zeros(len(starts), np.int64)
-    return list(zip(pre.tolist(), starts.tolist(), ends.tolist(), last[starts].tolist(), strict=True))

@@ -16,11 +16,12 @@ combinations, and the flow's phases ``t u`` reduced as exactly
 (:meth:`thetasol.theta.flow.FlowTheta.turns`), the drift far out stays at the level of ``t = 0``
 (tests/test_one_call.py).  After the flow ``Psi`` and its derivative go through one more real product
 (9x9 complex maps folded with ``B``, ``X0^-1``, ``Q0`` and the principal frame, :func:`linear_map`) and
-the 3x3 algebra runs on component rows: the polar factor by one Newton-Schulz step
-(:func:`thetasol.core.so3.polar_near_orthogonal`, closer to the long-double polar factor than the SVD's,
-tests/test_theta_evaluation.py).  One implementation serves every number of times: one time is a batch
-of one.  Working memory is a few KB per time (the flow's phases go in bounded blocks), so the default
-chunk of :class:`thetasol.protocol.Solution` applies.
+the 3x3 algebra follows: the polar factor by one Newton-Schulz step (as
+:func:`thetasol.core.so3.polar_near_orthogonal`, closer to the long-double polar factor than the SVD's,
+tests/test_theta_evaluation.py).  The per-time evaluation is compiled
+(:class:`thetasol.core.kernels.RotationKernel`, src/kernels.cpp): one call for many times, and one time
+is a batch of one.  Working memory is a few KB per call, so the default chunk of
+:class:`thetasol.protocol.Solution` applies.
 
 The shifts ``b_sk = A(P_s) - e_k`` are sums of Abel images, known to about 1e-14; where ``psi_k(P_s)``
 is small or zero that error shows directly in ``Psi``.  Each ``b_sk`` is moved by the least amount that
@@ -36,7 +37,8 @@ from dataclasses import dataclass
 import mpmath
 import numpy as np
 
-from thetasol.core.so3 import polar_near_orthogonal
+from thetasol.core.kernels import RotationKernel
+from thetasol.core.so3 import NEWTON_SCHULZ_MAX, polar_orthonormalize
 from thetasol.core.turns import rate_turns, split_rate_exact
 from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
 from thetasol.solutions.theta_rotation.exponents import Exponents, PhaseRates
@@ -44,7 +46,8 @@ from thetasol.solutions.theta_rotation.riemann import ThetaShifts
 from thetasol.solutions.theta_rotation.spectral_data import SpectralData
 from thetasol.theta.flow import FlowTheta
 
-__all__ = ["FlowEvaluator", "PhaseTurns", "build_evaluator", "flow_evaluator", "linear_map", "phase_turns"]
+__all__ = ["FlowEvaluator", "PhaseTurns", "build_evaluator", "flow_evaluator", "linear_map", "phase_turns",
+           "rotation_kernel"]
 
 #: ``2 pi i``: ``exp(2 pi i x)`` of the turns ``x``.
 TWO_PI_I = 2j * math.pi
@@ -163,6 +166,8 @@ class FlowEvaluator:
         Its symmetry axis, None for distinct ``J``.
     lin : ndarray, shape (45, 36)
         :func:`linear_map` of ``B``, ``X0inv``, ``Q0p``, ``P``, ``axis``.
+    kernel : RotationKernel
+        The compiled evaluation of :meth:`evaluate`, built from the arrays above.
     """
 
     flow: FlowTheta
@@ -176,6 +181,7 @@ class FlowEvaluator:
     spin: float
     axis: int | None
     lin: np.ndarray
+    kernel: RotationKernel
 
     @property
     def phase(self) -> PhaseRates:
@@ -200,49 +206,17 @@ class FlowEvaluator:
     def evaluate(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """``(omega, Q)`` at the flat times ``t``: shapes (n, 3), (n, 3, 3) in the body frame given.
 
-        ``Psi`` and ``Psidot = Psi rate`` (rate without dividing by ``vb``, which vanishes where a
-        component does) go through one real matrix product to ``G = Q0 Phi^T P^T`` (polar factor:
-        ``Q``) and ``F, Fd = P Phi, P Phidot`` (``omega = vee(F Fd^T)``); the 3x3 algebra after it
-        runs on component rows (9, n).
+        The compiled kernel (:class:`thetasol.core.kernels.RotationKernel`): ``Psi`` and
+        ``Psidot = Psi rate`` (rate without dividing by ``vb``, which vanishes where a component does) go
+        through one real matrix product to ``G = Q0 Phi^T P^T`` (polar factor: ``Q``) and
+        ``F, Fd = P Phi, P Phidot`` (``omega = vee(F Fd^T)``).  Times where ``G`` is too far from
+        orthogonal for one Newton-Schulz step (:data:`thetasol.core.so3.NEWTON_SCHULZ_MAX`) come back
+        unprojected and take the SVD here; the polar factor commutes with the orthogonal output frame.
         """
-        _, v, dv = self.flow(t, True)
-        n = t.shape[0]
-        vb, vd = v[:, :9].reshape(n, 3, 3), v[:, 9:]              # [n, s, k], [n, 1]
-        ivd = 1.0 / vd
-        # exp(i nu t) on the distinct rows of turns only (4-9 of the 9 exponents), then spread
-        q = np.exp(self.turns.rows(t).T * TWO_PI_I).take(self.turns.row_of, axis=1).reshape(n, 3, 3)
-        q *= self.amp
-        q *= ivd[:, None, :]
-        Z = np.empty((n, 2, 3, 3), complex)
-        np.multiply(q, vb, out=Z[:, 0])
-        rate = 1j * self.nu - (dv[:, 9:] * ivd)[:, None, :]
-        rate *= vb
-        rate += dv[:, :9].reshape(n, 3, 3)
-        np.multiply(q, rate, out=Z[:, 1])
-        Y = self.lin @ Z.reshape(n, 18).view(float).T              # (45, n)
-        Q = polar_near_orthogonal(Y[:9].reshape(3, 3, n))
-        w = np.add.reduce((Y[27:36] * Y[9:18] - Y[36:45] * Y[18:27]).reshape(3, 3, n), axis=1)   # vee(F Fd^T)
-        if self.axis is not None:
-            Q, w = self._from_turning_frame(t, Q, w)
-        return np.ascontiguousarray(w.T), np.ascontiguousarray(Q.transpose(2, 0, 1))
-
-    def _from_turning_frame(self, t: np.ndarray, Q: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Symmetric body: ``Q = Q~ R^T P^T``, ``omega = P (R omega~ + spin e)``, ``R = exp(-spin t hat(e))``
-        (component rows (3, 3, n), (3, n))."""
-        ax, spin, P = self.axis, self.spin, self.P
-        i, j = (ax + 1) % 3, (ax + 2) % 3
-        c, s = np.cos(-spin * t), np.sin(-spin * t)
-        Qr = np.empty_like(Q)
-        Qr[:, ax] = Q[:, ax]
-        Qr[:, i] = c * Q[:, i] - s * Q[:, j]
-        Qr[:, j] = s * Q[:, i] + c * Q[:, j]
-        wr = np.empty_like(w)
-        wr[ax] = w[ax] + spin
-        wr[i] = c * w[i] - s * w[j]
-        wr[j] = s * w[i] + c * w[j]
-        # Q~ R^T P^T row by row, and P omega: matrix products on the component rows, cheaper than
-        # broadcast sums over the times
-        return np.matmul(P, Qr), P @ wr
+        w, Q, projected = self.kernel(np.ascontiguousarray(t, dtype=float))
+        if not projected.all():
+            Q[~projected] = polar_orthonormalize(Q[~projected])
+        return w, Q
 
     def imaginary_residual(self, t: np.ndarray) -> np.ndarray:
         """max |Im Phi(0, t)| at the flat times ``t`` (it must vanish: the error of the evaluation)."""
@@ -252,10 +226,27 @@ class FlowEvaluator:
 
 def build_evaluator(flow: FlowTheta, nu: np.ndarray, phase: PhaseRates, amp: np.ndarray, X0inv: np.ndarray,
                     B: np.ndarray, Q0p: np.ndarray, P: np.ndarray, spin: float, axis: int | None) -> FlowEvaluator:
-    """The :class:`FlowEvaluator` of these data, with its turns (:func:`phase_turns`) and its folded
-    linear map (:func:`linear_map`)."""
-    return FlowEvaluator(flow=flow, nu=nu, turns=phase_turns(phase), amp=amp, X0inv=X0inv, B=B, Q0p=Q0p, P=P,
-                         spin=spin, axis=axis, lin=linear_map(B, X0inv, Q0p, P, axis))
+    """The :class:`FlowEvaluator` of these data, with its turns (:func:`phase_turns`), its folded
+    linear map (:func:`linear_map`) and its compiled kernel (:func:`rotation_kernel`)."""
+    turns, lin = phase_turns(phase), linear_map(B, X0inv, Q0p, P, axis)
+    kernel = rotation_kernel(flow, turns, amp, nu, lin, P, spin, axis)
+    return FlowEvaluator(flow=flow, nu=nu, turns=turns, amp=amp, X0inv=X0inv, B=B, Q0p=Q0p, P=P,
+                         spin=spin, axis=axis, lin=lin, kernel=kernel)
+
+
+def rotation_kernel(flow: FlowTheta, turns: PhaseTurns, amp: np.ndarray, nu: np.ndarray, lin: np.ndarray,
+                    P: np.ndarray, spin: float, axis: int | None) -> RotationKernel:
+    """The compiled evaluation of these frozen arrays: the turns' pieces and their integer rows (dense,
+    zeros skipped by the kernel), the amplitudes as floats (9, 2), ``axis`` -1 for distinct ``J``."""
+    coef = np.zeros((len(turns.row_terms), turns.pieces[0].size))
+    for q, terms in enumerate(turns.row_terms):
+        for j, a in terms:
+            coef[q, j] = a
+    f64 = np.ascontiguousarray
+    return RotationKernel(flow.kernel, f64(np.stack(turns.pieces)), coef, f64(turns.row_of, dtype=np.int64),
+                          f64(np.asarray(amp, complex).reshape(9)).view(float).reshape(9, 2), f64(nu, dtype=float),
+                          f64(lin), f64(P, dtype=float), float(spin), -1 if axis is None else int(axis),
+                          NEWTON_SCHULZ_MAX)
 
 
 def corrected_shifts(sd: SpectralData, dv: EigenvectorDivisors, ts: ThetaShifts,
