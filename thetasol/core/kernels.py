@@ -44,10 +44,10 @@ def _load_installed():
     raise ImportError(NOT_BUILT)
 
 
-try:
-    from thetasol.core import _kernels
-except ModuleNotFoundError:
+if importlib.util.find_spec(__name__.rpartition(".")[0] + "._kernels") is None:
     _kernels = _load_installed()
+else:
+    from thetasol.core import _kernels
 
 FlowKernel = _kernels.FlowKernel
 RotationKernel = _kernels.RotationKernel
