@@ -271,7 +271,9 @@ public:
             amp_[m] = {amp(m, 0), amp(m, 1)};
             nu_[m] = nu.data()[m];
         }
-        lin_.assign(lin.data(), lin.data() + 45 * 36);
+        linT_.resize(36 * 45);
+        for (size_t i = 0; i < 45; ++i)
+            for (size_t k = 0; k < 36; ++k) linT_[k * 45 + i] = lin(i, k);
         for (size_t a = 0; a < 9; ++a) P_[a] = P.data()[a];
     }
 
@@ -308,12 +310,13 @@ public:
             Z[18 + 2 * m] = z1.re;
             Z[18 + 2 * m + 1] = z1.im;
         }
-        double Y[45];
-        for (size_t i = 0; i < 45; ++i) {
-            const double* L = &lin_[i * 36];
-            double acc = 0.0;
-            for (size_t k = 0; k < 36; ++k) acc += L[k] * Z[k];
-            Y[i] = acc;
+        // Y = lin Z, column by column of lin (stored transposed): each Y[i] sums over k in order, and
+        // the loop over i vectorizes
+        double Y[45] = {};
+        for (size_t k = 0; k < 36; ++k) {
+            const double* L = &linT_[k * 45];
+            const double z = Z[k];
+            for (size_t i = 0; i < 45; ++i) Y[i] += L[i] * z;
         }
         // polar factor of X = Y[:9] (3x3, rows r, columns c): X (1 - D / 2), D = X^T X - 1
         const double* X = Y;
@@ -407,7 +410,7 @@ private:
     int axis_;
     double ns_max_;
     size_t rates_ = 0;
-    std::vector<double> pieces_, lin_;
+    std::vector<double> pieces_, linT_;
     std::vector<std::vector<std::pair<size_t, double>>> terms_;
     size_t row_of_[9];
     Cx amp_[9];
