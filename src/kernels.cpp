@@ -148,10 +148,7 @@ public:
     void values(const double* t, size_t n, double* work, double* out) const {
         Cx* tab = reinterpret_cast<Cx*>(work);
         double* ph = work + 2 * ntab_;
-        for (size_t b = 0; b < BLOCK; ++b) {
-            if (b < n) phases(t[b], tab, ph + b * 2 * P_);
-            else std::fill(ph + b * 2 * P_, ph + (b + 1) * 2 * P_, 0.0);
-        }
+        for (size_t b = 0; b < n; ++b) phases(t[b], tab, ph + b * 2 * P_);
         product(ph, n, out);
     }
 
@@ -181,52 +178,57 @@ private:
         static const bool avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
         if (avx2) return product_avx2(ph, n, out);
 #endif
-        product_blocked(ph, n, out);
+        if (n == BLOCK) return product_blocked<BLOCK, 2>(ph, n, out);
+        for (size_t b = 0; b < n; ++b) product_blocked<1, 10>(ph + b * 2 * P_, 1, out + b * cols_);
     }
 
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
     // (contracted to fused multiply-adds here only: the turns and the state keep -ffp-contract=off)
-    __attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) void product_avx2(const double* ph, size_t n, double* out) const {
-        product_blocked(ph, n, out);
+    __attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) void product_avx2(const double* ph, size_t n,
+                                                                                         double* out) const {
+        if (n == BLOCK) return product_blocked<BLOCK, 2>(ph, n, out);
+        for (size_t b = 0; b < n; ++b) product_blocked<1, 10>(ph + b * 2 * P_, 1, out + b * cols_);
     }
 #endif
 
-    // Register-blocked product: BLOCK times x 8 columns of accumulators, each summing SPAN rows of W from
-    // zero before it joins the column's total: the rounding grows with SPAN + 2 P / SPAN terms, not 2 P.
-    // Every time's sums are the same operations whatever the other times of its block.
+    // Register-blocked product: NB times x 4 NV columns of accumulators (NB NV <= 10 vectors), each summing
+    // SPAN rows of W from zero before it joins the column's total: the rounding grows with SPAN + 2 P / SPAN
+    // terms, not 2 P.  Each column's sums are the same operations whatever NB, NV and the other times of
+    // the block, so a time alone (NB = 1, wide rows of columns instead) gives the bits it gets in a batch.
+    template <size_t NB, size_t NV>
     __attribute__((always_inline)) inline void product_blocked(const double* ph, size_t n, double* out) const {
         typedef double v4 __attribute__((vector_size(32)));
+        constexpr size_t CW = 4 * NV;
         const size_t rows = 2 * P_;
-        double total[BLOCK][8];
-        for (size_t j0 = 0; j0 < cols_; j0 += 8) {
-            const size_t width = std::min<size_t>(8, cols_ - j0);
-            double wpad[8] = {0, 0, 0, 0, 0, 0, 0, 0};
-            for (size_t b = 0; b < BLOCK; ++b)
-                for (size_t j = 0; j < 8; ++j) total[b][j] = 0.0;
+        double total[NB][CW];
+        for (size_t j0 = 0; j0 < cols_; j0 += CW) {
+            const size_t width = std::min<size_t>(CW, cols_ - j0);
+            double wpad[CW] = {};
+            for (size_t b = 0; b < NB; ++b)
+                for (size_t j = 0; j < CW; ++j) total[b][j] = 0.0;
             for (size_t q0 = 0; q0 < rows; q0 += SPAN) {
                 const size_t q1 = std::min(rows, q0 + SPAN);
-                v4 acc[BLOCK][2] = {};
+                v4 acc[NB][NV] = {};
                 for (size_t q = q0; q < q1; ++q) {
                     const double* w = &W_[q * cols_ + j0];
-                    if (width < 8) {
+                    if (width < CW) {
                         for (size_t j = 0; j < width; ++j) wpad[j] = w[j];
                         w = wpad;
                     }
-                    v4 w0, w1;
-                    __builtin_memcpy(&w0, w, sizeof w0);
-                    __builtin_memcpy(&w1, w + 4, sizeof w1);
-                    for (size_t b = 0; b < BLOCK; ++b) {
+                    v4 wv[NV];
+#pragma GCC unroll 16
+                    for (size_t k = 0; k < NV; ++k) __builtin_memcpy(&wv[k], w + 4 * k, sizeof(v4));
+#pragma GCC unroll 4
+                    for (size_t b = 0; b < NB; ++b) {
                         const double a = ph[b * rows + q];
                         const v4 av = {a, a, a, a};
-                        acc[b][0] += av * w0;         // one fused multiply-add each where contracted
-                        acc[b][1] += av * w1;
+#pragma GCC unroll 16
+                        for (size_t k = 0; k < NV; ++k) acc[b][k] += av * wv[k];   // fused where contracted
                     }
                 }
-                for (size_t b = 0; b < BLOCK; ++b)
-                    for (size_t j = 0; j < 4; ++j) {
-                        total[b][j] += acc[b][0][j];
-                        total[b][4 + j] += acc[b][1][j];
-                    }
+                for (size_t b = 0; b < NB; ++b)
+                    for (size_t k = 0; k < NV; ++k)
+                        for (size_t j = 0; j < 4; ++j) total[b][4 * k + j] += acc[b][k][j];
             }
             for (size_t b = 0; b < n; ++b)
                 for (size_t j = 0; j < width; ++j) out[b * cols_ + j0 + j] = total[b][j];

@@ -13,7 +13,6 @@ installed distribution, which ``pip install .`` made from the same sources.
 from __future__ import annotations
 
 import importlib.machinery
-import importlib.metadata
 import importlib.util
 import sys
 
@@ -28,6 +27,8 @@ NOT_BUILT = ("thetasol's compiled core (thetasol.core._kernels) is not built: in
 def _load_installed():
     """The ``_kernels`` extension of the installed thetasol distribution, registered under its name, or
     ImportError saying how to build it."""
+    import importlib.metadata  # here: its import costs more than the rest of the module's
+
     name = __name__.rpartition(".")[0] + "._kernels"
     try:
         files = importlib.metadata.distribution("thetasol").files or []
