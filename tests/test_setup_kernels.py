@@ -12,7 +12,7 @@ import pytest
 
 from thetasol.curves import _poly
 from thetasol.theta import lattice
-from thetasol.theta.flow import _sorted_unique_rows, ellipsoid_candidates, lower_factor
+from thetasol.theta.flow import ellipsoid_candidates, lower_factor
 
 
 def _radius_by_quadrature(tol, rho, g, order, a):
@@ -129,12 +129,3 @@ def test_dense_unique_is_numpy_unique():
         for got, want in zip(lattice.dense_unique(codes, size), np.unique(codes, return_inverse=True), strict=True):
             assert got.dtype == want.dtype
             np.testing.assert_array_equal(got, want)
-
-
-def test_sorted_unique_rows_is_numpy_unique():
-    rng = np.random.default_rng(6)
-    for n, w in [(2672, 2), (300, 3), (1, 1), (0, 2), (50, 1)]:
-        a = rng.integers(-4, 5, size=(n, w))
-        a = a[np.lexsort(a.T[::-1])]
-        for got, want in zip(_sorted_unique_rows(a), np.unique(a, axis=0, return_inverse=True), strict=True):
-            np.testing.assert_array_equal(got, want.reshape(got.shape))
