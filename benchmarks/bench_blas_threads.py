@@ -17,7 +17,7 @@ import json
 import pathlib
 
 import numpy as np
-from _common import best_of, machine_info
+from _common import best_of, docs_page, docs_section, machine_info
 
 from thetasol import inertia, solve_rotation
 from thetasol.core import threads
@@ -63,4 +63,5 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    with docs_section(docs_page("docs/bench_theta_rotation.md"), "benchmarks/bench_blas_threads.py"):
+        main()

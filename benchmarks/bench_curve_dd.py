@@ -25,7 +25,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, ROOT)
 
-from _common import best_of, machine_info  # noqa: E402
+from _common import best_of, docs_page, docs_section, machine_info  # noqa: E402
 
 from thetasol import inertia, solve_rotation
 from thetasol.curves import _quad as _curve_quad  # noqa: E402
@@ -125,6 +125,7 @@ def main():
 
 
 if __name__ == "__main__":
-    t0 = time.perf_counter()
-    main()
-    print(f"\n(total {time.perf_counter() - t0:.0f} s)")
+    with docs_section(docs_page("docs/bench_curve_dd.md"), "benchmarks/bench_curve_dd.py"):
+        t0 = time.perf_counter()
+        main()
+        print(f"\n(total {time.perf_counter() - t0:.0f} s)")

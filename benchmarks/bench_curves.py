@@ -25,7 +25,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, ROOT)
 
-from _common import best_of, machine_info  # noqa: E402
+from _common import best_of, docs_page, docs_section, machine_info  # noqa: E402
 
 from thetasol.core.so3 import hat  # noqa: E402
 from thetasol.curves.plane_curve import PlaneCurve  # noqa: E402
@@ -235,4 +235,5 @@ def _sage_python(argv):
 
 
 if __name__ == "__main__":
-    main(quick="--quick" in sys.argv, sage_python=_sage_python(sys.argv[1:]))
+    with docs_section(docs_page("docs/bench_curves.md"), "benchmarks/bench_curves.py"):
+        main(quick="--quick" in sys.argv, sage_python=_sage_python(sys.argv[1:]))

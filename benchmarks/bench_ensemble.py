@@ -20,7 +20,7 @@ import time
 import warnings
 
 import numpy as np
-from _common import machine_info
+from _common import docs_page, docs_section, machine_info
 from bench_units_sweep import REGIMES, _body
 
 from thetasol.ensembles import solve_many
@@ -99,4 +99,5 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    with docs_section(docs_page("docs/ensembles.md"), "benchmarks/bench_ensemble.py"):
+        main()

@@ -22,7 +22,7 @@ import argparse
 import time
 
 import numpy as np
-from _common import best_of, machine_info
+from _common import best_of, docs_page, docs_section, machine_info
 
 from thetasol import inertia, integrate_rotation, solve_rotation
 
@@ -194,4 +194,5 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    with docs_section(docs_page("docs/bench_euler_top.md"), "benchmarks/bench_euler_top.py"):
+        main()

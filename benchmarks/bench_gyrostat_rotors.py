@@ -17,7 +17,7 @@ import sys
 import time
 
 import numpy as np
-from _common import best_of, machine_info
+from _common import best_of, docs_page, docs_section, machine_info
 
 from thetasol import inertia, solve_gyrostat
 
@@ -54,4 +54,5 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    with docs_section(docs_page("docs/gyrostat.md"), "benchmarks/bench_gyrostat_rotors.py"):
+        main()

@@ -20,10 +20,11 @@ max |Q - Q_ref|.
 from __future__ import annotations
 
 import argparse
+import sys
 import time
 
 import numpy as np
-from _common import best_of, machine_info
+from _common import best_of, docs_page, docs_section, machine_info
 
 from thetasol.core.so3 import rodrigues
 from thetasol.integrators.heavy_top import integrate_heavy_top
@@ -144,4 +145,7 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    page = docs_page("docs/heavy_top.md")
+    only = [a for a in sys.argv[1:] if a in ("lagrange", "kovalevskaya")]
+    with docs_section(page, "benchmarks/bench_heavy_top.py", section=" ".join(only)):
+        main()

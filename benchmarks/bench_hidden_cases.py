@@ -12,7 +12,7 @@ import time
 import warnings
 
 import numpy as np
-from _common import machine_info
+from _common import docs_page, docs_section, machine_info
 
 import thetasol as ts
 from thetasol.core.inertia import inertia
@@ -106,5 +106,6 @@ def main(seed: int = 2026, count: int = 45, f128: bool = False) -> None:
 
 
 if __name__ == "__main__":
-    args = [x for x in sys.argv[1:] if not x.startswith("--")]
-    main(*(int(x) for x in args), f128="--f128" in sys.argv)
+    with docs_section(docs_page("docs/theta_rotation.md"), "benchmarks/bench_hidden_cases.py"):
+        args = [x for x in sys.argv[1:] if not x.startswith("--")]
+        main(*(int(x) for x in args), f128="--f128" in sys.argv)

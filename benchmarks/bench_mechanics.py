@@ -17,7 +17,7 @@ import sys
 
 import mpmath
 import numpy as np
-from _common import best_of, machine_info
+from _common import best_of, docs_page, docs_section, machine_info
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
@@ -116,7 +116,8 @@ def demo_table():
 
 
 if __name__ == "__main__":
-    print(f"machine: {machine_info('mpmath')}\n")
-    mass_centre_table()
-    split_table()
-    demo_table()
+    with docs_section(docs_page("docs/bench_mechanics.md"), "benchmarks/bench_mechanics.py"):
+        print(f"machine: {machine_info('mpmath')}\n")
+        mass_centre_table()
+        split_table()
+        demo_table()

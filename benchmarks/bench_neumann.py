@@ -25,7 +25,7 @@ from scipy.integrate import solve_ivp
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 sys.path.insert(0, os.path.dirname(__file__))
-from _common import best_of, machine_info  # noqa: E402
+from _common import best_of, docs_page, docs_section, machine_info  # noqa: E402
 from test_neumann import CASES, T_FAR  # noqa: E402
 from test_neumann_point import CASES as POINT_CASES, _data, _errors, _scales  # noqa: E402
 
@@ -144,8 +144,9 @@ def refusals():
 
 
 if __name__ == "__main__":
-    which = sys.argv[1:] or ["rotation", "point", "refusals"]
-    print("# " + machine_info("heyoka"))
-    for name in which:
-        print(f"\n## {name}\n")
-        {"rotation": rotation, "point": point, "refusals": refusals}[name]()
+    with docs_section(docs_page("docs/neumann.md"), "benchmarks/bench_neumann.py", section=" ".join(sys.argv[1:])):
+        which = sys.argv[1:] or ["rotation", "point", "refusals"]
+        print("# " + machine_info("heyoka"))
+        for name in which:
+            print(f"\n## {name}\n")
+            {"rotation": rotation, "point": point, "refusals": refusals}[name]()

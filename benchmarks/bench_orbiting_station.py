@@ -17,7 +17,7 @@ import time
 import numpy as np
 
 sys.path.insert(0, os.path.dirname(__file__))
-from _common import best_of, machine_info  # noqa: E402
+from _common import best_of, docs_page, docs_section, machine_info  # noqa: E402
 
 from thetasol.core.inertia import inertia
 from thetasol.core.so3 import rodrigues  # noqa: E402
@@ -128,8 +128,10 @@ def station_table(orbits: int = 2):
 
 
 if __name__ == "__main__":
-    print(machine_info("heyoka"))
-    if "--station" not in sys.argv:
-        kepler_table()
-        rotation_table()
-    station_table()
+    page = docs_page("docs/orbiting_station.md")
+    with docs_section(page, "benchmarks/bench_orbiting_station.py", section="station" * ("--station" in sys.argv)):
+        print(machine_info("heyoka"))
+        if "--station" not in sys.argv:
+            kepler_table()
+            rotation_table()
+        station_table()

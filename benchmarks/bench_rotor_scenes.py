@@ -20,7 +20,7 @@ import sys
 import time
 
 import numpy as np
-from _common import best_of, machine_info
+from _common import best_of, docs_page, docs_section, machine_info
 
 sys.path.insert(0, os.path.join(os.path.dirname(__file__), "..", "tests"))
 import test_gyrostat_potential as P  # noqa: E402
@@ -91,4 +91,5 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    with docs_section(docs_page("docs/gyrostat.md"), "benchmarks/bench_rotor_scenes.py"):
+        main()

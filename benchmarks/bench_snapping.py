@@ -20,7 +20,7 @@ import time
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
-from _common import machine_info  # noqa: E402
+from _common import docs_page, docs_section, machine_info  # noqa: E402
 from bench_units_sweep import heyoka_rotation  # noqa: E402
 
 from thetasol import (
@@ -88,4 +88,5 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    with docs_section(docs_page("docs/units.md"), "benchmarks/bench_snapping.py"):
+        main()

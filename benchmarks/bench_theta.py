@@ -23,7 +23,7 @@ if "--threads" not in sys.argv:
 import time  # noqa: E402
 
 import numpy as np  # noqa: E402
-from _common import best_of, machine_info  # noqa: E402
+from _common import best_of, docs_page, docs_section, machine_info  # noqa: E402
 
 from thetasol import RiemannTheta  # noqa: E402
 
@@ -173,4 +173,5 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    with docs_section(docs_page("docs/bench_theta.md"), "benchmarks/bench_theta.py"):
+        main()

@@ -17,7 +17,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from _common import best_of, machine_info
+from _common import best_of, docs_page, docs_section, machine_info
 from bench_heavy_top import kovalevskaya_top
 
 from thetasol.solutions.kovalevskaya_attitude import _torus_lattice, kovalevskaya_attitude
@@ -62,4 +62,5 @@ def main():
 
 
 if __name__ == "__main__":
-    main()
+    with docs_section(docs_page("docs/theta.md"), "benchmarks/bench_theta_grid.py"):
+        main()

@@ -16,7 +16,7 @@ import pathlib
 import time
 
 import numpy as np
-from _common import best_of, machine_info
+from _common import best_of, docs_page, docs_section, machine_info
 
 from thetasol import inertia, solve_rotation
 
@@ -45,4 +45,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with docs_section(docs_page("docs/theta_rotation.md"), "benchmarks/bench_theta_references.py"):
+        main()

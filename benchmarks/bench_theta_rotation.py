@@ -24,8 +24,9 @@ Measured in one run on this machine, for every reference body of tests/data/rota
 
 Ratios are to heyoka: set-up / heyoka's propagation to t = 1000, dense theta / dense heyoka.
 
-Run:  python benchmarks/bench_theta_rotation.py [--quick] [--cases a,b] [--plot PNG] [--clock cpu]
-(``--quick``: five bodies, no DOP853.)  docs/bench_theta_rotation.md holds a recorded run.
+Run:  python benchmarks/bench_theta_rotation.py [--quick] [--cases a,b] [--plot PNG] [--clock cpu] [--write-docs]
+(``--quick``: five bodies, no DOP853; ``--write-docs``: the run replaces the generated section of
+docs/bench_theta_rotation.md.)
 """
 from __future__ import annotations
 
@@ -38,7 +39,7 @@ import sys
 import time
 
 import numpy as np
-from _common import best_of, machine_info
+from _common import best_of, docs_page, docs_section, machine_info
 
 from thetasol import inertia, integrate_rotation, invariants, solve_rotation
 from thetasol.integrators.rotation import rotation_expressions
@@ -252,4 +253,5 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    main()
+    with docs_section(docs_page("docs/bench_theta_rotation.md"), "benchmarks/bench_theta_rotation.py"):
+        main()

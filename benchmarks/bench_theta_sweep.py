@@ -24,7 +24,7 @@ import time
 import warnings
 
 import numpy as np
-from _common import best_of, machine_info
+from _common import best_of, docs_page, docs_section, machine_info
 from bench_theta_rotation import CLOCK, heyoka_integrator, heyoka_run
 from bench_units_sweep import REGIMES, _body
 
@@ -110,4 +110,5 @@ def main(argv=None) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with docs_section(docs_page("docs/bench_theta_rotation.md"), "benchmarks/bench_theta_sweep.py"):
+        main()

@@ -26,7 +26,7 @@ import warnings
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
 import numpy as np  # noqa: E402
-from _common import machine_info  # noqa: E402
+from _common import docs_page, docs_section, machine_info  # noqa: E402
 
 from thetasol import ClosedFormUnavailable, inertia, solve_rotation  # noqa: E402
 from thetasol.core.so3 import rodrigues  # noqa: E402
@@ -185,7 +185,8 @@ def main(n: int = 16, seed: int = 0):
 
     rng = np.random.default_rng(seed)
     print(machine_info("heyoka"))
-    print(f"thetasol from {sys.modules['thetasol'].__file__}; {n} bodies per regime, seed {seed}")
+    print(f"thetasol from {sys.modules['thetasol'].__file__}", file=sys.stderr)
+    print(f"\n{n} bodies per regime, seed {seed}")
     rows = []
     t_start = time.perf_counter()
     for regime in REGIMES:
@@ -196,7 +197,7 @@ def main(n: int = 16, seed: int = 0):
             if r["outcome"] in ("silent-wrong", "crash"):
                 print("  ", r, flush=True)
         rows.append(_row(regime, recs))
-        print(f"  {regime}: done at {time.perf_counter() - t_start:.0f} s", flush=True)
+        print(f"  {regime}: done at {time.perf_counter() - t_start:.0f} s", file=sys.stderr, flush=True)
     print(f"\nheyoka {heyoka.__version__}; total {time.perf_counter() - t_start:.0f} s\n")
     print("| regime | n | correct | warned | refused | silent-wrong | crash | max error (solved) | "
           "max error / bound | max refusal time | median set-up | cost per point |")
@@ -225,4 +226,7 @@ def _row(regime, recs):
 
 
 if __name__ == "__main__":
-    main(*(int(x) for x in sys.argv[1:3]))
+    page = docs_page("docs/units.md")
+    seed = sys.argv[2] if len(sys.argv) > 2 else "0"
+    with docs_section(page, "benchmarks/bench_units_sweep.py", section=f"seed {seed}"):
+        main(*(int(x) for x in sys.argv[1:3]))

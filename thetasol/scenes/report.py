@@ -318,11 +318,10 @@ def _break_even(setup: float, per_time: float, rate: float, density: float) -> s
     return f"T > {setup / gain:.3g}" if gain > 0 else "never at this output density"
 
 
-#: The generic reference body against its 80-bit reference (docs/bench_theta_rotation.md): errors over
-#: t <= 1000 of DOP853 at rtol 1e-13, heyoka float64 at tol 1e-16 and the theta solution, and theta's to t = 4002.
+#: Why the break-even above compares costs at equal accuracy; the measured errors of each side are in
+#: docs/bench_theta_rotation.md, written by benchmarks/bench_theta_rotation.py, not here (they depend on the body).
 _ACCURACY = ("accuracy: an integrator's error grows with the horizon and a closed form's stays near its set-up "
-             "accuracy (generic reference body, t <= 1000: DOP853 at rtol 1e-13 4.5e-11, heyoka float64 1.8e-12, "
-             "theta 1.4e-13, and 6.6e-13 to t = 4002; docs/bench_theta_rotation.md); matching it over long horizons "
+             "accuracy (measured per reference body in docs/bench_theta_rotation.md); matching it over long horizons "
              "costs an integrator a tighter tolerance or extended precision, so at equal accuracy the closed form "
              "pays off before the horizons above")
 
