@@ -9,6 +9,7 @@ import io
 import os
 import pathlib
 import platform
+import re
 import sys
 import time
 
@@ -97,7 +98,8 @@ def docs_section(page: str | None, script: str, section: str = ""):
     """Run the body printing as usual and, when ``page`` is given, write what it printed into ``page``'s
     generated section of ``script`` (the script's path from the root; ``section`` tells apart the runs of one
     script a page holds) under the date and the command.  Every script prints its own machine line
-    (``machine_info``) first.  Nothing is written when the body raises: a page holds complete runs only."""
+    (``machine_info``) first.  The script's headings become bold lines, so that the section sits under the
+    page's own heading, and every table gets the blank lines around it that markdown needs.  Nothing is written when the body raises: a page holds complete runs only."""
     if page is None:
         yield
         return
@@ -109,7 +111,10 @@ def docs_section(page: str | None, script: str, section: str = ""):
         sys.stdout = tee.stream
     command = " ".join(["python", f"benchmarks/{pathlib.Path(sys.argv[0]).name}", *sys.argv[1:]])
     when = datetime.datetime.now(datetime.UTC).strftime("%Y-%m-%d %H:%M UTC")
-    path = write_section(page, script, f"Recorded {when} by `{command}`.\n\n" + tee.copy.getvalue(), section)
+    text = re.sub(r"^#+[ \t]*(.+?)[ \t]*$", r"**\1**\n", tee.copy.getvalue(), flags=re.M)
+    text = re.sub(r"^([^|\n].*)\n(?=\|)", r"\1\n\n", text, flags=re.M)   # a table starts a block
+    text = re.sub(r"^(\|.*)\n(?=[^|\n])", r"\1\n\n", text, flags=re.M)   # and ends one
+    path = write_section(page, script, f"Recorded {when} by `{command}`.\n\n" + text, section)
     print(f"wrote the generated section of {path}", file=sys.stderr)
 
 

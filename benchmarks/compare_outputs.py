@@ -72,9 +72,8 @@ T_ROT = np.concatenate([np.linspace(0.0, 4002.0, 44), [0.7, 3.1, 17.3, 102.0, 99
 # the closed forms of the other branches also run backwards
 T_OTHER = np.concatenate([T_ROT, [-7.7, -123.4]])
 
-# Period matrices of tests/data/curves measured (PlaneCurve + period_matrix, one core):
-# 0.01 .. 0.16 s each, none near the ~5 s limit, so no curve is skipped.  Any curve listed here is
-# skipped (fixed list, so that the key set does not depend on timing).
+# Period matrices of tests/data/curves too slow to record (PlaneCurve + period_matrix, one core) would be
+# listed here and skipped (a fixed list, so that the key set does not depend on timing); none is.
 SKIP_CURVES: dict[str, str] = {}
 
 
