@@ -17,7 +17,7 @@ EXAMPLE = ROOT / "examples" / "satellite_boom.toml"
 
 
 def test_demo_as_a_process(tmp_path):
-    """The README's main job, as a user runs it (within a 120 s timeout; it takes 5-8 s, docs/mechanics.md)."""
+    """The README's main job, as a user runs it (within a 120 s timeout, far above its cost: docs/bench_mechanics.md)."""
     res = subprocess.run([sys.executable, "-m", "thetasol", "demo", "-o", str(tmp_path / "demo.npz")],
                          capture_output=True, text=True, timeout=120, cwd=tmp_path)
     assert res.returncode == 0, res.stderr
