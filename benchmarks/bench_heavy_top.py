@@ -28,7 +28,7 @@ from _common import best_of, docs_page, docs_section, machine_info
 
 from thetasol.core.so3 import rodrigues
 from thetasol.integrators.heavy_top import integrate_heavy_top
-from thetasol.solutions.heavy_top import solve_heavy_top
+from thetasol.solutions.tops.heavy_top import solve_heavy_top
 
 CPU = time.process_time
 

@@ -1,6 +1,6 @@
 """Speed against error for the mechanics: mass centre, split and unsplit (results in docs/bench_mechanics.md).
 
-1. The mass centre (3.2) on 1000 times in [0, 100]: closed form (thetasol.solutions.mass_center) against
+1. The mass centre (3.2) on 1000 times in [0, 100]: closed form (thetasol.solutions.points.mass_center) against
    scipy DOP853 at several tolerances and scipy.linalg.expm per time; errors against mpmath's
    matrix exponential at 40 digits.
 2. The split against the unsplit multibody system (thetasol.integrators.multibody) for a 5-body
@@ -26,7 +26,7 @@ from thetasol.integrators.multibody import integrate_multibody
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Configuration, Joint
 from thetasol.scenes.pipeline import solve_configuration
-from thetasol.solutions.mass_center import solve_mass_center
+from thetasol.solutions.points.mass_center import solve_mass_center
 
 REPEAT = 3
 

@@ -30,7 +30,7 @@ from test_neumann import CASES, T_FAR  # noqa: E402
 from test_neumann_point import CASES as POINT_CASES, _data, _errors, _scales  # noqa: E402
 
 from thetasol import inertia, integrate_rotation, solve_rotation  # noqa: E402
-from thetasol.solutions.neumann import solve_neumann  # noqa: E402
+from thetasol.solutions.points.neumann import solve_neumann  # noqa: E402
 
 T_POINT = np.array([0.7, 3.1, 17.3, 102.0, 1000.0])
 

@@ -25,8 +25,8 @@ from thetasol.integrators.multibody_gravity import integrate_multibody_gravity  
 from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation  # noqa: E402
 from thetasol.mechanics.gravity_gradient import orbit_frame  # noqa: E402
 from thetasol.scenes.format import load_scene  # noqa: E402
-from thetasol.solutions.kepler import KeplerOrbit  # noqa: E402
-from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation  # noqa: E402
+from thetasol.solutions.orbit.kepler import KeplerOrbit  # noqa: E402
+from thetasol.solutions.orbit.orbiting_rotation import solve_orbiting_rotation  # noqa: E402
 
 MU = 3.986004418e14
 RP = 6378137.0 + 500e3

@@ -30,7 +30,7 @@ from conftest import rand_Q  # noqa: E402
 from thetasol.core.inertia import inertia
 from thetasol.integrators.gyrostat import integrate_gyrostat, integrate_heavy_gyrostat  # noqa: E402
 from thetasol.scenes.gyrostat_scene import run_gyrostat_scene  # noqa: E402
-from thetasol.solutions.lagrange_gyrostat import solve_lagrange_gyrostat  # noqa: E402
+from thetasol.solutions.tops.lagrange_gyrostat import solve_lagrange_gyrostat  # noqa: E402
 
 
 def scenes(t_end):

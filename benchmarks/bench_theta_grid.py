@@ -20,8 +20,8 @@ import numpy as np
 from _common import best_of, docs_page, docs_section, machine_info
 from bench_heavy_top import kovalevskaya_top
 
-from thetasol.solutions.kovalevskaya_attitude import _torus_lattice, kovalevskaya_attitude
-from thetasol.solutions.kovalevskaya_top import kovalevskaya_motion
+from thetasol.solutions.tops.kovalevskaya_attitude import _torus_lattice, kovalevskaya_attitude
+from thetasol.solutions.tops.kovalevskaya_top import kovalevskaya_motion
 from thetasol.theta.grid import theta_grid
 
 CPU = time.process_time

@@ -1,6 +1,6 @@
 // thetasol.core._kernels (re-exported by thetasol.core.kernels): the compiled per-time evaluation of the theta-function rotation.
 //
-// The Python side (thetasol.theta.flow.FlowTheta, thetasol.solutions.theta_rotation.evaluator) builds
+// The Python side (thetasol.theta.flow.FlowTheta, thetasol.solutions.rotation.theta_rotation.evaluator) builds
 // every table once and validates the times; this file only computes from those frozen arrays:
 // turns -> phases -> Fourier flow tables -> [theta | d theta/dt] along the flow -> the state (omega, Q).
 // Each step repeats the floating-point operations of the numpy oracle (tests/oracle_theta_evaluation.py)
@@ -241,7 +241,7 @@ private:
     std::vector<size_t> start_, zero_, gather_;
 };
 
-// The state (omega, Q) of the theta-function rotation (thetasol.solutions.theta_rotation.evaluator):
+// The state (omega, Q) of the theta-function rotation (thetasol.solutions.rotation.theta_rotation.evaluator):
 // the nine exponents exp(i nu_sk t) from exact turns of a few rates, Psi and its rate from the flow's
 // values, one real product with the folded linear map (45, 36), one Newton-Schulz step to the polar
 // factor, vee(F Fd^T), and for a symmetric body the turning frame.

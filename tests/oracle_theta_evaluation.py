@@ -4,7 +4,7 @@ The shipped library evaluates the theta-function rotation per time in C++ only; 
 same algorithm in numpy, written for reading rather than speed, so that the tests can run the kernel
 against it (tests/test_core_kernels.py) and check the oracle's own steps against mpmath
 (tests/test_theta_evaluation.py).  It computes from the frozen tables of
-:class:`thetasol.theta.flow.FlowTheta` and :class:`thetasol.solutions.theta_rotation.evaluator.FlowEvaluator`,
+:class:`thetasol.theta.flow.FlowTheta` and :class:`thetasol.solutions.rotation.theta_rotation.evaluator.FlowEvaluator`,
 with the operations in the kernel's order where that order is fixed (turns, powers, products over the
 phases, the complex quotient); only the matrix products sum in BLAS's order.
 """

@@ -78,7 +78,7 @@ def test_cycle_finder_finds_a_cycle():
 def test_graph_sees_function_level_imports():
     """solve_rotation imports its closed forms inside the function: grimp records those edges."""
     edges = _import_graph()
-    assert "thetasol.solutions.theta_rotation" in edges["thetasol.solutions.rotation"]
+    assert "thetasol.solutions.rotation.theta_rotation" in edges["thetasol.solutions.rotation.dispatch"]
 
 
 def test_no_import_cycles():
@@ -160,7 +160,7 @@ def test_theta_set_up_imports_only_what_it_uses():
             "[thetasol.solve_rotation(thetasol.inertia(d[n]['J']), np.array(d[n]['a']), np.array(d[n]['Q0']), "
             "np.array(d[n]['omega0']))(np.array([0.5, 1e6])) for n in ('generic', 'symmetric_oblate', "
             "'rank_one_plus_isotropic', 'symmetric_rank_one')]; "
-            "print(sorted(m for m in ('thetasol.solutions.neumann_rotation', 'sympy', 'numpy.random') "
+            "print(sorted(m for m in ('thetasol.solutions.rotation.neumann_rotation', 'sympy', 'numpy.random') "
             "if m in sys.modules))")
     out = subprocess.run([sys.executable, "-c", code, refs], capture_output=True, text=True, check=True,
                          timeout=300)

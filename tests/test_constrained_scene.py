@@ -24,7 +24,7 @@ from thetasol.protocol import ClosedFormUnavailable
 from thetasol.scenes.format import load_scene
 from thetasol.scenes.pipeline import solve_configuration
 from thetasol.scenes.report import run
-from thetasol.solutions.neumann import NeumannSolution, solve_neumann
+from thetasol.solutions.points.neumann import NeumannSolution, solve_neumann
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "neumann_station.toml"
 EDGES = [("A", "B"), ("B", "C"), ("A", "D")]  # 4 bodies, C^2: a chain of length 2

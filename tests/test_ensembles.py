@@ -21,7 +21,7 @@ from thetasol import inertia
 from thetasol.ensembles import solve_many
 from thetasol.protocol import ClosedFormUnavailable
 from thetasol.scenes.format import load_scene
-from thetasol.solutions.rotation import solve_rotation
+from thetasol.solutions.rotation.dispatch import solve_rotation
 
 REFS = pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json"
 T = np.linspace(0.0, 50.0, 11)

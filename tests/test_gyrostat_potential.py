@@ -13,8 +13,8 @@ from thetasol.integrators.gyrostat import integrate_gyrostat, integrate_heavy_gy
 from thetasol.mechanics.rotors import gyrostat_energy
 from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions.gyrostat import solve_gyrostat
-from thetasol.solutions.kepler import KeplerOrbit
-from thetasol.solutions.lagrange_gyrostat import solve_lagrange_gyrostat
+from thetasol.solutions.orbit.kepler import KeplerOrbit
+from thetasol.solutions.tops.lagrange_gyrostat import solve_lagrange_gyrostat
 
 J0 = np.array([[1.2, 0.1, 0.05], [0.1, 0.7, 0.02], [0.05, 0.02, 0.4]])
 ROTORS = [{"axis": [1.0, 0.0, 0.0], "A": 0.05, "B": 0.03, "p": 0.4},

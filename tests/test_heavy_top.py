@@ -20,7 +20,7 @@ from thetasol.core.so3 import rodrigues
 from thetasol.integrators.heavy_top import integrate_heavy_top
 from thetasol.mechanics.heavy_top import heavy_top_invariants, kovalevskaya_integral
 from thetasol.protocol import ClosedFormUnavailable
-from thetasol.solutions.heavy_top import solve_heavy_top
+from thetasol.solutions.tops.heavy_top import solve_heavy_top
 
 TS = np.array([0.5, 1.0, 2.0, 10.0, 100.0, 1000.0])
 FLIP = np.array([[1.0, 0, 0], [0, -1.0, 0], [0, 0, -1.0]])   # hanging exactly (axis e3 down)
@@ -112,7 +112,7 @@ def test_hanging_phase_against_mpmath():
     # mpmath: measured 1.8e-15 (the Legendre-Carlson form F + (n/3) s^3 R_J: 1.1e-8)
     import mpmath
 
-    from thetasol.solutions.lagrange_top import _phase_G
+    from thetasol.solutions.tops.lagrange_top import _phase_G
     from thetasol.special.elliptic import ellipj
 
     c = solve_heavy_top(*BRULS_CARDONA[:4], **BRULS_CARDONA[4]).constants
@@ -407,7 +407,7 @@ def test_kovalevskaya_separating_variables():
     # float64-rounded state is conditioned like |s2/s1|: at s2 = -1151 the identity for s1 is 1.0e-8 off with s1
     # evaluated in mpmath at 40 digits from the same state); with the upward vertical in place of the downward one
     # the identity fails
-    from thetasol.solutions.kovalevskaya_top import kovalevskaya_curve, kovalevskaya_frame, kovalevskaya_variables
+    from thetasol.solutions.tops.kovalevskaya_top import kovalevskaya_curve, kovalevskaya_frame, kovalevskaya_variables
 
     rng = np.random.default_rng(3)
     R = _random_rotation(rng)
@@ -436,7 +436,7 @@ def test_kovalevskaya_separated_flow_against_heyoka():
     # image of the divisor, constants fitted at t = 0) against Kowalevski's variables of 80-bit heyoka:
     # measured 6.7e-16 .. 3.6e-14 relative at t <= 100 (7.4e-11 at t = 1000: the flow direction comes
     # from float64 periods, its error grows with t)
-    from thetasol.solutions.kovalevskaya_top import (
+    from thetasol.solutions.tops.kovalevskaya_top import (
         kovalevskaya_frame,
         kovalevskaya_separated_flow,
         kovalevskaya_variables,

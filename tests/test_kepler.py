@@ -11,7 +11,7 @@ import mpmath
 import numpy as np
 import pytest
 
-from thetasol.solutions.kepler import KeplerOrbit
+from thetasol.solutions.orbit.kepler import KeplerOrbit
 
 MU_EARTH = 3.986004418e14
 

@@ -11,7 +11,7 @@ Kowalevski's separated motion on the genus-2 curve, computed by generapy alone f
 
 since ``(s1 - s2) s1dot = y1`` and ``(s2 - s1) s2dot = y2`` give ``sum xdot_i/y_i = 0``, ``sum x_i xdot_i/y_i = 1``.
 These are compared with ``s1 + s2`` and ``s1 s2`` of thetasol's closed form ``(omega, gamma)``
-(:func:`thetasol.solutions.kovalevskaya_top.kovalevskaya_motion`, theta quotients with half-period
+(:func:`thetasol.solutions.tops.kovalevskaya_top.kovalevskaya_motion`, theta quotients with half-period
 characteristics), mapped to ``s1, s2`` by the memoir's algebraic formulas.
 
 generapy requires mpmath >= 1.4.1; the test is skipped without it.  Run it in a separate environment:
@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 from test_kovalevskaya_top import _top
 
-from thetasol.solutions.kovalevskaya_top import (
+from thetasol.solutions.tops.kovalevskaya_top import (
     kovalevskaya_curve,
     kovalevskaya_frame,
     kovalevskaya_motion,

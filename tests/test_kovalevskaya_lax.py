@@ -34,7 +34,7 @@ import pytest
 from test_kovalevskaya_top import _top
 
 from thetasol.core.so3 import hat
-from thetasol.solutions.kovalevskaya_top import kovalevskaya_frame
+from thetasol.solutions.tops.kovalevskaya_top import kovalevskaya_frame
 
 G = dict(mass=1.0, gravity=(0.0, 0.0, -9.81))
 E = np.array([[1.0, 0.0], [0.0, 1.0], [0.0, 0.0]])
@@ -110,7 +110,7 @@ def test_spectral_curve_constant_along_closed_form(seed):
     # the largest coefficient of its polynomial at t = 0; measured over t <= 1e3: 17: 7.9e-15, 2: 8.4e-15,
     # 4: 2.9e-15; over t <= 1e6: 9.7e-15, 8.4e-15, 4.2e-15.  The identities |g|^2, energy, area integral hold
     # to 6.2e-15 (b2 = -c0^2 a1/4 is checked with them)
-    from thetasol.solutions.heavy_top import solve_heavy_top
+    from thetasol.solutions.tops.heavy_top import solve_heavy_top
 
     I, c, Q0, w0 = _top(seed)
     frame = kovalevskaya_frame(I, c, G["mass"], G["gravity"])

@@ -1,5 +1,5 @@
 """Kovalevskaya's top (I1 = I2 = 2 I3, centre in the equatorial plane): ``(omega, gamma)`` from genus-2 theta
-quotients with half-period characteristics (thetasol.solutions.kovalevskaya_top.kovalevskaya_motion) against
+quotients with half-period characteristics (thetasol.solutions.tops.kovalevskaya_top.kovalevskaya_motion) against
 80-bit heyoka, and its integrals at far times.
 
 Reference: ``integrate_heavy_top(..., method="heyoka", fp_type=numpy.longdouble, rtol=1e-19)``.  Errors are max-norm
@@ -13,7 +13,7 @@ from conftest import label
 
 from thetasol.core.so3 import rodrigues
 from thetasol.integrators.heavy_top import integrate_heavy_top
-from thetasol.solutions.kovalevskaya_top import (
+from thetasol.solutions.tops.kovalevskaya_top import (
     kovalevskaya_curve,
     kovalevskaya_frame,
     kovalevskaya_motion,
@@ -94,7 +94,7 @@ def test_solve_heavy_top_against_heyoka(seed, bound):
     # grid inherits the state's error (fit_residual 4.2e-15 on 17, 2.9e-13 on 4) with a weight that depends on the
     # reference vector (on 4 the bound is 100 x the conditioning: its error there is that of the 40 samples alone)
     pytest.importorskip("heyoka")
-    from thetasol.solutions.heavy_top import solve_heavy_top
+    from thetasol.solutions.tops.heavy_top import solve_heavy_top
 
     I, c, Q0, w0 = _top(seed)
     sol = solve_heavy_top(I, c, Q0, w0, **G)
@@ -139,7 +139,7 @@ def test_solve_heavy_top_divisor_next_to_infinity():
     # Measured (omega, Q) at t in {0.5, 1, 2, 10, 100}: <= 1.2e-13 (heyoka conditioning at 100: 2e-14); at
     # t = 1000 1.8e-12; fit_residual 6e-13
     pytest.importorskip("heyoka")
-    from thetasol.solutions.heavy_top import solve_heavy_top
+    from thetasol.solutions.tops.heavy_top import solve_heavy_top
 
     I, c, Q0, w0 = _top(19)
     sol = solve_heavy_top(I, c, Q0, w0, **G)
@@ -159,7 +159,7 @@ def test_phase_reference_where_axes_and_momentum_pass_near_the_vertical(seed, bo
     # the theta jets as OpenBLAS's dtrsm kernel rounds them (FMA), 5.9e-12 with plain or compensated forward
     # substitution (the library's, deterministic across machines); seeds 0, 1, 5, 39 move by 0.8-1.3x
     pytest.importorskip("heyoka")
-    from thetasol.solutions.heavy_top import solve_heavy_top
+    from thetasol.solutions.tops.heavy_top import solve_heavy_top
 
     I, c, Q0, w0 = _top(seed)
     sol = solve_heavy_top(I, c, Q0, w0, **G)
@@ -173,9 +173,9 @@ def test_phase_reference_where_axes_and_momentum_pass_near_the_vertical(seed, bo
 def test_unconverged_phase_series_refused(monkeypatch):
     # a rate series not converged at the largest grid is refused, naming the numerical reference (seed 2 needs
     # 128 x 128; capped at 32 its truncation is 3.2e-6 rad)
-    import thetasol.solutions.kovalevskaya_attitude as ka
+    import thetasol.solutions.tops.kovalevskaya_attitude as ka
     from thetasol.protocol import ClosedFormUnavailable
-    from thetasol.solutions.heavy_top import solve_heavy_top
+    from thetasol.solutions.tops.heavy_top import solve_heavy_top
 
     monkeypatch.setattr(ka, "GRID_MAX", 32)
     with pytest.raises(ClosedFormUnavailable, match="not converged.*integrate_heavy_top"):
@@ -185,7 +185,7 @@ def test_unconverged_phase_series_refused(monkeypatch):
 def test_solution_integrals_at_far_times():
     # sol.invariants (energy, vertical momentum, k^2) along sol(t) over 401 times in [0, 1e6] and Q orthogonal
     from thetasol.mechanics.heavy_top import heavy_top_invariants, kovalevskaya_integral
-    from thetasol.solutions.heavy_top import solve_heavy_top
+    from thetasol.solutions.tops.heavy_top import solve_heavy_top
 
     I, c, Q0, w0 = _top(17)
     sol = solve_heavy_top(I, c, Q0, w0, **G)
@@ -208,7 +208,7 @@ def test_forty_random_tops_against_heyoka():
     # t in {0.5, 1, 2, 10, 100}: <= 1.6e-11 (seed 25, fit_residual 1.5e-11), at t = 1000: <= 7.5e-11 (seed 3),
     # median 2.1e-12; heyoka conditioning at t = 1000 ~1e-13
     pytest.importorskip("heyoka")
-    from thetasol.solutions.heavy_top import solve_heavy_top
+    from thetasol.solutions.tops.heavy_top import solve_heavy_top
 
     t = np.array([0.5, 1.0, 2.0, 10.0, 100.0, 1000.0])
     for seed in range(40):

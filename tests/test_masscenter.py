@@ -13,7 +13,7 @@ from hypothesis import given, settings, strategies as st
 
 from thetasol.core.so3 import rodrigues
 from thetasol.protocol import CHUNK, Solution
-from thetasol.solutions.mass_center import MassCenterMotion, solve_mass_center
+from thetasol.solutions.points.mass_center import MassCenterMotion, solve_mass_center
 
 
 def expm_reference(a, b, q0, v0, t, dps=40):

@@ -1,4 +1,5 @@
-"""Symmetric body without axial spin in a quadratic potential (Neumann's problem), thetasol.solutions.neumann_rotation.
+"""Symmetric body without axial spin in a quadratic potential (Neumann's problem),
+thetasol.solutions.rotation.neumann_rotation.
 
 References: DOP853 (rtol 1e-13) up to t = 40 and heyoka in 80-bit arithmetic up to t = 4002;
 the conserved quantities; the data at t = 0.

@@ -1,4 +1,4 @@
-"""A point on a sphere in a quadratic potential (Neumann's problem, Section 6): thetasol.solutions.neumann.
+"""A point on a sphere in a quadratic potential (Neumann's problem, Section 6): thetasol.solutions.points.neumann.
 
 References: heyoka in 80-bit arithmetic (``fp_type=np.longdouble``, tol 1e-19) of the constrained
 equations in Cartesian form, ``qddot = -a q + lambda q`` with ``lambda = (q.aq - |qdot|^2) / |q|^2``
@@ -11,7 +11,7 @@ from conftest import label as method_label
 
 from thetasol.core.so3 import rodrigues
 from thetasol.protocol import ClosedFormUnavailable
-from thetasol.solutions.neumann import solve_neumann
+from thetasol.solutions.points.neumann import solve_neumann
 
 ROT = rodrigues([0.3, -0.5, 0.9])
 T_REF = np.array([0.0, 0.7, -3.1, 17.3, 102.0, 1000.0])

@@ -92,7 +92,7 @@ def _drift(J, a, Q0, w0, w, Q) -> float:
                                       "above it far out, without growth: the bound's margin needs a decision")))])
 def test_far_times_keep_the_first_integrals(name):
     """The phases ``nu_sk t`` are integer combinations of the rates' turns reduced modulo 1 exactly
-    (:class:`thetasol.solutions.theta_rotation.exponents.PhaseRates`), and so are the theta flow's
+    (:class:`thetasol.solutions.rotation.theta_rotation.exponents.PhaseRates`), and so are the theta flow's
     phases ``t u`` (:class:`thetasol.theta.flow.FlowTheta`): the nine exponents keep their exact
     relations far out (the form ``F_s - G_k``, the lattice rate U), still combine into an orthogonal
     Phi(0, t), and energy and I2 do not drift.  Measured on [T, T + 100] at T = 0, 1e6, 1e9: <= 3.0e-14
@@ -144,8 +144,8 @@ def test_fitted_exponents_keep_their_own_rates(sol):
     5e-16 and 1e-12."""
     import mpmath
 
-    from thetasol.solutions.theta_rotation.evaluator import build_evaluator
-    from thetasol.solutions.theta_rotation.exponents import PhaseRates
+    from thetasol.solutions.rotation.theta_rotation.evaluator import build_evaluator
+    from thetasol.solutions.rotation.theta_rotation.exponents import PhaseRates
 
     ev = sol.evaluator
     fit = build_evaluator(ev.flow, ev.nu, PhaseRates.of_fit(ev.nu), ev.amp, ev.X0inv, ev.B, ev.Q0p, ev.P, ev.spin,

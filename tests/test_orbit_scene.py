@@ -23,7 +23,7 @@ from thetasol.mechanics.configuration import Configuration
 from thetasol.scenes.format import Scene, load_scene
 from thetasol.scenes.orbit_report import scaled_station
 from thetasol.scenes.report import run
-from thetasol.solutions.kepler import KeplerOrbit
+from thetasol.solutions.orbit.kepler import KeplerOrbit
 
 EXAMPLE = Path(__file__).resolve().parent.parent / "examples" / "orbiting_station.toml"
 

@@ -14,7 +14,7 @@ from scipy.integrate import solve_ivp
 from thetasol.core.so3 import rodrigues
 from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
 from thetasol.mechanics.gravity_gradient import orbit_frame
-from thetasol.solutions.kepler import KeplerOrbit
+from thetasol.solutions.orbit.kepler import KeplerOrbit
 
 MU = 3.986004418e14
 R_LEO = 6378137.0 + 500e3
@@ -157,7 +157,7 @@ def test_shapes_and_negative_times():
 
 from thetasol.core.inertia import inertia
 from thetasol.protocol import ClosedFormUnavailable  # noqa: E402
-from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation  # noqa: E402
+from thetasol.solutions.orbit.orbiting_rotation import solve_orbiting_rotation  # noqa: E402
 
 
 def _planar(orb, k, s, th0, thd, P=None):

@@ -20,7 +20,7 @@ from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import Solution
 from thetasol.scenes.format import Scene
 from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
-from thetasol.solutions.mass_center import MassCenterMotion
+from thetasol.solutions.points.mass_center import MassCenterMotion
 
 
 @pytest.fixture(scope="module")

@@ -115,7 +115,7 @@ def test_run_report_and_checks(tmp_path):
 
 def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
     """With an isotropic a the rotations are Euler tops; a stand-in solve_rotation exercises the
-    closed-form branch of the pipeline (the real one lives in thetasol.solutions.rotation)."""
+    closed-form branch of the pipeline (the real one lives in thetasol.solutions.rotation.dispatch)."""
     calls = []
 
     class Fake:
@@ -134,7 +134,8 @@ def test_closed_form_rotation_is_used_and_checked(tmp_path, monkeypatch):
             raise NotImplementedError("theta functions: not in this stand-in")
         return Fake(second_moments(I), a, Q0, w0)
 
-    monkeypatch.setitem(sys.modules, "thetasol.solutions.rotation", types.SimpleNamespace(solve_rotation=solve_rotation))
+    monkeypatch.setitem(sys.modules, "thetasol.solutions.rotation.dispatch",
+                        types.SimpleNamespace(solve_rotation=solve_rotation))
     text = SMALL.replace("a = [[1.0, 0.2, 0.0], [0.2, 0.5, 0.0], [0.0, 0.0, -0.1]]",
                          "a = [[0.3, 0.0, 0.0], [0.0, 0.3, 0.0], [0.0, 0.0, 0.3]]")
     sc = load_scene(write(tmp_path, text))

@@ -100,8 +100,8 @@ def test_kovalevskaya_phase_series_grid_against_pointwise(seed, monkeypatch):
     # 128 x 256 and 64 x 256 grids, and the mean rates differ by 1.6e-15); the other seeds pick the same grid
     from test_kovalevskaya_top import G, _top
 
-    from thetasol.solutions.kovalevskaya_attitude import build_kovalevskaya_top
-    from thetasol.solutions.kovalevskaya_top import KovalevskayaMotion
+    from thetasol.solutions.tops.kovalevskaya_attitude import build_kovalevskaya_top
+    from thetasol.solutions.tops.kovalevskaya_top import KovalevskayaMotion
 
     I, c, Q0, w0 = _top(seed)
     att, diag = build_kovalevskaya_top(I, c, Q0, w0, **G)

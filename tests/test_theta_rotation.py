@@ -14,8 +14,8 @@ from conftest import label
 from thetasol import ClosedFormUnavailable, inertia, integrate_rotation, invariants, solve_rotation
 from thetasol.core.so3 import hat
 from thetasol.mechanics.lax import eigenvector_poles
-from thetasol.solutions.theta_rotation import ThetaRotation
-from thetasol.solutions.theta_rotation.lattice import lattice_coords as _lattice_coords
+from thetasol.solutions.rotation.theta_rotation import ThetaRotation
+from thetasol.solutions.rotation.theta_rotation.lattice import lattice_coords as _lattice_coords
 
 REFS = json.loads((pathlib.Path(__file__).parent / "data" / "rotation" / "refs.json").read_text())
 # Measured (max over the six times, largest at t = 4002): 7.4e-15 (near the stable equilibrium) to
@@ -251,7 +251,7 @@ def test_flow_velocity_divided_difference_equals_the_sum_over_the_places():
     import sympy as sp
 
     from thetasol.curves.spectral import spectral_curve
-    from thetasol.solutions.theta_rotation.infinity import (
+    from thetasol.solutions.rotation.theta_rotation.infinity import (
         infinity_data as _infinity_data,
         velocity_at_infinity as _velocity_at_infinity,
     )
@@ -317,8 +317,8 @@ def test_nearly_symmetric_body_with_far_cell_vertices_against_dop853():
 def test_symmetric_body_with_little_axial_spin_is_refused_at_once(monkeypatch):
     # below MIN_AXIAL_SPIN (relative) the curve engine's set-up grows to minutes: refused before the curve
     # (the message of a failed set-up also says "little spin": the curve must not be built at all)
-    import thetasol.solutions.theta_rotation.spectral_data as tr
-    from thetasol.solutions.theta_rotation import MIN_AXIAL_SPIN
+    import thetasol.solutions.rotation.theta_rotation.spectral_data as tr
+    from thetasol.solutions.rotation.theta_rotation import MIN_AXIAL_SPIN
 
     def no_curve(*args, **kwargs):
         raise AssertionError("the spectral curve was built")
@@ -333,7 +333,7 @@ def test_nearly_spherical_symmetric_body_with_small_spin_is_refused_at_once(monk
     """J gap 0.25 %, axial spin 1e-3 relative: branch points at |E| ~ 4.2e4 sqrt|a| / J (with the guard
     lifted the set-up takes 4.8 s CPU; at spin 3e-4, 1.4e5, the curve alone takes 114 s): refused
     before the curve is built."""
-    import thetasol.solutions.theta_rotation.spectral_data as tr
+    import thetasol.solutions.rotation.theta_rotation.spectral_data as tr
 
     def no_curve(*args, **kwargs):
         raise AssertionError("the spectral curve was built")
@@ -417,7 +417,7 @@ def test_node_velocity_closed_form_against_a_contour_integral():
 
     from thetasol.core.inertia import inertia_from_moments
     from thetasol.curves.spectral import spectral_curve
-    from thetasol.solutions.theta_rotation.infinity import (
+    from thetasol.solutions.rotation.theta_rotation.infinity import (
         infinity_data as _infinity_data,
         velocity_at_infinity as _velocity_at_infinity,
     )
@@ -506,7 +506,7 @@ def test_node_branch_eigenvectors_against_mpmath():
     import mpmath
 
     from thetasol.mechanics.lax import lax_matrix, right_eigenvector
-    from thetasol.solutions.theta_rotation.node import node_branch as _node_branch, node_slopes as _node_slopes
+    from thetasol.solutions.rotation.theta_rotation.node import node_branch as _node_branch, node_slopes as _node_slopes
 
     curve = solve_rotation(inertia(_NODE_NEAR_BRANCH[0]), *_NODE_NEAR_BRANCH[1:]).curve
     lb = curve.node[1]
@@ -553,10 +553,10 @@ def test_riemann_constant_from_stage_two_divisors_matches_the_fallback_divisors(
     """Riemann's vanishing theorem on the divisors made of stage 2's points (poles and component zeros)
     picks the same half-period candidate as on the three divisors of the fixed table of test points, and
     decides on its own (without the table's divisors)."""
-    from thetasol.solutions.theta_rotation import riemann as stage3
-    from thetasol.solutions.theta_rotation.divisors import eigenvector_divisors
-    from thetasol.solutions.theta_rotation.frame import body_frame
-    from thetasol.solutions.theta_rotation.spectral_data import spectral_data
+    from thetasol.solutions.rotation.theta_rotation import riemann as stage3
+    from thetasol.solutions.rotation.theta_rotation.divisors import eigenvector_divisors
+    from thetasol.solutions.rotation.theta_rotation.frame import body_frame
+    from thetasol.solutions.rotation.theta_rotation.spectral_data import spectral_data
 
     J, a, Q0, w0, _ = _case(name)
     sd = spectral_data(body_frame(J, a, Q0, w0))

@@ -1,4 +1,4 @@
-"""solve_rotation does not depend on the user's units (thetasol/solutions/_scaling.py, docs/units.md).
+"""solve_rotation does not depend on the user's units (thetasol/solutions/rotation/_scaling.py, docs/units.md).
 
 Scaling J, rescaling time and adding c 1 to a change nothing physical; the solutions must transform
 as the physics says, to the data's conditioning.  References nobody here wrote: heyoka's Taylor

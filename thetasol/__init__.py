@@ -23,15 +23,15 @@ def _group(module: str, *names: str) -> None:
 # the solution protocol and its exceptions
 _group("thetasol.protocol", "Solution", "RotationSolution", "ClosedFormUnavailable")
 # closed forms, one per physical model
-_group("thetasol.solutions.rotation", "solve_rotation")
+_group("thetasol.solutions.rotation.dispatch", "solve_rotation")
 _group("thetasol.solutions.gyrostat", "solve_gyrostat")
-_group("thetasol.solutions.neumann", "solve_neumann", "NeumannSolution")
-_group("thetasol.solutions.heavy_top", "solve_heavy_top")
-_group("thetasol.solutions.heavy_top_base", "HeavyTopSolution")
-_group("thetasol.solutions.kepler", "KeplerOrbit", "solve_kepler")
-_group("thetasol.solutions.orbiting_rotation", "solve_orbiting_rotation", "OrbitingRotation")
-_group("thetasol.solutions.mass_center", "MassCenterMotion", "solve_mass_center")
-_group("thetasol.solutions.lagrange_gyrostat", "solve_lagrange_gyrostat")
+_group("thetasol.solutions.points.neumann", "solve_neumann", "NeumannSolution")
+_group("thetasol.solutions.tops.heavy_top", "solve_heavy_top")
+_group("thetasol.solutions.tops.heavy_top_base", "HeavyTopSolution")
+_group("thetasol.solutions.orbit.kepler", "KeplerOrbit", "solve_kepler")
+_group("thetasol.solutions.orbit.orbiting_rotation", "solve_orbiting_rotation", "OrbitingRotation")
+_group("thetasol.solutions.points.mass_center", "MassCenterMotion", "solve_mass_center")
+_group("thetasol.solutions.tops.lagrange_gyrostat", "solve_lagrange_gyrostat")
 # mechanics: bodies, configurations, equations and first integrals
 _group("thetasol.mechanics.bodies", "Body")
 _group("thetasol.mechanics.configuration", "Configuration", "Joint")
@@ -137,13 +137,13 @@ if TYPE_CHECKING:
     from thetasol.scenes.pipeline import ConfigurationSolution, solve_configuration
     from thetasol.scenes.report import run
     from thetasol.solutions.gyrostat import solve_gyrostat
-    from thetasol.solutions.heavy_top import solve_heavy_top
-    from thetasol.solutions.heavy_top_base import HeavyTopSolution
-    from thetasol.solutions.kepler import KeplerOrbit, solve_kepler
-    from thetasol.solutions.lagrange_gyrostat import solve_lagrange_gyrostat
-    from thetasol.solutions.mass_center import MassCenterMotion, solve_mass_center
-    from thetasol.solutions.neumann import NeumannSolution, solve_neumann
-    from thetasol.solutions.orbiting_rotation import OrbitingRotation, solve_orbiting_rotation
-    from thetasol.solutions.rotation import solve_rotation
+    from thetasol.solutions.orbit.kepler import KeplerOrbit, solve_kepler
+    from thetasol.solutions.orbit.orbiting_rotation import OrbitingRotation, solve_orbiting_rotation
+    from thetasol.solutions.points.mass_center import MassCenterMotion, solve_mass_center
+    from thetasol.solutions.points.neumann import NeumannSolution, solve_neumann
+    from thetasol.solutions.rotation.dispatch import solve_rotation
+    from thetasol.solutions.tops.heavy_top import solve_heavy_top
+    from thetasol.solutions.tops.heavy_top_base import HeavyTopSolution
+    from thetasol.solutions.tops.lagrange_gyrostat import solve_lagrange_gyrostat
     from thetasol.theta.grid import ThetaGrid, theta_grid
     from thetasol.theta.riemann import RiemannTheta, riemann_theta, riemann_theta_separated, siegel_reduce

@@ -102,7 +102,7 @@ def _task(index: int, item: Any, solver: Callable | None) -> _Task:
     if isinstance(item, (str, os.PathLike)):
         return _Task(index, "path", Path(item))
     if solver is None:
-        from thetasol.solutions.rotation import solve_rotation
+        from thetasol.solutions.rotation.dispatch import solve_rotation
 
         solver = solve_rotation
     if isinstance(item, Mapping):

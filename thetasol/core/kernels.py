@@ -2,7 +2,7 @@
 
 :class:`FlowKernel` evaluates theta along a real linear flow from the frozen tables of
 :class:`thetasol.theta.flow.FlowTheta`; :class:`RotationKernel` the state ``(omega, Q)`` from those of
-:class:`thetasol.solutions.theta_rotation.evaluator.FlowEvaluator`.  The Python side validates, builds the
+:class:`thetasol.solutions.rotation.theta_rotation.evaluator.FlowEvaluator`.  The Python side validates, builds the
 tables and owns what a user sees; the kernels only compute (docs/architecture.md).
 
 The extension ``_kernels`` is built by ``pip install`` (scikit-build-core, nanobind, the system C++17

@@ -9,7 +9,7 @@ which makes ``c = (|q|^2 - R^2) / 2`` obey ``cddot + 2 alpha cdot + alpha^2 c = 
 critically damped; ``alpha = sqrt(max |eig a|) + |v0| / R``, the fastest natural rate; the sign of
 ``2 alpha`` follows the direction of integration, so that backward in time it damps too): on the
 sphere it is Neumann's multiplier, off it the drift of the integrator decays instead of growing.
-Used where :func:`~thetasol.solutions.neumann.solve_neumann` builds no closed form (within ~1e-4 of
+Used where :func:`~thetasol.solutions.points.neumann.solve_neumann` builds no closed form (within ~1e-4 of
 a separatrix) and by the split of a scene with the sphere constraint in that case.
 """
 from __future__ import annotations

@@ -53,7 +53,7 @@ def _rotation_case(name, description, J, a, Q0, w0, t_span=(0.0, 20.0), model="b
         integrals = mdl.free_top_integrals(J)
 
     def build():
-        from thetasol.solutions.rotation import solve_rotation
+        from thetasol.solutions.rotation.dispatch import solve_rotation
         sol = solve_rotation(inertia(J), a, Q0, w0)
         return sol, _rotation_states(sol)
 
@@ -149,7 +149,7 @@ def _heavy_top_case(name, description, I, center, Q0, w0, mass, gravity, t_span)
     rhs, integrals = mdl.heavy_top_system(I, c, mass, g)
 
     def build():
-        from thetasol.solutions.heavy_top import solve_heavy_top
+        from thetasol.solutions.tops.heavy_top import solve_heavy_top
         sol = solve_heavy_top(I, c, Q0, w0, mass=mass, gravity=g)
         return sol, _rotation_states(sol)
 
@@ -196,17 +196,17 @@ def _point_cases():
     a_mc, b_mc = np.array([[1.0, 0.2, 0.0], [0.2, -0.3, 0.1], [0.0, 0.1, 0.0]]), np.array([0.2, -0.4, 0.6])
 
     def neumann():
-        from thetasol.solutions.neumann import solve_neumann
+        from thetasol.solutions.points.neumann import solve_neumann
         return solve_neumann(np.diag(k), q0, v0)
 
     def kepler(r0, v):
         def make():
-            from thetasol.solutions.kepler import solve_kepler
+            from thetasol.solutions.orbit.kepler import solve_kepler
             return solve_kepler(1.0, r0, v)
         return make
 
     def mass_centre():
-        from thetasol.solutions.mass_center import solve_mass_center
+        from thetasol.solutions.points.mass_center import solve_mass_center
         return solve_mass_center(a_mc, b_mc, [0.3, -0.2, 0.5], [0.1, 0.4, -0.2])
 
     kep = "r' = v,  v' = -mu r / |r|^3  (7.7), mu = 1"
@@ -241,8 +241,8 @@ def _orbiting_case():
     rhs, integrals = mdl.orbiting_system(J, 1.0)
 
     def build():
-        from thetasol.solutions.kepler import solve_kepler
-        from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation
+        from thetasol.solutions.orbit.kepler import solve_kepler
+        from thetasol.solutions.orbit.orbiting_rotation import solve_orbiting_rotation
         orbit = solve_kepler(1.0, r0, v0)
         sol = solve_orbiting_rotation(Isat, orbit, Q0, w0)
         return sol, _rotation_states(sol, lambda t: np.concatenate(orbit(t), axis=1))

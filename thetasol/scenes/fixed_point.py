@@ -20,9 +20,9 @@ about the pivot with the Lagrangian (5.3),
 The cheapest exact form (Corollaries 2-4), chosen by :func:`main_rotation`:
 
 * ``R = 0`` or ``b_P = 0`` (Corollary 2): the Section 4 problem with ``J_P``, by
-  :func:`thetasol.solutions.rotation.solve_rotation`;
+  :func:`thetasol.solutions.rotation.dispatch.solve_rotation`;
 * ``a`` isotropic (zero included: a uniform field, Corollary 3; ``a = s 1`` exerts no torque): a
-  heavy top, :func:`thetasol.solutions.heavy_top.solve_heavy_top` with ``I_P``, centre
+  heavy top, :func:`thetasol.solutions.tops.heavy_top.solve_heavy_top` with ``I_P``, centre
   ``c - r_P``, mass ``m`` and gravity ``-b_P / 2`` (Euler, Lagrange, Kovalevskaya);
 * otherwise no closed form is known (Corollary 4): the numerical reference
   :func:`thetasol.integrators.fixed_point.integrate_fixed_point`, and the diagnostics say why.
@@ -130,7 +130,7 @@ def pivoted_body(config: Configuration, pivot: Pivot, a: ArrayLike, b: ArrayLike
 
 
 def _heavy_top(pb: PivotedBody, Q0: np.ndarray, w0: np.ndarray) -> Any:
-    from thetasol.solutions.heavy_top import solve_heavy_top  # loads the elliptic and theta machinery
+    from thetasol.solutions.tops.heavy_top import solve_heavy_top  # loads the elliptic and theta machinery
 
     return solve_heavy_top(pb.I, pb.center, Q0, w0, mass=pb.mass, gravity=-0.5 * pb.b)
 

@@ -50,7 +50,7 @@ from thetasol.scenes.pipeline import closed_form_rotation, parts_text, rotation_
 from thetasol.scenes.references import announce_fallbacks
 from thetasol.scenes.values import number, numeric_array
 from thetasol.solutions.gyrostat import solve_gyrostat
-from thetasol.solutions.mass_center import MassCenterMotion
+from thetasol.solutions.points.mass_center import MassCenterMotion
 
 __all__ = ["GyrostatScene", "GyrostatSplit", "solve_gyrostat_configuration", "gyrostat_scene_from_dict",
            "load_gyrostat_scene", "run_gyrostat_scene"]

@@ -4,10 +4,10 @@ With ``[orbit]`` (``mu``, and the system mass centre's ``r0``, ``v0`` relative t
 centre) a scene has no ``[potential]``: the field is ``-mu / |x|``, and Theorem 4 splits the motion
 (to the order of (7.4)) into
 
-* the system mass centre on the Kepler orbit (7.7), :class:`~thetasol.solutions.kepler.KeplerOrbit`
+* the system mass centre on the Kepler orbit (7.7), :class:`~thetasol.solutions.orbit.kepler.KeplerOrbit`
   (closed form, every conic);
 * one rotation per effective body (7.10) in the tidal field (7.11) of that orbit, independent of the
-  others: :func:`~thetasol.solutions.orbiting_rotation.solve_orbiting_rotation` where a closed form
+  others: :func:`~thetasol.solutions.orbit.orbiting_rotation.solve_orbiting_rotation` where a closed form
   applies (relative equilibria and planar pitch motions on a circular orbit, spherical bodies), else
   :func:`~thetasol.integrators.orbiting_rotation.integrate_orbiting_rotation` on demand;
 
@@ -39,8 +39,8 @@ from thetasol.mechanics.gravity_gradient import GravityGradientStability, gravit
 from thetasol.protocol import ClosedFormUnavailable, describe, worst_error
 from thetasol.scenes.pipeline import ConfigurationSolution, parts_text
 from thetasol.scenes.values import numeric_array
-from thetasol.solutions.kepler import KeplerOrbit
-from thetasol.solutions.orbiting_rotation import solve_orbiting_rotation
+from thetasol.solutions.orbit.kepler import KeplerOrbit
+from thetasol.solutions.orbit.orbiting_rotation import solve_orbiting_rotation
 
 __all__ = ["OrbitEntry", "orbit_entry", "BodyStability", "station_stability", "OrbitingConfigurationSolution",
            "solve_orbiting_configuration"]

@@ -36,7 +36,7 @@ from thetasol.protocol import describe
 from thetasol.scenes.checks import Check, ReportText, verdict
 from thetasol.scenes.orbit import OrbitingConfigurationSolution
 from thetasol.scenes.references import Part, horizon_tolerance, reference
-from thetasol.solutions.kepler import KeplerOrbit
+from thetasol.solutions.orbit.kepler import KeplerOrbit
 
 __all__ = ["run_orbit", "scaled_station", "station_size", "jacobi_integral"]
 

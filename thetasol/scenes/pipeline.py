@@ -2,9 +2,9 @@
 
 :func:`solve_configuration` builds, once, every part of the split:
 
-* the system mass centre ``q(t)`` in closed form (:class:`~thetasol.solutions.mass_center.MassCenterMotion`);
+* the system mass centre ``q(t)`` in closed form (:class:`~thetasol.solutions.points.mass_center.MassCenterMotion`);
 * one rotation per effective body (2.15), (3.7) in ``1/2 x^T a x`` (3.3), independent of ``q``
-  and of each other: ``thetasol.solutions.rotation.solve_rotation`` where a closed form exists
+  and of each other: ``thetasol.solutions.rotation.dispatch.solve_rotation`` where a closed form exists
   (elliptic functions for ``a = c 1`` and pendulum motions, Neumann's separation for a
   symmetric body without axial spin, theta functions otherwise), else (data it refuses, e.g. a
   symmetric body with little but non-zero axial spin) a
@@ -14,7 +14,7 @@
 
 With ``constraint=Sphere(R)`` (Section 6, Theorem 3) the mass centre is held on ``|q| = R`` (a rod
 on a spherical joint at the origin of the potential ``1/2 q^T a q``): it then moves as C. Neumann's
-point, :func:`~thetasol.solutions.neumann.solve_neumann` with the same ``a`` (per unit mass: the
+point, :func:`~thetasol.solutions.points.neumann.solve_neumann` with the same ``a`` (per unit mass: the
 rod's force acts on the total mass; near a separatrix, where that closed form is refused,
 :func:`~thetasol.integrators.neumann.integrate_neumann`), and the rotations are unchanged (the force is a uniform
 acceleration field on the bodies: no torque about any mass centre).
@@ -43,8 +43,8 @@ from thetasol.mechanics.equations import invariants as rotation_invariants
 from thetasol.mechanics.potential import potential_kind
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import ClosedFormUnavailable, Solution, describe, worst_error
-from thetasol.solutions.mass_center import MassCenterMotion
-from thetasol.solutions.neumann import NeumannSolution, solve_neumann
+from thetasol.solutions.points.mass_center import MassCenterMotion
+from thetasol.solutions.points.neumann import NeumannSolution, solve_neumann
 
 __all__ = ["ConfigurationSolution", "solve_configuration", "rotation_kind", "closed_form_rotation", "effective_rotations",
            "parts_text"]
@@ -66,7 +66,7 @@ def closed_form_rotation(J: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: Arra
     """``solve_rotation(inertia(J), a, Q0, omega0)`` and ``""``, or ``None`` and the reason it refused the data
     (``J`` the second moments the split of the configuration gives)."""
     # imported here: scenes without a closed-form rotation never load the theta machinery
-    from thetasol.solutions.rotation import solve_rotation
+    from thetasol.solutions.rotation.dispatch import solve_rotation
 
     try:
         return solve_rotation(inertia(J), a, Q0, omega0), ""
@@ -307,14 +307,14 @@ def solve_configuration(config: Configuration, a: ArrayLike, b: ArrayLike, q0: A
     omega0 : mapping name -> (3,)
         Body-frame angular velocities (zero where missing).
     rotation : {"auto", "numerical"}
-        ``"auto"`` uses ``thetasol.solutions.rotation.solve_rotation`` where it has a closed form
+        ``"auto"`` uses ``thetasol.solutions.rotation.dispatch.solve_rotation`` where it has a closed form
         and :func:`~thetasol.integrate_rotation` (on demand) elsewhere; ``"numerical"`` always
         integrates.
     rtol, method : float, str
         Passed to :func:`~thetasol.integrate_rotation` for the numerical rotations.
     constraint : Sphere, optional
         Hold the system mass centre on the sphere ``|q| = constraint.radius`` about the origin
-        (Theorem 3): it then moves by :func:`~thetasol.solutions.neumann.solve_neumann` with the
+        (Theorem 3): it then moves by :func:`~thetasol.solutions.points.neumann.solve_neumann` with the
         same ``a``; the rotations are unchanged.  Needs ``b = 0``, ``|q0| = radius`` and ``v0``
         tangent, to 1e-12 relative (else ``ValueError``).  Where ``solve_neumann`` builds no closed
         form (near a separatrix) the mass centre is a

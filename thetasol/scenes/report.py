@@ -299,7 +299,7 @@ def _load_closed_forms(scene: Scene) -> float:
         return 0.0
     start = time.perf_counter()
     # (the set-up itself does not import sympy)
-    for name in ("thetasol.solutions.rotation", "thetasol.solutions.theta_rotation", "mpmath"):
+    for name in ("thetasol.solutions.rotation.dispatch", "thetasol.solutions.rotation.theta_rotation", "mpmath"):
         importlib.import_module(name)
     return time.perf_counter() - start
 

@@ -71,7 +71,7 @@ points around it, where the orbit lingers, only to ``eps / distance``.  The
 new anchor is a fast point where the pencil turns fastest.
 
 Degenerate cases are separate closed forms: ``N = 0`` (or below the rounding of ``m``) is the
-Euler top (:mod:`thetasol.solutions.euler_top`), ``m = 0`` rest, ``h x omega = 0`` (to the rounding of the
+Euler top (:mod:`thetasol.solutions.rotation.euler_top`), ``m = 0`` rest, ``h x omega = 0`` (to the rounding of the
 data) steady rotation, a spherical carrier and an axisymmetric carrier with ``N`` along its
 axis are trigonometric.
 

@@ -23,7 +23,7 @@ from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions.gyrostat._elliptic import elliptic_motion, elliptic_orbit, reanchor
 from thetasol.solutions.gyrostat._forms import Axisymmetric, BodyMap, Delegate, Scaled, Sphere, Steady
 from thetasol.solutions.gyrostat._rotors import RotorAngles, parse_rotors, rotor_angles
-from thetasol.solutions.rotation import RotationSolution, solve_rotation
+from thetasol.solutions.rotation.dispatch import RotationSolution, solve_rotation
 
 __all__ = ["GyrostatSolution", "solve_gyrostat"]
 

@@ -22,9 +22,9 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from thetasol.mechanics.lax import eigenvector_poles, lax_matrix, polish_eigenvector_poles, right_eigenvector
-from thetasol.solutions.theta_rotation._directions import ALPHA_CANDIDATES, DIVISOR_CANDIDATES
-from thetasol.solutions.theta_rotation.lattice import reduce_lattice
-from thetasol.solutions.theta_rotation.spectral_data import SpectralData
+from thetasol.solutions.rotation.theta_rotation._directions import ALPHA_CANDIDATES, DIVISOR_CANDIDATES
+from thetasol.solutions.rotation.theta_rotation.lattice import reduce_lattice
+from thetasol.solutions.rotation.theta_rotation.spectral_data import SpectralData
 
 if TYPE_CHECKING:
     from thetasol.curves.spectral import SpectralCurve
@@ -117,7 +117,7 @@ def circle_radius(curve: SpectralCurve, E_poles: np.ndarray, E_zeros: np.ndarray
     (trapezoidal error ~ 3^-N); the zeros of the eigenvector components, whose poles cancel only to
     rounding between the two terms of the mean, must not lie near the circle.  Among radii
     r_max 2^-j the one farthest (in log scale) from those zeros is taken.  The node's eigenvectors
-    (:func:`~thetasol.solutions.theta_rotation.node.node_branch`) are accurate at every radius.
+    (:func:`~thetasol.solutions.rotation.theta_rotation.node.node_branch`) are accurate at every radius.
     """
     bp = np.abs(np.asarray(curve.branch_points))
     far = np.concatenate([bp[bp > 0], np.abs(E_poles[np.abs(E_poles) > 0])])

@@ -1,15 +1,15 @@
 """Heavy tops (Section 5): a rigid body turning about a fixed point in uniform gravity, in closed form.
 
 :func:`solve_heavy_top` recognizes the integrable cases in any body frame and returns a
-:class:`~thetasol.solutions.heavy_top_base.HeavyTopSolution` (``sol(t) -> (omega, Q)``):
+:class:`~thetasol.solutions.tops.heavy_top_base.HeavyTopSolution` (``sol(t) -> (omega, Q)``):
 
 * mass centre at the fixed point, or no gravity: the Euler top, through
-  :func:`thetasol.solutions.rotation.solve_rotation` with ``a = 0`` (second moments
+  :func:`thetasol.solutions.rotation.dispatch.solve_rotation` with ``a = 0`` (second moments
   ``J = tr(I)/2 1 - I``), still a heavy-top result (:class:`EulerHeavyTopSolution`, case ``"euler"``);
 * Lagrange's top, ``I`` symmetric about the axis through the mass centre: the closed form of
-  :mod:`thetasol.solutions.lagrange_top` (``method = "elliptic"``);
+  :mod:`thetasol.solutions.tops.lagrange_top` (``method = "elliptic"``);
 * Kovalevskaya's top (``I1 = I2 = 2 I3``, centre in the equatorial plane, any body frame): genus-2 theta
-  functions, :mod:`thetasol.solutions.kovalevskaya_top` and :mod:`thetasol.solutions.kovalevskaya_attitude`
+  functions, :mod:`thetasol.solutions.tops.kovalevskaya_top` and :mod:`thetasol.solutions.tops.kovalevskaya_attitude`
   (``method = "theta/genus-2"``);
 * anything else: :class:`~thetasol.protocol.ClosedFormUnavailable` naming
   :func:`thetasol.integrators.heavy_top.integrate_heavy_top`.
@@ -28,9 +28,9 @@ from thetasol.core.attitude import uniform_rotation
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants, kovalevskaya_integral
 from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution, quiet_far_times
-from thetasol.solutions.heavy_top_base import HeavyTopSolution
-from thetasol.solutions.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame, lagrange_state
-from thetasol.solutions.rotation import solve_rotation
+from thetasol.solutions.rotation.dispatch import solve_rotation
+from thetasol.solutions.tops.heavy_top_base import HeavyTopSolution
+from thetasol.solutions.tops.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame, lagrange_state
 
 __all__ = ["solve_heavy_top", "LagrangeTopSolution", "SteadyRotationSolution", "KovalevskayaTopSolution",
            "EulerHeavyTopSolution"]
@@ -38,7 +38,7 @@ __all__ = ["solve_heavy_top", "LagrangeTopSolution", "SteadyRotationSolution", "
 
 @dataclass(frozen=True, eq=False)
 class LagrangeTopSolution(HeavyTopSolution):
-    """Lagrange's top in closed form (:mod:`thetasol.solutions.lagrange_top`)."""
+    """Lagrange's top in closed form (:mod:`thetasol.solutions.tops.lagrange_top`)."""
 
     constants: object = field(default=None, repr=False)
 
@@ -56,7 +56,7 @@ class SteadyRotationSolution(HeavyTopSolution):
 
 @dataclass(frozen=True, eq=False)
 class KovalevskayaTopSolution(HeavyTopSolution):
-    """Kovalevskaya's top in genus-2 theta functions (:mod:`thetasol.solutions.kovalevskaya_attitude`)."""
+    """Kovalevskaya's top in genus-2 theta functions (:mod:`thetasol.solutions.tops.kovalevskaya_attitude`)."""
 
     constants: object = field(default=None, repr=False)
 
@@ -86,7 +86,7 @@ def _euler(Im, c, Q0m, w0, mass, g):
 
 
 def _kovalevskaya(Im, c, Q0m, w0, mass, g):
-    from thetasol.solutions.kovalevskaya_attitude import build_kovalevskaya_top
+    from thetasol.solutions.tops.kovalevskaya_attitude import build_kovalevskaya_top
 
     try:
         att, diag = build_kovalevskaya_top(Im, c, Q0m, w0, mass, g)

@@ -1,6 +1,6 @@
 """Kovalevskaya's top, the attitude: the angle about the vertical as a Fourier series on the invariant torus.
 
-Given ``(omega, gamma)`` of :class:`thetasol.solutions.kovalevskaya_top.KovalevskayaMotion`, the attitude is
+Given ``(omega, gamma)`` of :class:`thetasol.solutions.tops.kovalevskaya_top.KovalevskayaMotion`, the attitude is
 ``Q = E S(phi) B^T`` with ``B = [u_b, gamma x u_b, gamma]`` (body frame), ``u_b`` the unit horizontal part of a
 reference vector ``b`` (among ``M = I omega``, the body axes and their combinations, the one whose rate series
 converges fastest on the first grid), ``E`` a space frame with third axis up and ``S(phi)`` the rotation by ``phi`` about it.
@@ -34,7 +34,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core.dd import dd_mul
-from thetasol.solutions.kovalevskaya_top import KovalevskayaMotion
+from thetasol.solutions.tops.kovalevskaya_top import KovalevskayaMotion
 
 __all__ = ["Reference", "KovalevskayaAttitude", "kovalevskaya_attitude", "build_kovalevskaya_top"]
 
@@ -154,7 +154,7 @@ class KovalevskayaAttitude:
 
 def _grid_state(motion, val, der):
     """``omega`` and ``gamma`` (body frame, up) as ``(3, N)`` arrays from the seven theta values and derivatives on
-    the grid (:func:`thetasol.solutions.kovalevskaya_top.KovalevskayaMotion.memoir_state`'s formulas on
+    the grid (:func:`thetasol.solutions.tops.kovalevskaya_top.KovalevskayaMotion.memoir_state`'s formulas on
     contiguous planes, one complex reciprocal per point)."""
     V = np.moveaxis(val, -1, 0).reshape(7, -1)
     Dv = np.moveaxis(der, -1, 0).reshape(7, -1)
@@ -362,7 +362,7 @@ def build_kovalevskaya_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega
     Raises ``FloatingPointError`` or ``RuntimeError`` when the construction does not apply to the data
     (an initial state on the curve's branch point at infinity, ``q(0) = 0``; a degenerate curve).
     """
-    from thetasol.solutions.kovalevskaya_top import kovalevskaya_motion
+    from thetasol.solutions.tops.kovalevskaya_top import kovalevskaya_motion
 
     with np.errstate(divide="raise", invalid="raise", over="raise"):
         motion = kovalevskaya_motion(I, center, Q0, omega0, mass, gravity)

@@ -24,12 +24,12 @@ from thetasol.core.attitude import principal_frame
 from thetasol.mechanics.equations import invariants as first_integrals
 from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._symmetry import symmetry_axis
-from thetasol.solutions.theta_rotation.divisors import eigenvector_divisors
-from thetasol.solutions.theta_rotation.evaluator import FlowEvaluator, flow_evaluator
-from thetasol.solutions.theta_rotation.exponents import exponents
-from thetasol.solutions.theta_rotation.frame import body_frame
-from thetasol.solutions.theta_rotation.riemann import theta_shifts
-from thetasol.solutions.theta_rotation.spectral_data import spectral_data
+from thetasol.solutions.rotation.theta_rotation.divisors import eigenvector_divisors
+from thetasol.solutions.rotation.theta_rotation.evaluator import FlowEvaluator, flow_evaluator
+from thetasol.solutions.rotation.theta_rotation.exponents import exponents
+from thetasol.solutions.rotation.theta_rotation.frame import body_frame
+from thetasol.solutions.rotation.theta_rotation.riemann import theta_shifts
+from thetasol.solutions.rotation.theta_rotation.spectral_data import spectral_data
 
 if TYPE_CHECKING:
     from thetasol.curves.plane_curve import Place

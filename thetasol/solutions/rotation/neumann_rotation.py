@@ -2,13 +2,13 @@
 
 For ``J = diag(j, j, j3)`` (principal frame) the torque has no component along the symmetry axis,
 so ``omega_3`` is an integral.  With ``omega_3 = 0`` the spectral curve (4.12) has a tacnode over
-``E = infinity`` and the theta-function construction of :mod:`thetasol.solutions.theta_rotation` does not
+``E = infinity`` and the theta-function construction of :mod:`thetasol.solutions.rotation.theta_rotation` does not
 apply.  The mechanics is solved directly instead (docs/neumann.md has the derivation and checks):
 
 * ``gamma = Q e3`` (the symmetry axis in space) is a point on the unit sphere in C. Neumann's problem:
   mass ``I1 = j + j3``, potential ``1/2 (j3 - j) gamma^T a gamma``
   (``V = 1/2 tr(Q^T a Q J) = j/2 tr a + 1/2 (j3 - j) gamma^T a gamma``, ``T = 1/2 I1 |gammadot|^2``),
-  i.e. the point model of :mod:`thetasol.solutions.neumann` with ``K = (j3 - j) a / I1``.
+  i.e. the point model of :mod:`thetasol.solutions.points.neumann` with ``K = (j3 - j) a / I1``.
 * The rest of the attitude: with ``omega_3 = 0`` the space angular velocity is
   ``gamma x gammadot`` and the body axis ``e1 = Q P e_1`` is parallel-transported along gamma.
   Its angle phi from the frame ``f1 = c x gamma / |c x gamma|``, ``f2 = gamma x f1`` (``c`` the
@@ -35,7 +35,7 @@ from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._symmetry import (
     symmetric_without_spin,
 )
-from thetasol.solutions.neumann import (
+from thetasol.solutions.points.neumann import (
     EllipticNeumann,
     LatitudeCircle,
     NeumannTorus,
@@ -197,7 +197,7 @@ class NeumannRotation(RotationSolution):
     frame : ndarray, shape (3, 3)
         Their eigenvectors (columns, right-handed, space frame).
     axis_model : object
-        The point model of the axis in these eigen-coordinates (:func:`thetasol.solutions.neumann.neumann_model`).
+        The point model of the axis in these eigen-coordinates (:func:`thetasol.solutions.points.neumann.neumann_model`).
     """
 
     k: np.ndarray = field(default=None, repr=False)

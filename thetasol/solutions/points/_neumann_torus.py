@@ -1,6 +1,6 @@
 """The genus-2 model of Neumann's problem (distinct eigenvalues): sphero-conical coordinates on the
 curve ``y^2 = -4 A(z) B(z)``, each a separated :class:`Oscillator`, on the torus of
-:class:`NeumannTorus`.  Private to :mod:`thetasol.solutions.neumann` (which exports both);
+:class:`NeumannTorus`.  Private to :mod:`thetasol.solutions.points.neumann` (which exports both);
 docs/neumann.md has the derivation and the checks.
 """
 from __future__ import annotations

@@ -10,20 +10,20 @@ elliptic function evaluations per time (no time stepping).
 Dispatch (one small function per branch, tried in order, see ``_BRANCHES``):
 
 * ``a = c 1`` (zero or isotropic) or a spherical body (no torque, Section 4 I): the Euler top of
-  :mod:`thetasol.solutions.euler_top` in Jacobi elliptic functions;
+  :mod:`thetasol.solutions.rotation.euler_top` in Jacobi elliptic functions;
 * angular velocity along a principal axis that is also an eigenvector of ``Q0^T a Q0``: the
   body keeps turning about that axis, a planar pendulum in elliptic functions
-  (:mod:`thetasol.solutions.pendulum`; the spectral curve is reducible), uniform rotation or rest included;
+  (:mod:`thetasol.solutions.rotation.pendulum`; the spectral curve is reducible), uniform rotation or rest included;
 * a symmetric body with no spin about its symmetry axis: the axis moves as in C. Neumann's problem
-  and the body is parallel-transported along it (:mod:`thetasol.solutions.neumann_rotation`);
+  and the body is parallel-transported along it (:mod:`thetasol.solutions.rotation.neumann_rotation`);
 * any other ``a`` (Section 4 II): the Baker-Akhiezer theta-function solution of
-  :mod:`thetasol.solutions.theta_rotation` (genus 4; genus 3 for a potential with a repeated eigenvalue
+  :mod:`thetasol.solutions.rotation.theta_rotation` (genus 4; genus 3 for a potential with a repeated eigenvalue
   or for a symmetric body, genus 2 for both).
 
 Units: the data are first put in units where ``max J`` and the larger of ``|omega0|`` and
 ``sqrt|a - c 1|`` are of order one, by exact powers of two, and an isotropic part ``c 1`` of ``a``
 that dominates is removed (it exerts no torque); the solution is returned in the user's units
-(:mod:`thetasol.solutions._scaling`, docs/units.md).  A potential too weak against the spin for the
+(:mod:`thetasol.solutions.rotation._scaling`, docs/units.md).  A potential too weak against the spin for the
 theta-function set-up (``MIN_POTENTIAL``) is refused at once.
 
 The free gyrostat (8.39)-(8.40) has its own entry point, :func:`thetasol.solve_gyrostat`,
@@ -43,8 +43,8 @@ from thetasol.core.inertia import second_moments
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.potential import potential_kind
 from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
-from thetasol.solutions._scaling import choose_scales, dimensionless_data, scaled_solution
 from thetasol.solutions._symmetry import SNAP_TOL, symmetric_without_spin, symmetry_axis
+from thetasol.solutions.rotation._scaling import choose_scales, dimensionless_data, scaled_solution
 
 __all__ = ["ClosedFormUnavailable", "RotationSolution", "solve_rotation"]
 
@@ -55,13 +55,13 @@ def _free_branch(J, a, Q0, omega0, dps):
     # a spherical body feels no torque either ([u, J] = 0): the same eigenvalue test on J
     if not (potential_kind(a) == "isotropic" or potential_kind(J) == "isotropic"):
         return None
-    from thetasol.solutions.euler_top import solve_euler_top
+    from thetasol.solutions.rotation.euler_top import solve_euler_top
 
     return solve_euler_top(J, a, Q0, omega0, dps=dps)
 
 
 def _pendulum_branch(J, a, Q0, omega0, dps):
-    from thetasol.solutions.pendulum import solve_pendulum
+    from thetasol.solutions.rotation.pendulum import solve_pendulum
 
     return solve_pendulum(J, a, Q0, omega0, dps)
 
@@ -71,7 +71,7 @@ def _neumann_branch(J, a, Q0, omega0, dps):
     # other bodies do not import its modules
     if symmetric_without_spin(J, a, omega0) is None:
         return None
-    from thetasol.solutions.neumann_rotation import solve_neumann_rotation
+    from thetasol.solutions.rotation.neumann_rotation import solve_neumann_rotation
 
     return solve_neumann_rotation(J, a, Q0, omega0, dps)
 
@@ -119,7 +119,7 @@ def _check_potential_size(J, a, omega0):
 
 def _potential_branch(J, a, Q0, omega0, dps):
     _check_potential_size(J, a, omega0)
-    from thetasol.solutions.theta_rotation import solve_theta_rotation
+    from thetasol.solutions.rotation.theta_rotation import solve_theta_rotation
 
     return solve_theta_rotation(J, a, Q0, omega0, dps=dps)
 
@@ -159,7 +159,7 @@ def solve_rotation(I: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayLike,
         ...; docs/results.md), ``sol.invariants`` (first integrals), ``sol.diagnostics`` (self-checks,
         ``error_estimate`` among them), ``sol.check()``.  Data
         of order one (scales within ``2^+-4`` of 1, no dominant isotropic part) get the branch's own
-        solution object; others a :class:`~thetasol.solutions._scaling.ScaledRotation` around the
+        solution object; others a :class:`~thetasol.solutions.rotation._scaling.ScaledRotation` around the
         solution of the dimensionless problem (``sol.diagnostics["scales"]``), with the user's body
         (``sol.I``; the paper's second moments ``sol.J``), ``a`` and first integrals.
 

@@ -23,9 +23,9 @@ import numpy as np
 from thetasol.curves.plane_curve import Numerator
 from thetasol.curves.riemann_constant import riemann_constant_vector, test_abscissae
 from thetasol.mechanics.lax import lax_matrix
-from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
-from thetasol.solutions.theta_rotation.lattice import reduce_lattice
-from thetasol.solutions.theta_rotation.spectral_data import SpectralData
+from thetasol.solutions.rotation.theta_rotation.divisors import EigenvectorDivisors
+from thetasol.solutions.rotation.theta_rotation.lattice import reduce_lattice
+from thetasol.solutions.rotation.theta_rotation.spectral_data import SpectralData
 
 if TYPE_CHECKING:
     from thetasol.curves.plane_curve import Place

@@ -20,9 +20,9 @@ import numpy as np
 
 from thetasol.core.panels import gauss_legendre
 from thetasol.mechanics.lax import lax_matrix, right_eigenvector
-from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
-from thetasol.solutions.theta_rotation.node import lax_eigenvalues, local_branch, node_branch
-from thetasol.solutions.theta_rotation.spectral_data import SpectralData
+from thetasol.solutions.rotation.theta_rotation.divisors import EigenvectorDivisors
+from thetasol.solutions.rotation.theta_rotation.node import lax_eigenvalues, local_branch, node_branch
+from thetasol.solutions.rotation.theta_rotation.spectral_data import SpectralData
 
 __all__ = ["N_CIRCLE", "N_RAY", "CauchyMeans", "auxiliary_points", "auxiliary_nu", "circle_points", "circle_rows",
            "means_from_theta"]

@@ -7,7 +7,7 @@ rotors' axial moments.  The axial momentum ``M3 = C omega3 + lam`` and the verti
 ``(m + N) . gamma`` are conserved, ``omega3`` is constant, and the nutation ``u = gamma . e3`` obeys the
 Lagrange top's cubic with ``a = M3 / A`` (the total axial momentum); the spin angle obeys
 ``phidot = omega3 - u psidot`` with ``omega3 = (M3 - lam) / C``.  So the closed form of
-:mod:`thetasol.solutions.lagrange_top` holds with one changed constant: the phase rate
+:mod:`thetasol.solutions.tops.lagrange_top` holds with one changed constant: the phase rate
 ``kappa = a (A / C - 1)`` becomes ``omega3 - a`` (from the spin equation above); everything else (turning
 points, Legendre integrals of the third kind, far-time reduction) is the top's.
 
@@ -24,9 +24,9 @@ from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
 from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.gyrostat import solve_gyrostat
-from thetasol.solutions.heavy_top import LagrangeTopSolution, SteadyRotationSolution, solve_heavy_top
-from thetasol.solutions.heavy_top_base import HeavyTopSolution
-from thetasol.solutions.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame
+from thetasol.solutions.tops.heavy_top import LagrangeTopSolution, SteadyRotationSolution, solve_heavy_top
+from thetasol.solutions.tops.heavy_top_base import HeavyTopSolution
+from thetasol.solutions.tops.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame
 
 __all__ = ["solve_lagrange_gyrostat"]
 
@@ -66,7 +66,7 @@ def solve_lagrange_gyrostat(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omeg
     -------
     HeavyTopSolution or RotationSolution
         ``sol(t) -> (omega, Q)``; model ``"heavy-top"``, method ``"elliptic"`` (case ``""`` or
-        ``"separatrix"``; ``"elementary"`` with case ``"steady"``) and ``diagnostics["rotor_momentum"]``; ``N = 0`` is :func:`thetasol.solutions.heavy_top.solve_heavy_top`, no gravity
+        ``"separatrix"``; ``"elementary"`` with case ``"steady"``) and ``diagnostics["rotor_momentum"]``; ``N = 0`` is :func:`thetasol.solutions.tops.heavy_top.solve_heavy_top`, no gravity
         or the centre at the pivot :func:`thetasol.solve_gyrostat`.  ``invariants``: ``energy``
         (``1/2 omega . I omega - mass g . Q center``), ``vertical_momentum`` (``Q (m + N) . up``),
         ``axial_momentum`` (``(m + N) . e3``).

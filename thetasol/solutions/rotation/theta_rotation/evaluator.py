@@ -40,10 +40,10 @@ import numpy as np
 from thetasol.core.kernels import RotationKernel
 from thetasol.core.so3 import NEWTON_SCHULZ_MAX, polar_orthonormalize
 from thetasol.core.turns import rate_turns, split_rate_exact
-from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
-from thetasol.solutions.theta_rotation.exponents import Exponents, PhaseRates
-from thetasol.solutions.theta_rotation.riemann import ThetaShifts
-from thetasol.solutions.theta_rotation.spectral_data import SpectralData
+from thetasol.solutions.rotation.theta_rotation.divisors import EigenvectorDivisors
+from thetasol.solutions.rotation.theta_rotation.exponents import Exponents, PhaseRates
+from thetasol.solutions.rotation.theta_rotation.riemann import ThetaShifts
+from thetasol.solutions.rotation.theta_rotation.spectral_data import SpectralData
 from thetasol.theta.flow import FlowTheta
 
 __all__ = ["FlowEvaluator", "PhaseTurns", "build_evaluator", "flow_evaluator", "linear_map", "phase_turns",

@@ -3,7 +3,7 @@
 The mass centre constrained to the sphere ``|q| = R`` (6.1) in the potential ``phi = 1/2 q^T a q`` (6.2)
 moves, per unit mass, by ``qddot = -a q + lambda q`` with ``lambda = (q.aq - |qdot|^2) / |q|^2`` (the
 multiplier that keeps ``d^2 |q|^2 / dt^2 = 0``).  :func:`solve_neumann` returns its exact solution;
-the rotation of a symmetric body without axial spin (:mod:`thetasol.solutions.neumann_rotation`) uses
+the rotation of a symmetric body without axial spin (:mod:`thetasol.solutions.rotation.neumann_rotation`) uses
 the same models for the body's axis.  docs/neumann.md has the derivation and the checks.
 
 Units.  With ``a = V diag(k) V^T``, ``x = V^T q / R`` is on the unit sphere and the eigenvalues are
@@ -22,7 +22,7 @@ The models (``method``, and ``case`` where it is not the generic one), docs/neum
   inverse and ``t(s) = int (u2 - u1) ds`` are linear terms plus Fourier series, and
   ``x_i = prod_k sqrt(k_i - u_k) / sqrt(prod_{j != i} (k_i - k_j))`` (square roots smooth in theta).
   A time is mapped to ``s`` by safeguarded Newton: a far time costs what ``t = 1`` costs.  The model
-  lives in :mod:`thetasol.solutions._neumann_torus` (:class:`NeumannTorus`, :class:`Oscillator`).
+  lives in :mod:`thetasol.solutions.points._neumann_torus` (:class:`NeumannTorus`, :class:`Oscillator`).
 * ``elliptic``, ``elementary`` with case ``latitude`` (a repeated eigenvalue): ``z = x.n`` in a quartic well,
   the azimuth about ``n`` a quadrature on the same circle, or a uniform circle of latitude.
 * case ``planar-*`` (an invariant great circle, or an isotropic ``a``): a pendulum in twice the
@@ -55,8 +55,8 @@ from thetasol.core.roots import quadratic_roots
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.constraints import point_on_sphere
 from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, Solution
-from thetasol.solutions._neumann_torus import MIN_WIDTH, DegenerateTorus, NeumannTorus, Oscillator
 from thetasol.solutions._symmetry import SNAP_TOL
+from thetasol.solutions.points._neumann_torus import MIN_WIDTH, DegenerateTorus, NeumannTorus, Oscillator
 
 __all__ = ["NeumannSolution", "solve_neumann", "NeumannTorus", "Oscillator", "EllipticNeumann",
            "LatitudeCircle", "PlanarNeumann", "neumann_model", "series_or_unavailable",

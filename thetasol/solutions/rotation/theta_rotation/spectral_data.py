@@ -19,9 +19,9 @@ import numpy as np
 from thetasol.curves.adapted_basis import real_flow_basis
 from thetasol.curves.spectral import spectral_curve
 from thetasol.solutions._symmetry import SNAP_TOL
-from thetasol.solutions.theta_rotation.frame import BodyFrame
-from thetasol.solutions.theta_rotation.infinity import infinity_data, velocity_at_infinity
-from thetasol.solutions.theta_rotation.node import node_branch_slopes
+from thetasol.solutions.rotation.theta_rotation.frame import BodyFrame
+from thetasol.solutions.rotation.theta_rotation.infinity import infinity_data, velocity_at_infinity
+from thetasol.solutions.rotation.theta_rotation.node import node_branch_slopes
 from thetasol.theta.riemann import RiemannTheta
 
 if TYPE_CHECKING:

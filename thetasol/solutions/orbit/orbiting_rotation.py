@@ -51,7 +51,7 @@ from thetasol.core.so3 import rotation_about
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability, orbit_frame
 from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
-from thetasol.solutions.kepler import KeplerOrbit
+from thetasol.solutions.orbit.kepler import KeplerOrbit
 from thetasol.special.elliptic import ellipj, ellipk
 from thetasol.special.pendulum import pendulum_angle, pendulum_params
 

@@ -39,10 +39,13 @@ below ``MIN_J_GAP``), are refused at once (ClosedFormUnavailable).
 """
 from __future__ import annotations
 
-from thetasol.solutions.theta_rotation.cauchy import N_CIRCLE, N_RAY
-from thetasol.solutions.theta_rotation.frame import MAX_FAR_BRANCH, MIN_AXIAL_SPIN, MIN_J_GAP
+from thetasol.solutions.rotation.theta_rotation.cauchy import N_CIRCLE, N_RAY
+from thetasol.solutions.rotation.theta_rotation.frame import MAX_FAR_BRANCH, MIN_AXIAL_SPIN, MIN_J_GAP
 
-# the entry point of the dispatcher in thetasol.solutions.rotation
-from thetasol.solutions.theta_rotation.solution import ThetaRotation, solve_theta_rotation as solve_theta_rotation
+# the entry point of the dispatcher in thetasol.solutions.rotation.dispatch
+from thetasol.solutions.rotation.theta_rotation.solution import (
+    ThetaRotation,
+    solve_theta_rotation as solve_theta_rotation,
+)
 
 __all__ = ["ThetaRotation", "solve_theta_rotation", "MIN_AXIAL_SPIN", "MIN_J_GAP", "MAX_FAR_BRANCH", "N_CIRCLE", "N_RAY"]

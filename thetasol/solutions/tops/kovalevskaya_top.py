@@ -1,7 +1,7 @@
 """Kovalevskaya's top: the separating variables, the genus-2 curve, their motion by Jacobi inversion in theta
 functions (:class:`SeparatedFlow`) and ``(omega, gamma)`` as quotients of theta functions with half-period
-characteristics (:class:`KovalevskayaMotion`).  The attitude is :mod:`thetasol.solutions.kovalevskaya_attitude`;
-:func:`thetasol.solutions.heavy_top.solve_heavy_top` puts them together (docs/heavy_top.md).  Checked along
+characteristics (:class:`KovalevskayaMotion`).  The attitude is :mod:`thetasol.solutions.tops.kovalevskaya_attitude`;
+:func:`thetasol.solutions.tops.heavy_top.solve_heavy_top` puts them together (docs/heavy_top.md).  Checked along
 80-bit heyoka trajectories (tests/test_heavy_top.py, tests/test_kovalevskaya_top.py).
 
 Normalization of Kowalevski's memoir (S. Kowalevski, Acta Math. 12 (1889) 177-232): principal frame with ``I = diag(2, 2, 1) I3``, the mass centre

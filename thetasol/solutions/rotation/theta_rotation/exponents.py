@@ -22,17 +22,17 @@ import numpy as np
 from thetasol.curves.plane_curve import Numerator
 from thetasol.protocol import ClosedFormUnavailable
 from thetasol.solutions._symmetry import SNAP_TOL
-from thetasol.solutions.theta_rotation.cauchy import (
+from thetasol.solutions.rotation.theta_rotation.cauchy import (
     CauchyMeans,
     auxiliary_nu,
     auxiliary_points,
     circle_rows,
     means_from_theta,
 )
-from thetasol.solutions.theta_rotation.divisors import EigenvectorDivisors
-from thetasol.solutions.theta_rotation.infinity import velocity_at_infinity
-from thetasol.solutions.theta_rotation.riemann import ThetaShifts
-from thetasol.solutions.theta_rotation.spectral_data import SpectralData
+from thetasol.solutions.rotation.theta_rotation.divisors import EigenvectorDivisors
+from thetasol.solutions.rotation.theta_rotation.infinity import velocity_at_infinity
+from thetasol.solutions.rotation.theta_rotation.riemann import ThetaShifts
+from thetasol.solutions.rotation.theta_rotation.spectral_data import SpectralData
 
 if TYPE_CHECKING:
     from thetasol.curves.plane_curve import Place
