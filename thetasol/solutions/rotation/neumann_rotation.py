@@ -197,7 +197,8 @@ class NeumannRotation(RotationSolution):
     frame : ndarray, shape (3, 3)
         Their eigenvectors (columns, right-handed, space frame).
     axis_model : object
-        The point model of the axis in these eigen-coordinates (:func:`thetasol.solutions.points.neumann.neumann_model`).
+        The point model of the axis in these eigen-coordinates
+        (:func:`thetasol.solutions.points.neumann.neumann_model`).
     """
 
     k: np.ndarray = field(default=None, repr=False)
