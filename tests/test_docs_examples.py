@@ -105,3 +105,16 @@ def test_api_conventions_signature(name, args):
         if "=" in tok:
             key, value = (s.strip() for s in tok.split("=", 1))
             assert eval(value, {"float": float}) == defaults[key], f"{name}: default of {key}"  # noqa: S307
+
+
+def test_reference_cases_page_lists_the_catalogue():
+    """The generated case table of docs/reference_cases.md names every case with its method and case
+    (benchmarks/bench_reference_cases.py rewrites it; a catalogue change without a rerun fails here)."""
+    text = (ROOT / "docs/reference_cases.md").read_text()
+    rows: dict = {}
+    for line in text.splitlines():
+        if line.startswith("| `"):
+            rows.setdefault(line.split("|")[1].strip(" `"), line)       # the case table comes first
+    for c in thetasol.reference.cases():
+        method = f"`{c.method}`" + (f" ({c.solution.case})" if c.solution.case else "")
+        assert c.name in rows and f"| {method} |" in rows[c.name], c.name
