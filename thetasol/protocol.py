@@ -325,8 +325,10 @@ class RotationSolution(Solution):
         inertia tensor the entry points take).
     a : ndarray, shape (3, 3)
         Potential matrix, ``phi = 1/2 x^T a x``.
-    Q0, omega0 : ndarray
-        Initial attitude (body to space) and body angular velocity.
+    Q0 : ndarray (3, 3)
+        Initial attitude, the rotation from the body frame to the space frame.
+    omega0 : ndarray (3,)
+        Initial angular velocity in the body frame.
     model : str
         ``"rotation"`` (subclasses for other systems override it), see :data:`MODELS`.
     method : str
