@@ -2,7 +2,8 @@
 
 Each is converted with jupytext and executed cell by cell with nbclient in a fresh kernel of this
 interpreter (the equivalent of ``pytest --nbmake`` for text notebooks); the docs build executes them
-too.  Notebooks that take more than ~6 s here are marked slow (``python -m pytest -m slow``).
+too.  The two longest (the oracle sweeps several integrators and tolerances over a genus-4 motion, the
+Kovalevskaya top builds its genus-2 theta functions) are marked slow (``python -m pytest -m slow``).
 """
 from __future__ import annotations
 
@@ -13,8 +14,6 @@ from pathlib import Path
 import pytest
 
 NOTEBOOKS = sorted((Path(__file__).resolve().parents[1] / "docs" / "notebooks").glob("*.md"))
-# execution times (kernel start included) on the shared 2-core machine at load ~2: oracle 6.7 s, the others
-# 1.5-4.3 s; kovalevskaya_top 14.8 s at load ~7 (its set-up alone is 2-6 s)
 SLOW = {"oracle", "kovalevskaya_top"}
 
 
