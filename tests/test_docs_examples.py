@@ -118,3 +118,11 @@ def test_reference_cases_page_lists_the_catalogue():
     for c in thetasol.reference.cases():
         method = f"`{c.method}`" + (f" ({c.solution.case})" if c.solution.case else "")
         assert c.name in rows and f"| {method} |" in rows[c.name], c.name
+
+
+def test_every_public_name_has_an_api_page():
+    """What docs/conf.py checks at build time (a warning, an error under ``sphinx -W``), without a build:
+    every name of ``thetasol.__all__`` is documented by an ``auto...:: thetasol.<name>`` line of docs/api."""
+    text = "".join(p.read_text() for p in (ROOT / "docs" / "api").glob("*.md"))
+    documented = set(re.findall(r"^\.\. auto\w+:: thetasol\.(\w+)\s*$", text, re.M))
+    assert set(thetasol.__all__) - {"__version__"} - documented == set()
