@@ -147,7 +147,15 @@ def test_lagrange_gyrostat_refusals_and_limits():
         solve_lagrange_gyrostat(I, c, Q0, w0, N=Ntilted)
     assert label(solve_lagrange_gyrostat(I, c, Q0, w0, N=np.zeros(3))) == "elliptic"
     free = solve_lagrange_gyrostat(I, c, Q0, w0, N=N, gravity=[0.0, 0.0, 0.0])
-    assert free.model == "gyrostat"
+    # no torque: the free gyrostat of the same body, still a heavy-top result (its centre, mass, invariants)
+    assert free.model == "heavy-top" and free.case.startswith("gyrostat") and np.array_equal(free.center, c)
+    assert {"energy", "vertical_momentum", "axial_momentum"} <= set(free.invariants)
+    t = np.linspace(0.0, 5.0, 11)
+    gyro = solve_gyrostat(free.I, N, Q0, w0)   # the body as the heavy top validated it
+    for sol in (free, solve_lagrange_gyrostat(I, np.zeros(3), Q0, w0, N=N)):
+        assert sol.model == "heavy-top" and np.all(np.isfinite(list(sol.invariants.values())))
+        (w, Q), (wg, Qg) = sol(t), gyro(t)
+        assert np.array_equal(w, wg) and np.abs(Q - Qg).max() <= 4 * np.finfo(float).eps
 
 
 def test_numerical_gyrostat_protocol():

@@ -22,9 +22,14 @@ from numpy.typing import ArrayLike
 from thetasol.core import validate as V
 from thetasol.core.threads import single_blas_thread
 from thetasol.mechanics.heavy_top import heavy_top_data, heavy_top_invariants
-from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
+from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, quiet_far_times
 from thetasol.solutions.gyrostat import solve_gyrostat
-from thetasol.solutions.tops.heavy_top import LagrangeTopSolution, SteadyRotationSolution, solve_heavy_top
+from thetasol.solutions.tops.heavy_top import (
+    EulerHeavyTopSolution,
+    LagrangeTopSolution,
+    SteadyRotationSolution,
+    solve_heavy_top,
+)
 from thetasol.solutions.tops.heavy_top_base import HeavyTopSolution
 from thetasol.solutions.tops.lagrange_top import SYMMETRY_RTOL, build_lagrange_top, lagrange_frame
 
@@ -35,16 +40,26 @@ _REFERENCE = "thetasol.integrators.gyrostat.integrate_heavy_gyrostat"
 
 def _invariants(Im, c, N, mass, g, w0, Q0) -> dict:
     base = heavy_top_invariants(Im, c, mass, g, w0, Q0)
-    up = -g / np.linalg.norm(g)
-    h = Im @ w0 + N
+    gn, cn = np.linalg.norm(g), np.linalg.norm(c)
+    up = -g / gn if gn > 0 else np.array([0.0, 0.0, 1.0])      # heavy_top_invariants' conventions without
+    h = Im @ w0 + N                                              # gravity or with the centre at the pivot
     return {"energy": float(base["energy"]), "vertical_momentum": float((Q0 @ h) @ up),
-            "axial_momentum": float(h @ (c / np.linalg.norm(c)))}
+            "axial_momentum": float(h @ (c / cn)) if cn > 0 else 0.0}
+
+
+def _torque_free(Im, c, Nv, Q0m, w0, mass, g) -> EulerHeavyTopSolution:
+    """No gravity torque (centre at the pivot, no gravity or no mass): the free gyrostat of the same body,
+    as a heavy-top result like every other answer of :func:`solve_lagrange_gyrostat`."""
+    gyro = solve_gyrostat(Im, Nv, Q0m, w0)
+    diag = {**gyro.diagnostics, "case": "gyrostat" + (f"/{gyro.case}" if gyro.case else "")}
+    return EulerHeavyTopSolution(Im, c, mass, g, Q0m, w0, gyro.method, _invariants(Im, c, Nv, mass, g, w0, Q0m),
+                                 diag, rotation=quiet_far_times(gyro))
 
 
 @single_blas_thread
 def solve_lagrange_gyrostat(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: ArrayLike, *, N: ArrayLike,
                             mass: float = 1.0, gravity: ArrayLike = (0.0, 0.0, -9.81)
-                            ) -> HeavyTopSolution | RotationSolution:
+                            ) -> HeavyTopSolution:
     """Exact motion of a Lagrange gyrostat on a fixed point in uniform gravity.
 
     Parameters
@@ -64,10 +79,12 @@ def solve_lagrange_gyrostat(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omeg
 
     Returns
     -------
-    HeavyTopSolution or RotationSolution
+    HeavyTopSolution
         ``sol(t) -> (omega, Q)``; model ``"heavy-top"``, method ``"elliptic"`` (case ``""`` or
-        ``"separatrix"``; ``"elementary"`` with case ``"steady"``) and ``diagnostics["rotor_momentum"]``; ``N = 0`` is :func:`thetasol.solutions.tops.heavy_top.solve_heavy_top`, no gravity
-        or the centre at the pivot :func:`thetasol.solve_gyrostat`.  ``invariants``: ``energy``
+        ``"separatrix"``; ``"elementary"`` with case ``"steady"``) and ``diagnostics["rotor_momentum"]``;
+        ``N = 0`` is :func:`thetasol.solutions.tops.heavy_top.solve_heavy_top`; no gravity or the centre at
+        the pivot the free gyrostat of :func:`thetasol.solve_gyrostat` (case ``"gyrostat"``), as a heavy-top
+        result.  ``invariants``: ``energy``
         (``1/2 omega . I omega - mass g . Q center``), ``vertical_momentum`` (``Q (m + N) . up``),
         ``axial_momentum`` (``(m + N) . e3``).
 
@@ -85,7 +102,7 @@ def solve_lagrange_gyrostat(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omeg
     if not np.any(Nv):
         return solve_heavy_top(Im, c, Q0m, w0, mass=mass, gravity=g)
     if cn == 0 or gn == 0 or mass == 0:
-        return solve_gyrostat(Im, Nv, Q0m, w0)
+        return _torque_free(Im, c, Nv, Q0m, w0, mass, g)
     frame = lagrange_frame(Im, c)
     e3 = c / cn
     lam = float(Nv @ e3)
