@@ -194,7 +194,7 @@ class _System:
 
 
 @single_blas_thread
-def integrate_gyrostat_multibody(gc: GyrostatConfiguration, a: ArrayLike, b: ArrayLike, q0: ArrayLike,
+def integrate_gyrostat_multibody(config: GyrostatConfiguration, a: ArrayLike, b: ArrayLike, q0: ArrayLike,
                                  v0: ArrayLike, Q0: Mapping[str, ArrayLike], omega0: Mapping[str, ArrayLike],
                                  t: ArrayLike, *, rtol: float = 1e-12, atol: float | None = None,
                                  method: str = "DOP853", alpha: float | None = None) -> Trajectories:
@@ -202,7 +202,7 @@ def integrate_gyrostat_multibody(gc: GyrostatConfiguration, a: ArrayLike, b: Arr
 
     Parameters
     ----------
-    gc : GyrostatConfiguration
+    config : GyrostatConfiguration
         A CR^n (CU^n) tree; the initial state places the rotors at ``phi = 0`` with their ``spin``.
     a, b : array_like
         Potential (2.4).
@@ -227,12 +227,12 @@ def integrate_gyrostat_multibody(gc: GyrostatConfiguration, a: ArrayLike, b: Arr
     tt = V.times(t, "t")
     if tt.ndim != 1 or tt.size == 0 or tt[0] < 0 or np.any(np.diff(tt) < 0):
         raise ValueError("t must be a non-empty increasing 1-d array of times >= 0")
-    model = _Model(gc)
-    Qc = {n: V.rotation_matrix(Q0.get(n, np.eye(3)), f"Q0[{n!r}]") for n in gc.order}
-    wc = {n: V.vector3(omega0.get(n, np.zeros(3)), f"omega0[{n!r}]") for n in gc.order}
-    zeros = {r: np.zeros(()) for r in gc.rotors}
-    spins = {r: np.array(gc.rotors[r].spin) for r in gc.rotors}
-    placed = gc.place(V.vector3(q0, "q0"), V.vector3(v0, "v0"), Qc, wc, zeros, spins)
+    model = _Model(config)
+    Qc = {n: V.rotation_matrix(Q0.get(n, np.eye(3)), f"Q0[{n!r}]") for n in config.order}
+    wc = {n: V.vector3(omega0.get(n, np.zeros(3)), f"omega0[{n!r}]") for n in config.order}
+    zeros = {r: np.zeros(()) for r in config.rotors}
+    spins = {r: np.array(config.rotors[r].spin) for r in config.rotors}
+    placed = config.place(V.vector3(q0, "q0"), V.vector3(v0, "v0"), Qc, wc, zeros, spins)
     x, v, Q, w = (np.array([placed[n][k] for n in model.names]) for k in ("position", "velocity", "attitude", "omega"))
     if alpha is None:
         alpha = max(1.0, float(np.max(np.linalg.norm(w, axis=1))) + float(np.sqrt(np.max(np.abs(np.linalg.eigvalsh(a))))))
