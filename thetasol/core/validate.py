@@ -77,6 +77,16 @@ def symmetric_matrix(a: ArrayLike, name: str = "a", rtol: float = SYM_RTOL) -> n
     return 0.5 * (a + a.T)
 
 
+def principal_or_tensor(x: ArrayLike, name: str) -> np.ndarray:
+    """Three principal values or a symmetric 3x3 tensor (finite, numeric), as the 3x3 array."""
+    arr = finite_array(x, name)
+    if arr.shape == (3,):
+        arr = np.diag(arr)
+    elif arr.shape != (3, 3):
+        raise ValueError(f"{name} must be 3 principal values or a 3x3 tensor, got shape {arr.shape}")
+    return symmetric_matrix(arr, name)
+
+
 def second_moments(J: ArrayLike, name: str = "J") -> np.ndarray:
     """Second-moment tensor ``J = sum m r r^T`` as a 3x3 array, checked to be physical.
 
@@ -85,12 +95,7 @@ def second_moments(J: ArrayLike, name: str = "J") -> np.ndarray:
     triangle inequalities ``I_i <= I_j + I_k``, a rod excluded); a flat plate (one
     ``J_i = 0``) is allowed.
     """
-    arr = finite_array(J, name)
-    if arr.shape == (3,):
-        arr = np.diag(arr)
-    elif arr.shape != (3, 3):
-        raise ValueError(f"{name} must be 3 principal values or a 3x3 tensor, got shape {arr.shape}")
-    arr = symmetric_matrix(arr, name)
+    arr = principal_or_tensor(J, name)
     ev = np.linalg.eigvalsh(arr)
     scale = max(ev[-1], np.finfo(float).tiny)
     if ev[-1] <= 0:
@@ -118,12 +123,7 @@ def inertia(I: ArrayLike, name: str = "I") -> np.ndarray:
     ``J = sum m r r^T`` (the paper's convention) are refused with a message naming that mix-up and
     its conversion, ``thetasol.inertia(J)``.
     """
-    arr = finite_array(I, name)
-    if arr.shape == (3,):
-        arr = np.diag(arr)
-    elif arr.shape != (3, 3):
-        raise ValueError(f"{name} must be 3 principal values or a 3x3 tensor, got shape {arr.shape}")
-    arr = symmetric_matrix(arr, name)
+    arr = principal_or_tensor(I, name)
     ev = np.linalg.eigvalsh(arr)
     if ev[0] <= TRIANGLE_RTOL * ev[2]:
         raise ValueError(f"inertia {name} must be positive definite (a rod or a point has a zero principal "
@@ -150,12 +150,7 @@ def _plain(m: np.ndarray) -> str:
 
 def inertia_to_moments(I: ArrayLike, name: str = "I") -> np.ndarray:
     """Second moments ``J = tr(I)/2 1 - I`` from an inertia tensor (principal values or 3x3)."""
-    arr = finite_array(I, name)
-    if arr.shape == (3,):
-        arr = np.diag(arr)
-    elif arr.shape != (3, 3):
-        raise ValueError(f"{name} must be 3 principal values or a 3x3 tensor, got shape {arr.shape}")
-    arr = symmetric_matrix(arr, name)
+    arr = principal_or_tensor(I, name)
     ev = np.linalg.eigvalsh(arr)
     if ev[0] <= 0:
         raise ValueError(f"inertia {name} must be positive definite, eigenvalues {ev}")
