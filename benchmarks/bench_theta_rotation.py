@@ -93,7 +93,7 @@ def drift(J, a, Q0, w0, w, Q) -> float:
     M0 = I @ w0
     scale_E = abs(T0) + abs(0.5 * np.trace(u0 @ J))
     scale_I2 = float(M0 @ M0) * 2 + abs(2 * np.trace(J @ J @ u0))   # |tr M^2| = 2 |m|^2
-    i0, it = invariants(J, a, Q0, w0), invariants(J, a, Q, w)
+    i0, it = invariants(inertia(J), a, Q0, w0), invariants(inertia(J), a, Q, w)
     return float(max(np.abs(it["energy"] - i0["energy"]).max() / scale_E,
                      np.abs(it["I2"] - i0["I2"]).max() / scale_I2))
 

@@ -206,11 +206,11 @@ def group_rotation_refs(rec, root):
             # the public first integrals and spectral coefficients on the solution's own output
             def eq(sol=sol, name=name, J=J, a=a):
                 w, Q = sol(T_ROT[:8])
-                inv = invariants(J, a, Q, w)
+                inv = invariants(inertia(J), a, Q, w)
                 for k in sorted(inv):
                     rec.value(f"equations/{name}/invariants/{k}", inv[k])
-                rec.num(f"equations/{name}/spectral_coefficients", spectral_coefficients(J, sol.M(T_ROT[:8]), sol.u(T_ROT[:8])))
-                rec.num(f"equations/{name}/torque", torque(J, a, Q))
+                rec.num(f"equations/{name}/spectral_coefficients", spectral_coefficients(inertia(J), sol.M(T_ROT[:8]), sol.u(T_ROT[:8])))
+                rec.num(f"equations/{name}/torque", torque(inertia(J), a, Q))
             rec.guard(f"equations/{name}", eq)
     return refs
 

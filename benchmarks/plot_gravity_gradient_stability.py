@@ -18,6 +18,7 @@ import matplotlib
 
 matplotlib.use("Agg")
 
+from thetasol.core.inertia import inertia  # noqa: E402
 from thetasol.mechanics.gravity_gradient import gravity_gradient_stability  # noqa: E402
 from thetasol.plot import stability_diagram  # noqa: E402
 from thetasol.scenes.format import load_scene  # noqa: E402
@@ -37,7 +38,7 @@ def station_points() -> dict:
     sol = scene.solution()
     pts = {f"station: {n} ({b.stability.region})": (b.stability.k1, b.stability.k3) for n, b in sol.stability.items()}
     Jp = scene.config.effective_body("panel").principal_moments           # ascending J = descending I
-    st = gravity_gradient_stability(Jp[[1, 2, 0]], 1.0)
+    st = gravity_gradient_stability(inertia(Jp[[1, 2, 0]]), 1.0)
     pts[f"station_lqr.py: panel target ({st.region}, LQR-stabilized)"] = (st.k1, st.k3)
     return pts
 

@@ -78,7 +78,7 @@ def test_paper_sign_described_as_documented():
     udot = (u[2] - u[0]) / (2 * h)
     assert np.allclose(Mdot, M[1] @ W[1] - W[1] @ M[1] + u[1] @ J - J @ u[1], atol=1e-7)
     assert np.allclose(udot, u[1] @ W[1] - W[1] @ u[1], atol=1e-7)
-    inv = invariants(J, a, Q, w)
+    inv = invariants(inertia(J), a, Q, w)
     assert np.allclose(inv["H"], -2 * inv["energy"], rtol=1e-13)
 
 

@@ -43,7 +43,7 @@ def rel_drift(x):
 def test_spectral_coefficients_match_sympy_determinant():
     J, a, Q0, w0 = random_case(0)
     M, u, _ = paper_variables(J, a, Q0, w0)
-    C = spectral_coefficients(J, M, u)
+    C = spectral_coefficients(inertia(J), M, u)
     E, w = sp.symbols("E w")
     L = sp.Matrix(J @ J) * E**2 + sp.Matrix(M) * E + sp.Matrix(u) - w * sp.eye(3)
     poly = sp.Poly(sp.expand(L.det()), E, w)
@@ -79,7 +79,7 @@ def test_first_integrals_constant(a_kind, method):
     rtol, t_end, tol = (1e-12, 40.0, 2e-11) if method == "DOP853" else (1e-10, 20.0, 2e-12)
     t = np.linspace(0.0, t_end, 41)
     w, Q = integrate_rotation(inertia(J), a, Q0, w0, rtol=rtol, method=method)(t)
-    inv = invariants(J, a, Q, w)
+    inv = invariants(inertia(J), a, Q, w)
     for key in ("energy", "H", "I2", "I3"):  # (4.9), (4.13)
         assert rel_drift(inv[key]) < tol, key
     C = inv["curve"]  # every coefficient of (4.12), relative to the largest
@@ -99,13 +99,13 @@ def test_first_integrals_constant(a_kind, method):
 
 def test_invariants_broadcast_and_values():
     J, a, Q0, w0 = random_case(3)
-    inv = invariants(J, a, Q0, w0)
+    inv = invariants(inertia(J), a, Q0, w0)
     Iner = np.trace(J) * np.eye(3) - J
     assert inv["energy"] == pytest.approx(0.5 * w0 @ Iner @ w0 + 0.5 * np.trace(Q0.T @ a @ Q0 @ J), rel=1e-14)
     assert inv["m2"] == pytest.approx(np.sum((Iner @ w0) ** 2), rel=1e-14)
     Qs = np.broadcast_to(Q0, (2, 5, 3, 3))
     ws = np.broadcast_to(w0, (2, 5, 3))
-    inv2 = invariants(J, a, Qs, ws)
+    inv2 = invariants(inertia(J), a, Qs, ws)
     assert inv2["H"].shape == (2, 5) and inv2["curve"].shape == (2, 5, 7, 4)
     assert np.allclose(inv2["curve"][1, 3], inv["curve"])
 
@@ -115,7 +115,7 @@ def test_heyoka_float64_reference_conserves_to_round_off():
     J, a, Q0, w0 = random_case(4)
     t = np.linspace(0.0, 100.0, 11)
     w, Q = integrate_rotation(inertia(J), a, Q0, w0, rtol=1e-15, method="heyoka")(t)
-    inv = invariants(J, a, Q, w)
+    inv = invariants(inertia(J), a, Q, w)
     for key in ("H", "I2", "I3"):
         assert rel_drift(inv[key]) < 1e-13, key
     wd, Qd = integrate_rotation(inertia(J), a, Q0, w0, rtol=1e-12)(t)
@@ -253,20 +253,20 @@ def test_first_integrals_long_run():
     J, a, Q0, w0 = random_case(8)
     t = np.linspace(0.0, 1000.0, 201)
     w, Q = integrate_rotation(inertia(J), a, Q0, w0, rtol=1e-13)(t)
-    inv = invariants(J, a, Q, w)
+    inv = invariants(inertia(J), a, Q, w)
     for key in ("H", "I2", "I3"):
         assert rel_drift(inv[key]) < 1e-10, key
     C = inv["curve"]
     assert np.max(np.abs(C - C[0])) < 1e-10 * np.max(np.abs(C[0]))
 
 
-def test_invariants_take_J_as_solve_rotation_does():
-    """J as a list, a 1-D array of principal values or a 3x3 tensor: the same integrals; other shapes name J."""
+def test_invariants_take_I_as_solve_rotation_does():
+    """I as a list, a 1-D array of principal values or a 3x3 tensor: the same integrals; other shapes name I."""
     a = np.array([[0.3, -0.2, 0.1], [-0.2, -0.4, 0.25], [0.1, 0.25, 0.6]])
     Q, w = np.eye(3), np.array([0.3, -0.6, 0.45])
-    ref = invariants(np.diag([0.6, 1.0, 1.7]), a, Q, w)
-    for J in ([0.6, 1.0, 1.7], np.array([0.6, 1.0, 1.7])):
-        got = invariants(J, a, Q, w)
+    ref = invariants(np.diag([2.7, 2.3, 1.6]), a, Q, w)
+    for I in ([2.7, 2.3, 1.6], np.array([2.7, 2.3, 1.6])):  # noqa: E741 - the inertia tensor's usual name
+        got = invariants(I, a, Q, w)
         assert all(np.array_equal(got[k], ref[k]) for k in ref)
-    with pytest.raises(ValueError, match="J must be 3 principal values"):
-        invariants([0.6, 1.0], a, Q, w)
+    with pytest.raises(ValueError, match="I must be 3 principal values"):
+        invariants([2.7, 2.3], a, Q, w)

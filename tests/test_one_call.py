@@ -78,7 +78,7 @@ def _drift(J, a, Q0, w0, w, Q) -> float:
     u0 = -(Q0.T @ a @ Q0)
     scale_E = abs(0.5 * w0 @ m0) + abs(0.5 * np.trace(u0 @ J))
     scale_I2 = 2 * float(m0 @ m0) + abs(2 * np.trace(J @ J @ u0))
-    i0, it = invariants(J, a, Q0, w0), invariants(J, a, Q, w)
+    i0, it = invariants(inertia(J), a, Q0, w0), invariants(inertia(J), a, Q, w)
     return float(max(np.abs(it["energy"] - i0["energy"]).max() / scale_E,
                      np.abs(it["I2"] - i0["I2"]).max() / scale_I2))
 

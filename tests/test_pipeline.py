@@ -108,7 +108,7 @@ def test_energy_is_the_physical_bodies_energy(closed, numerical, scene):
     # the rotations' first integrals along the closed forms (measured <= 8.7e-15, the root's curve)
     tr = closed.trajectories(t)
     for i, n in enumerate(tr.names):
-        inv = invariants(scene.config.effective_body(n).J, scene.a, tr.attitude[i], tr.omega[i])
+        inv = invariants(inertia(scene.config.effective_body(n).J), scene.a, tr.attitude[i], tr.omega[i])
         for k in ("energy", "I2", "I3", "curve"):
             ref = closed.invariants["rotations"][n][k]
             assert np.max(np.abs(inv[k] - ref)) < 1e-13 * (1 + np.max(np.abs(ref)))
@@ -125,7 +125,7 @@ def test_numerical_rotations_on_demand(numerical, scene):
         w2, Q2 = integrate_rotation(inertia(e.J), scene.a, scene.Q0[n], scene.omega0[n], rtol=1e-13)(t)
         # measured 0 (root, tip) and 5.4e-15 (arm: its Q0 from the scene is projected onto SO(3) once more)
         assert max(np.max(np.abs(w1 - w2)), np.max(np.abs(Q1 - Q2))) < 3e-14
-        inv = invariants(e.J, scene.a, Q1, w1)
+        inv = invariants(inertia(e.J), scene.a, Q1, w1)
         # measured <= 3.6e-14 relative (root)
         assert np.max(np.abs(inv["energy"] - rot.invariants["energy"])) < 3e-13 * abs(rot.invariants["energy"])
     d = numerical.diagnostics["rotations"]

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 from conftest import rand_Q
 
+from thetasol.core.inertia import inertia
 from thetasol.core.so3 import complete_frame, hat
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Joint
@@ -90,7 +91,7 @@ def test_reduction_matches_point_masses(seed):
         assert abs(r.B * np.trace(r.z @ hat(w)) - r.A * (r.axis @ w)) < 1e-14 * r.A * np.linalg.norm(w)
     # (8.34)'s potential part: the points' 1/2 x.a x about the centre is 1/2 tr(Q J_k Q^T a)
     V_points = 0.5 * np.sum(M * np.einsum("ki,ij,kj->k", X @ Q.T, a, X @ Q.T))
-    V_reduced = gyrostat_energy(e.J, np.zeros((3, 3)), a, Q, np.zeros(3))
+    V_reduced = gyrostat_energy(inertia(e.J), np.zeros((3, 3)), a, Q, np.zeros(3))
     assert abs(V_points - V_reduced) < 1e-12 * np.max(np.abs(a)) * np.trace(e.J)
     # (8.25), (8.33): p = A (omega . l + phidot), N = sum p l
     p = e.momenta(w, phid)

@@ -12,6 +12,7 @@ import tomllib
 import numpy as np
 import pytest
 
+from thetasol.core.inertia import inertia
 from thetasol.integrators.multibody_rotors import integrate_gyrostat_multibody
 from thetasol.scenes.format import demo_scene_path, load_scene
 from thetasol.scenes.gyrostat_scene import GyrostatScene, gyrostat_scene_from_dict, run_gyrostat_scene
@@ -132,7 +133,7 @@ def test_split_state_shapes_and_first_integrals():
         assert np.array_equal(traj.position, np.moveaxis(pos.reshape(6, 7, 3), 0, 1))
         W, Qs, _, _ = sol.evaluate_parts(np.linspace(0.0, 10.0, 51))
         for n, e in scene.config.effective_gyrostats().items():
-            E = gyrostat_energy(e.J, e.J_gyro, scene.a, Qs[n], W[n])
+            E = gyrostat_energy(inertia(e.J), e.I_gyro, scene.a, Qs[n], W[n])
             # measured <= 7.2e-15 (closed forms), 5.4e-13 (integrated at rtol 1e-12)
             assert np.max(np.abs(E - sol.invariants["energies"][n])) < (3e-12 if e.rotors and not free else 3e-14) \
                 * abs(E[0])

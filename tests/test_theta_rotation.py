@@ -73,7 +73,7 @@ def test_integrals_4_13_are_constant_on_the_theta_solution(name):
     sol = solve_rotation(inertia(J), a, Q0, w0)
     t = np.concatenate([np.linspace(0, 50, 401), [997.0, 4002.0, 1e5, 1e6]])
     w, Q = sol(t)
-    inv = invariants(J, a, Q, w)
+    inv = invariants(inertia(J), a, Q, w)
     # measured 2.8e-14 (generic), 3.1e-14 (fast spin), 1.4e-12 (rank one, at t = 1e6: its conjugate
     # places' phases exp(i nu t) are rounded independently) relative (the phases t u are reduced mod 1
     # before theta is summed)
@@ -152,7 +152,7 @@ def test_far_times_cost_nothing_extra_and_stay_on_the_invariant_torus():
     t = np.array([1.0, 1e6, 1e6 + 1.0, 3.3e7])
     w, Q = sol(t)
     assert np.all(np.isfinite(w)) and np.abs(np.swapaxes(Q, -1, -2) @ Q - np.eye(3)).max() < 1e-14
-    inv = invariants(J, a, Q, w)
+    inv = invariants(inertia(J), a, Q, w)
     assert np.abs(inv["energy"] - inv["energy"][0]).max() < 1e-9
     # Im Phi(0, t) must vanish; it grows linearly with the accuracy of the precession frequencies
     # (measured ~1.3e-13 per unit time, dominated by small eigenvector components; the error of Q

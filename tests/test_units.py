@@ -208,7 +208,7 @@ def test_reproducers_solved_against_heyoka(name):
         bound = 0.2 * max(np.abs(w_p - w_ref).max() / np.abs(w_ref).max(), np.abs(Q_p - Q_ref).max())
     assert _error(sol, w_ref, Q_ref, t) <= bound
     # the first integrals are the user's data's
-    inv = invariants(J, a, Q0, w0)
+    inv = invariants(inertia(J), a, Q0, w0)
     # (solve_rotation snaps Q0 to SO(3): 4.4e-15 relative on the energy with a = A + 1e5 1)
     assert abs(sol.invariants["energy"] - inv["energy"]) <= 2e-14 * abs(inv["energy"])
     assert np.abs(sol.invariants["curve"] - inv["curve"]).max() <= 1e-15 * np.abs(inv["curve"]).max()

@@ -33,7 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core.inertia import second_moments
-from thetasol.mechanics.gravity_gradient import gravity_gradient_stability
+from thetasol.mechanics.gravity_gradient import gravity_gradient_stability_from_moments
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import Solution, describe
 
@@ -363,7 +363,7 @@ def _region(k1: float, k3: float) -> str:
     J = second_moments(I)                      # J >= 0: the triangle inequalities of the inertia
     if np.any(I <= 0) or np.any(J < 0):
         return "non-physical"
-    return gravity_gradient_stability(J, 1.0).region
+    return gravity_gradient_stability_from_moments(J, 1.0).region
 
 
 def stability_grid(n: int = 201) -> tuple[np.ndarray, np.ndarray]:

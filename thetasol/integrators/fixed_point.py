@@ -28,7 +28,7 @@ from thetasol.core import validate as V
 from thetasol.core.inertia import second_moments
 from thetasol.core.so3 import cross, hat, polar_orthonormalize
 from thetasol.integrators._common import SCIPY_METHODS, Settings, body_inertia, both_ways, settings, solve_ivp_mQ
-from thetasol.mechanics.equations import torque
+from thetasol.mechanics.equations import torque_from_moments
 from thetasol.protocol import RotationSolution
 
 __all__ = ["integrate_fixed_point", "fixed_point_energy", "NumericalFixedPoint"]
@@ -114,7 +114,7 @@ class NumericalFixedPoint(RotationSolution):
         def rhs(_t, y):
             m, Q = y[:3], y[3:].reshape(3, 3)
             w = I_inv @ m
-            mdot = cross(m, w) + torque(Jm, am, Q) + cross(Rv, Q.T @ F)
+            mdot = cross(m, w) + torque_from_moments(Jm, am, Q) + cross(Rv, Q.T @ F)
             return np.concatenate([mdot, (Q @ hat(w)).ravel()])
 
         m0 = Im @ w0

@@ -41,7 +41,7 @@ from thetasol.integrators._common import (
     settings,
     solve_ivp_mQ,
 )
-from thetasol.mechanics.equations import invariants, rotation_rhs
+from thetasol.mechanics.equations import invariants_from_moments, rotation_rhs
 from thetasol.protocol import RotationSolution
 
 __all__ = ["integrate_rotation", "NumericalRotation", "rotation_expressions"]
@@ -99,7 +99,7 @@ def integrate_rotation(I: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayL
     Qm = V.rotation_matrix(Q0, "Q0")
     wm = V.vector3(omega0, "omega0")
     opts = settings(method, rtol, atol, fp_type, step, methods=(*SCIPY_METHODS, "splitting", "heyoka"))
-    inv = invariants(Jm, am, Qm, wm)
+    inv = invariants_from_moments(Jm, am, Qm, wm)
     first = {"energy": float(inv["energy"]), "I2": float(inv["I2"]), "I3": float(inv["I3"]), "curve": inv["curve"]}
     return NumericalRotation(J=Jm, a=am, Q0=Qm, omega0=wm, method=f"numerical/{opts.method}", invariants=first,
                              diagnostics=opts.diagnostics(), I=Im, settings=opts)

@@ -39,7 +39,11 @@ from scipy.spatial.transform import Rotation
 
 from thetasol.core import validate as V
 from thetasol.mechanics.configuration import Configuration
-from thetasol.mechanics.gravity_gradient import GravityGradientStability, gravity_gradient_stability, orbit_frame
+from thetasol.mechanics.gravity_gradient import (
+    GravityGradientStability,
+    gravity_gradient_stability_from_moments,
+    orbit_frame,
+)
 
 __all__ = ["gravity_gradient_linearization", "AttitudeLQR", "lqr_attitude_controller", "StationController",
            "station_controller"]
@@ -62,7 +66,7 @@ def gravity_gradient_linearization(J: ArrayLike, mean_motion: float) -> tuple[np
     B : ndarray (6, 3)
         ``u`` the control couple along the same axes.
     """
-    st = gravity_gradient_stability(J, mean_motion)
+    st = gravity_gradient_stability_from_moments(J, mean_motion)
     I1, I2, I3 = st.inertia
     n = st.mean_motion
     A = np.zeros((6, 6))
@@ -165,7 +169,7 @@ def lqr_attitude_controller(J: ArrayLike, mean_motion: float, Qw: ArrayLike | No
     if off > 1e-10 * np.max(np.abs(Ja)):
         raise ValueError(f"the alignment's axes are not principal axes of J (off-diagonal {off:.3g})")
     A, B = gravity_gradient_linearization(np.diag(Ja), mean_motion)
-    st = gravity_gradient_stability(np.diag(Ja), mean_motion)
+    st = gravity_gradient_stability_from_moments(np.diag(Ja), mean_motion)
     n = st.mean_motion
     Qm = np.diag(np.r_[np.ones(3), np.full(3, n ** -2)]) if Qw is None else _weight(Qw, 6, "Qw")
     Rm = np.diag((n * n * st.inertia) ** -2.0) if Rw is None else _weight(Rw, 3, "Rw")

@@ -21,20 +21,33 @@ from __future__ import annotations
 
 import numpy as np
 
-from thetasol.core.inertia import inertia_from_moments
+from thetasol.core.inertia import inertia_from_moments, second_moments
 from thetasol.core.so3 import cross, hat, vee
 
 __all__ = [
     "torque",
+    "torque_from_moments",
     "rotation_rhs",
     "paper_variables",
     "invariants",
+    "invariants_from_moments",
     "spectral_coefficients",
+    "spectral_coefficients_from_moments",
 ]
 
 
-def torque(J: np.ndarray, a: np.ndarray, Q: np.ndarray) -> np.ndarray:
-    """Body-frame torque of the potential ``1/2 x^T a x`` on a body with second moments ``J``.
+def torque(I: np.ndarray, a: np.ndarray, Q: np.ndarray) -> np.ndarray:  # noqa: E741 - the inertia tensor's usual name
+    """Body-frame torque of the potential ``1/2 x^T a x`` on a body of inertia tensor ``I``.
+
+    ``I`` is the inertia tensor in the body frame, three principal values or a symmetric 3x3; it is
+    converted once to the paper's second moments ``J = tr(I)/2 1 - I`` (:func:`thetasol.second_moments`)
+    and :func:`torque_from_moments` does the rest.  Shape ``Q.shape[:-2] + (3,)``.
+    """
+    return torque_from_moments(_moments_matrix(second_moments(I)), a, Q)
+
+
+def torque_from_moments(J: np.ndarray, a: np.ndarray, Q: np.ndarray) -> np.ndarray:
+    """Body-frame torque of the potential ``1/2 x^T a x`` on a body with second moments ``J`` (3x3).
 
     ``tau = vee([J, Q^T a Q]) = vee([u, J])`` with ``u = -Q^T a Q``: the term ``[u, J]`` of (4.8).
     Shape ``Q.shape[:-2] + (3,)``.
@@ -51,7 +64,7 @@ def rotation_rhs(J: np.ndarray, I_inv: np.ndarray, a: np.ndarray, m: np.ndarray,
     Returns ``(mdot, Qdot)`` where ``mdot = m x omega + tau`` and ``omega = I^{-1} m``.
     """
     omega = m @ I_inv.T
-    mdot = cross(m, omega) + torque(J, a, Q)
+    mdot = cross(m, omega) + torque_from_moments(J, a, Q)
     return mdot, Q @ hat(omega)
 
 
@@ -81,8 +94,19 @@ def _tr(X):
     return np.trace(X, axis1=-2, axis2=-1)
 
 
-def invariants(J: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray) -> dict:
-    """First integrals of the rotation in a quadratic potential.
+def invariants(I: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray) -> dict:  # noqa: E741
+    """First integrals of the rotation in a quadratic potential, of a body of inertia tensor ``I``.
+
+    ``I`` is the inertia tensor in the body frame, three principal values (a list or a 1-D array) or a
+    symmetric 3x3; ``a`` a 3x3 matrix.  ``I`` is converted once to the paper's second moments
+    ``J = tr(I)/2 1 - I`` (:func:`thetasol.second_moments`), in which the integrals below are written,
+    and :func:`invariants_from_moments` computes them (see there for the keys).
+    """
+    return invariants_from_moments(second_moments(I), a, Q, omega)
+
+
+def invariants_from_moments(J: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray) -> dict:
+    """First integrals of the rotation in a quadratic potential, of a body of second moments ``J``.
 
     Returns a dict of arrays (shape ``omega.shape[:-1]``):
 
@@ -93,8 +117,8 @@ def invariants(J: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray) -
     ``m2``      ``|m|^2 = -1/2 tr(M^2)`` ((4.7), conserved only when ``a`` is isotropic or zero);
     ``curve``   all coefficients of the spectral curve (4.12), see :func:`spectral_coefficients`.
 
-    ``J`` is the paper's second moments (of an inertia ``I``: :func:`thetasol.second_moments`), three principal
-    values (a list or a 1-D array) or a 3x3 tensor; ``a`` a 3x3 matrix.
+    ``J`` is the paper's second moments, three principal values (a list or a 1-D array) or a 3x3 tensor;
+    ``a`` a 3x3 matrix.
     """
     J = _moments_matrix(J)
     a = np.asarray(a, dtype=float)
@@ -113,7 +137,7 @@ def invariants(J: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray) -
         "I2": _tr(M2 + 2 * J2 @ u),
         "I3": _tr(M2 @ u + J2 @ u @ u),
         "m2": -0.5 * _tr(M2),
-        "curve": spectral_coefficients(J, M, u),
+        "curve": spectral_coefficients_from_moments(J, M, u),
     }
 
 
@@ -126,8 +150,19 @@ def _polymul(p, q):
     return out
 
 
-def spectral_coefficients(J: np.ndarray, M: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """Coefficients of ``R(w, E) = det(J^2 E^2 + M E + u - w 1)`` (4.12).
+def spectral_coefficients(I: np.ndarray, M: np.ndarray, u: np.ndarray) -> np.ndarray:  # noqa: E741
+    """Coefficients of the spectral curve (4.12) of a body of inertia tensor ``I`` at the paper's ``(M, u)``.
+
+    ``I`` is the inertia tensor in the body frame, three principal values or a symmetric 3x3; the curve
+    ``det(J^2 E^2 + M E + u - w 1)`` is written in the paper's second moments, so ``I`` is converted
+    once to ``J = tr(I)/2 1 - I`` (:func:`thetasol.second_moments`) and
+    :func:`spectral_coefficients_from_moments` does the rest (shape ``batch + (7, 4)``).
+    """
+    return spectral_coefficients_from_moments(_moments_matrix(second_moments(I)), M, u)
+
+
+def spectral_coefficients_from_moments(J: np.ndarray, M: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """Coefficients of ``R(w, E) = det(J^2 E^2 + M E + u - w 1)`` (4.12), ``J`` the second moments (3x3).
 
     Returns ``C`` of shape ``batch + (7, 4)`` with ``R = sum_{k,l} C[k, l] E^k w^l``.
     Only even ``k`` are non-zero (the involution ``E -> -E``); every entry is a first

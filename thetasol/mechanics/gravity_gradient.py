@@ -41,19 +41,22 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
-from thetasol.core.inertia import inertia_from_moments
+from thetasol.core.inertia import second_moments
 from thetasol.core.so3 import cross
 
-__all__ = ["gravity_gradient_torque", "orbit_frame", "GravityGradientStability", "gravity_gradient_stability"]
+__all__ = ["gravity_gradient_torque", "orbit_frame", "GravityGradientStability", "gravity_gradient_stability",
+           "gravity_gradient_stability_from_moments"]
 
 
-def gravity_gradient_torque(J: np.ndarray, Q: np.ndarray, r: np.ndarray, mu: float) -> np.ndarray:
-    """Body-frame torque ``3 mu / |r|^5 (Q^T r) x I (Q^T r)`` (7.16), ``I = tr(J) 1 - J``.
+def gravity_gradient_torque(I: ArrayLike, Q: np.ndarray, r: np.ndarray, mu: float) -> np.ndarray:  # noqa: E741
+    """Body-frame torque ``3 mu / |r|^5 (Q^T r) x I (Q^T r)`` (7.16) on a body of inertia tensor ``I``.
+
+    The vector form (7.16) is written in the inertia itself, so ``I`` is used as given (no conversion).
 
     Parameters
     ----------
-    J : ndarray, shape (3, 3)
-        Second moments in the body frame.
+    I : array_like, shape (3,) or (3, 3)
+        Inertia tensor in the body frame: three principal values or a symmetric 3x3.
     Q : ndarray, shape (..., 3, 3)
         Attitude, body to space.
     r : ndarray, shape (..., 3)
@@ -65,7 +68,11 @@ def gravity_gradient_torque(J: np.ndarray, Q: np.ndarray, r: np.ndarray, mu: flo
     -------
     ndarray, shape ``broadcast(Q.shape[:-2], r.shape[:-1]) + (3,)``
     """
-    I = inertia_from_moments(J)
+    I = np.asarray(I, dtype=float)  # noqa: E741
+    if I.shape == (3,):
+        I = np.diag(I)  # noqa: E741
+    elif I.shape != (3, 3):
+        raise ValueError(f"I must be 3 principal values or a 3x3 tensor, got shape {I.shape}")
     rb = np.einsum("...ji,...j->...i", Q, r)             # Q^T r
     rn2 = np.sum(r * r, axis=-1)[..., None]
     return 3.0 * mu / (rn2 * rn2 * np.sqrt(rn2)) * cross(rb, rb @ I.T)
@@ -133,14 +140,15 @@ def _roll_yaw_roots(b: float, c: float, n: float):
     return [n * n * big, n * n * small]
 
 
-def gravity_gradient_stability(J: ArrayLike, mean_motion: float) -> GravityGradientStability:
+def gravity_gradient_stability(I: ArrayLike, mean_motion: float) -> GravityGradientStability:  # noqa: E741
     """Linear stability of a body on a circular orbit with its principal axes along the orbit frame.
 
     Parameters
     ----------
-    J : array_like, shape (3,)
-        Principal second moments ``sum m r r^T`` in the order axis 1 radial, axis 2 along-track,
-        axis 3 orbit normal (``I = tr(J) - J``: give a body's inertia ``I`` as ``J = tr(I)/2 - I``).
+    I : array_like, shape (3,)
+        Principal moments of inertia in the order axis 1 radial, axis 2 along-track, axis 3 orbit
+        normal.  Converted once to the paper's second moments ``J = tr(I)/2 - I``
+        (:func:`thetasol.second_moments`) for :func:`gravity_gradient_stability_from_moments`.
     mean_motion : float
         ``n = sqrt(mu / R^3)`` of the circular orbit (> 0), in the user's time unit.
 
@@ -150,12 +158,22 @@ def gravity_gradient_stability(J: ArrayLike, mean_motion: float) -> GravityGradi
 
     Examples
     --------
-    >>> s = gravity_gradient_stability([0.5, 1.5, 0.25], 1.0)   # I = (1.75, 0.75, 2.0): I3 > I1 > I2
+    >>> s = gravity_gradient_stability([1.75, 0.75, 2.0], 1.0)   # I3 > I1 > I2
     >>> s.region, s.stable
     ('unstable', False)
-    >>> s = gravity_gradient_stability([1.25, 0.75, 0.25], 1.0)  # I = (1.0, 1.5, 2.0)
+    >>> s = gravity_gradient_stability([1.0, 1.5, 2.0], 1.0)
     >>> s.region, round(s.pitch_frequency, 6), [round(w, 6) for w in s.roll_yaw_frequencies]
     ('lagrange', 0.866025, [0.681774, 1.69367])
+    """
+    Iv = V.finite_array(I, "I", (3,))
+    return gravity_gradient_stability_from_moments(second_moments(Iv), mean_motion)
+
+
+def gravity_gradient_stability_from_moments(J: ArrayLike, mean_motion: float) -> GravityGradientStability:
+    """:func:`gravity_gradient_stability` of a body given by its principal second moments ``J = sum m r r^T``.
+
+    The paper's convention (``I = tr(J) - J``), for the callers inside thetasol that hold ``J``; same
+    axes, result and checks.
     """
     Jv = V.finite_array(J, "J", (3,))
     if np.any(Jv < 0) or not np.sum(Jv) > 0:

@@ -49,13 +49,13 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
-from thetasol.core.inertia import inertia_from_moments
+from thetasol.core.inertia import inertia_from_moments, second_moments
 from thetasol.core.so3 import complete_frame, hat
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import CENTRAL_RTOL, Joint
 
 __all__ = ["Rotor", "MasslessCarrier", "EffectiveRotor", "EffectiveGyrostat", "GyrostatConfiguration",
-           "axis_rotation", "gyrostat_energy", "ROTOR_RTOL"]
+           "axis_rotation", "gyrostat_energy", "gyrostat_energy_from_moments", "ROTOR_RTOL"]
 
 #: Relative tolerance of assumption (8.12): a rotor's mass centre off its axis by more than this times
 #: its size, or its second moments asymmetric about the axis by more than this times their largest
@@ -492,8 +492,29 @@ class GyrostatConfiguration:
                 f"root {self.root!r})")
 
 
-def gyrostat_energy(J: np.ndarray, J_gyro: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray) -> np.ndarray:
+def gyrostat_energy(I: ArrayLike, I_gyro: ArrayLike, a: np.ndarray, Q: np.ndarray,  # noqa: E741
+                    omega: np.ndarray) -> np.ndarray:
+    """The first integral (8.34) as a physical energy of a gyrostat, ``1/2 omega . I_gyro omega + V``.
+
+    ``I`` is the inertia tensor of the whole body (carrier and rotors, the one the potential acts on) and
+    ``I_gyro`` the gyrostat's inertia in ``M_k = I_gyro omega`` (8.33), :attr:`EffectiveGyrostat.I_gyro`, each three
+    principal values or a symmetric 3x3 in the body frame.  Both are converted once to the paper's second
+    moments (:func:`thetasol.second_moments`) for :func:`gyrostat_energy_from_moments`, where the
+    potential ``V = 1/2 tr(Q^T a Q J)`` is written.
+    """
+    return gyrostat_energy_from_moments(_matrix(second_moments(I)), _matrix(second_moments(I_gyro)), a, Q, omega)
+
+
+def _matrix(J: np.ndarray) -> np.ndarray:
+    """A 3x3 array from three principal values or a 3x3 tensor."""
+    return np.diag(J) if J.shape == (3,) else J
+
+
+def gyrostat_energy_from_moments(J: np.ndarray, J_gyro: np.ndarray, a: np.ndarray, Q: np.ndarray,
+                                 omega: np.ndarray) -> np.ndarray:
     """The first integral (8.34) as a physical energy: ``1/2 omega . I(J_gyro) omega + 1/2 tr(Q^T a Q J)``.
+
+    ``J`` and ``J_gyro`` are the paper's second moments (3x3) of the whole body and of the gyrostat.
 
     (8.34) ``H = 1/2 tr(M omega) + tr(u J)`` is ``-2`` times this with ``u = -Q^T a Q``
     (docs/conventions.md); independent of ``N`` and the ``p_ka``.  Broadcasts over leading axes.

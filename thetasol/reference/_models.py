@@ -10,7 +10,7 @@ import numpy as np
 
 from thetasol.core.inertia import inertia_from_moments
 from thetasol.core.so3 import cross, hat
-from thetasol.mechanics.equations import invariants, rotation_rhs
+from thetasol.mechanics.equations import invariants_from_moments, rotation_rhs
 from thetasol.mechanics.heavy_top import heavy_top_invariants
 from thetasol.reference._case import Group
 
@@ -52,7 +52,7 @@ def rotation_system(J: np.ndarray, a: np.ndarray):
 
     def integrals(y):
         w, Q = split_rotation(y)
-        inv = invariants(J, a, Q, w)
+        inv = invariants_from_moments(J, a, Q, w)
         kin = 0.5 * np.einsum("...i,ij,...j->...", w, I, w)
         u = -(np.swapaxes(Q, -1, -2) @ a @ Q)
         pot = 0.5 * np.abs(np.trace(u @ J, axis1=-2, axis2=-1))

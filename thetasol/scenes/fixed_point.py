@@ -42,7 +42,7 @@ from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.fixed_point import fixed_point_energy, integrate_fixed_point
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Pivot, pivot_mass_center
-from thetasol.mechanics.equations import invariants as rotation_invariants
+from thetasol.mechanics.equations import invariants_from_moments as rotation_invariants
 from thetasol.protocol import ClosedFormUnavailable, describe, worst_error
 from thetasol.scenes.pipeline import (
     ConfigurationSolution,

@@ -42,7 +42,13 @@ from thetasol.integrators.multibody_rotors import integrate_gyrostat_multibody, 
 from thetasol.integrators.rotation import integrate_rotation
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import Joint
-from thetasol.mechanics.rotors import GyrostatConfiguration, MasslessCarrier, Rotor, axis_rotation, gyrostat_energy
+from thetasol.mechanics.rotors import (
+    GyrostatConfiguration,
+    MasslessCarrier,
+    Rotor,
+    axis_rotation,
+    gyrostat_energy_from_moments,
+)
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import Solution, describe, worst_error
 from thetasol.scenes.checks import ReportText
@@ -231,7 +237,7 @@ def solve_gyrostat_configuration(config: GyrostatConfiguration, a: Any, b: Any, 
         w0n = V.vector3(omega0.get(n, np.zeros(3)), f"omega0[{n!r}]")
         parts[n] = _part(e, a, Q0n, w0n, momenta[n], rotation, rtol)
         models[n] = parts[n].model
-        energies[n] = float(gyrostat_energy(e.J, e.J_gyro, a, Q0n, w0n))
+        energies[n] = float(gyrostat_energy_from_moments(e.J, e.J_gyro, a, Q0n, w0n))
     inv = {"rotor_momenta": momenta, "energies": energies, "mass_center": mc.invariants}
     diag = {"models": models, "parts": "Theorem 5: " + parts_text(mc, {n: p.sol for n, p in parts.items()}),
             "error_estimate": worst_error([mc, *(p.sol for p in parts.values())])}
@@ -455,7 +461,7 @@ def _drift(scene: GyrostatScene, sol: GyrostatSplit, traj: Trajectories, say) ->
         ("; (8.40) |m + N|^2" if rotation_kind(scene.a) == "elliptic" else ""))
     for n, e in scene.config.effective_gyrostats().items():
         Q, W = traj.info["carrier_attitudes"][n], traj.info["carrier_omegas"][n]
-        E = gyrostat_energy(e.J, e.J_gyro, scene.a, Q, W)
+        E = gyrostat_energy_from_moments(e.J, e.J_gyro, scene.a, Q, W)
         ref = sol.invariants["energies"][n]
         line = f"  {n}: {float(np.max(np.abs(E - ref))) / max(abs(ref), 1e-300):.1e}"
         if rotation_kind(scene.a) == "elliptic":

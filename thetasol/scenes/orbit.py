@@ -35,7 +35,11 @@ from thetasol.core.threads import single_blas_thread
 from thetasol.integrators.multibody_gravity import box_mass_points
 from thetasol.integrators.orbiting_rotation import integrate_orbiting_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
-from thetasol.mechanics.gravity_gradient import GravityGradientStability, gravity_gradient_stability, orbit_frame
+from thetasol.mechanics.gravity_gradient import (
+    GravityGradientStability,
+    gravity_gradient_stability_from_moments,
+    orbit_frame,
+)
 from thetasol.protocol import ClosedFormUnavailable, describe, worst_error
 from thetasol.scenes.pipeline import ConfigurationSolution, parts_text
 from thetasol.scenes.values import numeric_array
@@ -180,7 +184,7 @@ def station_stability(config: Configuration, orbit: KeplerOrbit, Q0: Mapping[str
         lag = e.axes[:, [2, 1, 0]].copy()                   # J descending: I ascending radial -> normal
         if np.linalg.det(lag) < 0:
             lag[:, 2] = -lag[:, 2]
-        out[name] = BodyStability(alignment=B0, angle=angle, stability=gravity_gradient_stability(Jal, n),
+        out[name] = BodyStability(alignment=B0, angle=angle, stability=gravity_gradient_stability_from_moments(Jal, n),
                                   lagrange_alignment=lag)
     return out
 

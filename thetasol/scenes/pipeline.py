@@ -39,7 +39,7 @@ from thetasol.integrators.neumann import NumericalNeumann, integrate_neumann
 from thetasol.integrators.rotation import integrate_rotation
 from thetasol.mechanics.configuration import Configuration, initial_attitudes
 from thetasol.mechanics.constraints import Sphere
-from thetasol.mechanics.equations import invariants as rotation_invariants
+from thetasol.mechanics.equations import invariants_from_moments as rotation_invariants
 from thetasol.mechanics.potential import potential_kind
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import ClosedFormUnavailable, Solution, describe, worst_error

@@ -34,7 +34,7 @@ import numpy as np
 
 from thetasol.integrators.fixed_point import fixed_point_energy
 from thetasol.integrators.multibody import integrate_multibody
-from thetasol.mechanics.equations import invariants
+from thetasol.mechanics.equations import invariants_from_moments
 from thetasol.mechanics.trajectories import Trajectories
 from thetasol.protocol import describe
 from thetasol.scenes.checks import Check, ReportText, verdict
@@ -211,7 +211,7 @@ def _drift(scene: Scene, traj: Trajectories, say: ReportText) -> None:
             say(f"  {n} about the pivot: energy (5.3) {float(np.max(np.abs(E - E[0])) / max(abs(E[0]), 1e-300)):.1e}")
             continue
         e = scene.config.effective_body(n)
-        inv = invariants(e.J, scene.a, traj.attitude[i], traj.omega[i])
+        inv = invariants_from_moments(e.J, scene.a, traj.attitude[i], traj.omega[i])
         drift = {}
         for k in ("energy", "I2", "I3"):
             x = inv[k]

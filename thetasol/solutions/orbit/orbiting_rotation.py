@@ -49,7 +49,7 @@ from thetasol.core.attitude import angle_mod_2pi, principal_frame, uniform_rotat
 from thetasol.core.inertia import inertia, second_moments
 from thetasol.core.so3 import rotation_about
 from thetasol.core.threads import single_blas_thread
-from thetasol.mechanics.gravity_gradient import gravity_gradient_stability, orbit_frame
+from thetasol.mechanics.gravity_gradient import gravity_gradient_stability_from_moments, orbit_frame
 from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions.orbit.kepler import KeplerOrbit
 from thetasol.special.elliptic import ellipj, ellipk
@@ -234,7 +234,7 @@ def solve_orbiting_rotation(I: ArrayLike, orbit: KeplerOrbit, Q0: ArrayLike, ome
         diag["period"] = c["period"]
     if case == "relative-equilibrium":
         order = [int(np.argmax(np.abs(Qp.T @ F0[:, a]))) for a in range(3)]   # principal axis per orbit axis
-        st = gravity_gradient_stability(Jp[order], n)
+        st = gravity_gradient_stability_from_moments(Jp[order], n)
         diag.update(stability=st.region, stable=st.stable)
     inv = {"jacobi": _jacobi(Im, n, F0, Q0, w0)}
     if c["kind"] == "pendulum":

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from thetasol.mechanics.equations import invariants as _invariants
+from thetasol.mechanics.equations import invariants_from_moments as _invariants
 from thetasol.protocol import RotationSolution, quiet_far_times
 
 __all__ = ["Scales", "choose_scales", "dimensionless_data", "ScaledRotation", "scaled_solution"]

@@ -30,7 +30,7 @@ import numpy as np
 
 from thetasol.core.attitude import principal_frame
 from thetasol.core.periodic import eval_series, integrated, powers, refined_fft, sum_series
-from thetasol.mechanics.equations import invariants as _invariants
+from thetasol.mechanics.equations import invariants_from_moments as _invariants
 from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._symmetry import (
     symmetric_without_spin,

@@ -23,7 +23,7 @@ import numpy as np
 from thetasol.core.attitude import principal_frame
 from thetasol.core.inertia import inertia
 from thetasol.core.so3 import rotation_about
-from thetasol.mechanics.equations import invariants as _invariants
+from thetasol.mechanics.equations import invariants_from_moments as _invariants
 from thetasol.protocol import RotationSolution
 
 __all__ = ["PendulumRotation", "solve_pendulum"]

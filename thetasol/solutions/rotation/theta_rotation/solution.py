@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core.attitude import principal_frame
-from thetasol.mechanics.equations import invariants as first_integrals
+from thetasol.mechanics.equations import invariants_from_moments as first_integrals
 from thetasol.protocol import ROUNDOFF, ClosedFormUnavailable, RotationSolution
 from thetasol.solutions._symmetry import symmetry_axis
 from thetasol.solutions.rotation.theta_rotation.divisors import eigenvector_divisors
