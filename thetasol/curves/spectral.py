@@ -147,7 +147,9 @@ def spectral_curve(J: ArrayLike, M: ArrayLike, u: ArrayLike, *, tol: float = 1e-
     Parameters
     ----------
     J : array_like
-        Second moments: 3 principal values or a symmetric 3x3 tensor (the paper's J, (2.9)).
+        Second moments: 3 principal values or a symmetric 3x3 tensor (the paper's J, (2.9)).  Unlike
+        the entry points, which take the inertia ``I``, this takes ``J``: the curve (4.12) is written in
+        it; of a body given by its inertia pass ``thetasol.second_moments(I)``.
     M : array_like
         Angular momentum, skew 3x3 ``M = hat(m)`` or the 3-vector ``m``.
     u : array_like
