@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from thetasol.core import validate as V
 from thetasol.core.inertia import inertia_from_moments, second_moments
 from thetasol.core.so3 import cross, hat, vee
 
@@ -43,7 +44,7 @@ def torque(I: np.ndarray, a: np.ndarray, Q: np.ndarray) -> np.ndarray:  # noqa: 
     converted once to the paper's second moments ``J = tr(I)/2 1 - I`` (:func:`thetasol.second_moments`)
     and :func:`torque_from_moments` does the rest.  Shape ``Q.shape[:-2] + (3,)``.
     """
-    return torque_from_moments(_moments_matrix(second_moments(I)), a, Q)
+    return torque_from_moments(second_moments(V.principal_or_tensor(I, "I")), a, Q)
 
 
 def torque_from_moments(J: np.ndarray, a: np.ndarray, Q: np.ndarray) -> np.ndarray:
@@ -80,16 +81,6 @@ def paper_variables(J: np.ndarray, a: np.ndarray, Q: np.ndarray,
     return M, u, W
 
 
-def _moments_matrix(J) -> np.ndarray:
-    """J as a 3x3 array from three principal values or a 3x3 tensor (values unchanged)."""
-    J = np.asarray(J, dtype=float)
-    if J.shape == (3,):
-        return np.diag(J)
-    if J.shape != (3, 3):
-        raise ValueError(f"J must be 3 principal values or a 3x3 tensor, got shape {J.shape}")
-    return J
-
-
 def _tr(X):
     return np.trace(X, axis1=-2, axis2=-1)
 
@@ -120,7 +111,7 @@ def invariants_from_moments(J: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: 
     ``J`` is the paper's second moments, three principal values (a list or a 1-D array) or a 3x3 tensor;
     ``a`` a 3x3 matrix.
     """
-    J = _moments_matrix(J)
+    J = V.principal_or_tensor(J, "J")
     a = np.asarray(a, dtype=float)
     if a.shape != (3, 3):
         raise ValueError(f"a must be a 3x3 matrix, got shape {a.shape}")
@@ -158,7 +149,7 @@ def spectral_coefficients(I: np.ndarray, M: np.ndarray, u: np.ndarray) -> np.nda
     once to ``J = tr(I)/2 1 - I`` (:func:`thetasol.second_moments`) and
     :func:`spectral_coefficients_from_moments` does the rest (shape ``batch + (7, 4)``).
     """
-    return spectral_coefficients_from_moments(_moments_matrix(second_moments(I)), M, u)
+    return spectral_coefficients_from_moments(second_moments(V.principal_or_tensor(I, "I")), M, u)
 
 
 def spectral_coefficients_from_moments(J: np.ndarray, M: np.ndarray, u: np.ndarray) -> np.ndarray:

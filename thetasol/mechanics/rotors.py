@@ -502,12 +502,8 @@ def gyrostat_energy(I: ArrayLike, I_gyro: ArrayLike, a: np.ndarray, Q: np.ndarra
     moments (:func:`thetasol.second_moments`) for :func:`gyrostat_energy_from_moments`, where the
     potential ``V = 1/2 tr(Q^T a Q J)`` is written.
     """
-    return gyrostat_energy_from_moments(_matrix(second_moments(I)), _matrix(second_moments(I_gyro)), a, Q, omega)
-
-
-def _matrix(J: np.ndarray) -> np.ndarray:
-    """A 3x3 array from three principal values or a 3x3 tensor."""
-    return np.diag(J) if J.shape == (3,) else J
+    return gyrostat_energy_from_moments(second_moments(V.principal_or_tensor(I, "I")),
+                                        second_moments(V.principal_or_tensor(I_gyro, "I_gyro")), a, Q, omega)
 
 
 def gyrostat_energy_from_moments(J: np.ndarray, J_gyro: np.ndarray, a: np.ndarray, Q: np.ndarray,
