@@ -51,7 +51,7 @@ def _nonlinear(J, n, x, u=(0.0, 0.0, 0.0)):
 @pytest.mark.parametrize("region", sorted(BODIES))
 def test_linearization_is_the_jacobian_of_the_nonlinear_equations(region):
     J, n, h = np.array(BODIES[region]), 1.3, 1e-5
-    A, B = gravity_gradient_linearization(J, n)
+    A, B = gravity_gradient_linearization(inertia(J), n)
     jac = np.array([(_nonlinear(J, n, h * e) - _nonlinear(J, n, -h * e)) / (2 * h) for e in np.eye(6)]).T
     jac_u = np.array([(_nonlinear(J, n, np.zeros(6), h * e) - _nonlinear(J, n, np.zeros(6), -h * e)) / (2 * h)
                       for e in np.eye(3)]).T
@@ -67,7 +67,7 @@ def test_linearization_is_the_jacobian_of_the_nonlinear_equations(region):
 @pytest.mark.parametrize("region", sorted(BODIES))
 def test_lqr_solves_the_riccati_equation_and_stabilizes(region):
     J, n = np.array(BODIES[region]), 0.7
-    c = lqr_attitude_controller(J, n)
+    c = lqr_attitude_controller(inertia(J), n)
     assert c.open_loop.region == {"pitch-unstable": "unstable"}.get(region, region)
     Qw = np.diag(np.r_[np.ones(3), np.full(3, n ** -2)])
     Rw = np.diag((n * n * c.inertia) ** -2.0)
@@ -79,7 +79,7 @@ def test_lqr_solves_the_riccati_equation_and_stabilizes(region):
 def test_error_and_torque_in_a_rotated_body_frame():
     J = np.array([1.25, 0.75, 0.25])
     B0 = rodrigues([0.3, -0.2, 1.0])                  # body frame turned from the principal one
-    c = lqr_attitude_controller(B0 @ np.diag(J) @ B0.T, 1.0, alignment=B0)
+    c = lqr_attitude_controller(inertia(B0 @ np.diag(J) @ B0.T), 1.0, alignment=B0)
     F = rodrigues([0.1, 0.5, -0.4])
     theta = np.array([0.01, -0.02, 0.03])
     R = rodrigues(theta)
@@ -90,9 +90,9 @@ def test_error_and_torque_in_a_rotated_body_frame():
     assert np.allclose(th, theta, atol=1e-15) and np.allclose(rt, rate, atol=1e-15)
     assert np.allclose(c.torque(Q, w, F), B0 @ (-c.K @ np.r_[theta, rate]), atol=1e-15)
     with pytest.raises(ValueError, match="not principal"):
-        lqr_attitude_controller(B0 @ np.diag(J) @ B0.T, 1.0, alignment=np.eye(3))
+        lqr_attitude_controller(inertia(B0 @ np.diag(J) @ B0.T), 1.0, alignment=np.eye(3))
     with pytest.raises(ValueError, match="needs the alignment"):
-        lqr_attitude_controller(np.diag(J), 1.0)
+        lqr_attitude_controller(inertia(np.diag(J)), 1.0)
 
 
 def _run(demo, scale, torques_on, orbits):

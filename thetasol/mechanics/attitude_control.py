@@ -38,9 +38,11 @@ from scipy.linalg import solve_continuous_are
 from scipy.spatial.transform import Rotation
 
 from thetasol.core import validate as V
+from thetasol.core.inertia import moments_from_inertia
 from thetasol.mechanics.configuration import Configuration
 from thetasol.mechanics.gravity_gradient import (
     GravityGradientStability,
+    gravity_gradient_stability,
     gravity_gradient_stability_from_moments,
     orbit_frame,
 )
@@ -49,13 +51,13 @@ __all__ = ["gravity_gradient_linearization", "AttitudeLQR", "lqr_attitude_contro
            "station_controller"]
 
 
-def gravity_gradient_linearization(J: ArrayLike, mean_motion: float) -> tuple[np.ndarray, np.ndarray]:
+def gravity_gradient_linearization(I: ArrayLike, mean_motion: float) -> tuple[np.ndarray, np.ndarray]:  # noqa: E741
     """``(A, B)`` of ``x' = A x + B u``, ``x = (theta, theta')``, about the orbit-aligned attitude.
 
     Parameters
     ----------
-    J : array_like, shape (3,)
-        Principal second moments in the order radial, along-track, normal (as for
+    I : array_like, shape (3,)
+        Principal moments of inertia in the order radial, along-track, normal (as for
         :func:`~thetasol.mechanics.gravity_gradient.gravity_gradient_stability`).
     mean_motion : float
         ``n`` of the circular orbit.
@@ -66,7 +68,11 @@ def gravity_gradient_linearization(J: ArrayLike, mean_motion: float) -> tuple[np
     B : ndarray (6, 3)
         ``u`` the control couple along the same axes.
     """
-    st = gravity_gradient_stability_from_moments(J, mean_motion)
+    return _linearization(gravity_gradient_stability(I, mean_motion))
+
+
+def _linearization(st: GravityGradientStability) -> tuple[np.ndarray, np.ndarray]:
+    """The ``(A, B)`` of :func:`gravity_gradient_linearization` from the body's stability record."""
     I1, I2, I3 = st.inertia
     n = st.mean_motion
     A = np.zeros((6, 6))
@@ -125,14 +131,14 @@ class AttitudeLQR:
         return u @ self.alignment.T
 
 
-def lqr_attitude_controller(J: ArrayLike, mean_motion: float, Qw: ArrayLike | None = None,
+def lqr_attitude_controller(I: ArrayLike, mean_motion: float, Qw: ArrayLike | None = None,  # noqa: E741
                             Rw: ArrayLike | None = None, alignment: ArrayLike | None = None) -> AttitudeLQR:
     """LQR controller holding a body's principal axes along the orbit frame on a circular orbit.
 
     Parameters
     ----------
-    J : array_like, shape (3,) or (3, 3)
-        Second moments: principal values in the order radial, along-track, normal (then
+    I : array_like, shape (3,) or (3, 3)
+        Inertia tensor: principal values in the order radial, along-track, normal (then
         ``alignment`` defaults to the identity), or the body-frame tensor (then ``alignment`` is
         required).
     mean_motion : float
@@ -142,7 +148,7 @@ def lqr_attitude_controller(J: ArrayLike, mean_motion: float, Qw: ArrayLike | No
     Rw : array_like (3, 3) or (3,), optional
         Control weight (default ``diag(1 / (n^2 I_i)^2)``).
     alignment : array_like (3, 3), optional
-        Body-frame axes (columns, right-handed, principal axes of ``J``) to hold along radial,
+        Body-frame axes (columns, right-handed, principal axes of ``I``) to hold along radial,
         along-track and normal.
 
     Returns
@@ -151,10 +157,17 @@ def lqr_attitude_controller(J: ArrayLike, mean_motion: float, Qw: ArrayLike | No
 
     Examples
     --------
-    >>> c = lqr_attitude_controller([0.5, 1.5, 0.25], 1.0)      # unstable alone (I = (1.75, 0.75, 2))
+    >>> c = lqr_attitude_controller([1.75, 0.75, 2.0], 1.0)     # unstable alone
     >>> c.open_loop.region, bool(np.all(c.closed_loop_eigenvalues.real < 0))
     ('unstable', True)
     """
+    principal = np.shape(I) == (3,)
+    Jm = moments_from_inertia(V.inertia(I, "I"))
+    return _lqr(np.diag(Jm) if principal else Jm, mean_motion, Qw, Rw, alignment)
+
+
+def _lqr(J: np.ndarray, mean_motion: float, Qw, Rw, alignment) -> AttitudeLQR:
+    """:func:`lqr_attitude_controller` of a body given by its second moments ``J`` (principal or tensor)."""
     Jm = np.asarray(J, dtype=float)
     if Jm.shape == (3,):
         B0 = np.eye(3) if alignment is None else V.rotation_matrix(alignment, "alignment")
@@ -168,8 +181,8 @@ def lqr_attitude_controller(J: ArrayLike, mean_motion: float, Qw: ArrayLike | No
     off = np.max(np.abs(Ja - np.diag(np.diag(Ja))))
     if off > 1e-10 * np.max(np.abs(Ja)):
         raise ValueError(f"the alignment's axes are not principal axes of J (off-diagonal {off:.3g})")
-    A, B = gravity_gradient_linearization(np.diag(Ja), mean_motion)
     st = gravity_gradient_stability_from_moments(np.diag(Ja), mean_motion)
+    A, B = _linearization(st)
     n = st.mean_motion
     Qm = np.diag(np.r_[np.ones(3), np.full(3, n ** -2)]) if Qw is None else _weight(Qw, 6, "Qw")
     Rm = np.diag((n * n * st.inertia) ** -2.0) if Rw is None else _weight(Rw, 3, "Rw")
@@ -228,7 +241,7 @@ def station_controller(config: Configuration, mean_motion: float, alignments: di
     unknown = set(alignments) - set(config.order)
     if unknown:
         raise ValueError(f"alignments name unknown bodies {sorted(unknown)}")
-    ctrl = {n: lqr_attitude_controller(config.effective_body(n).J, mean_motion, Qw, Rw, alignment=B0)
+    ctrl = {n: _lqr(config.effective_body(n).J, mean_motion, Qw, Rw, B0)
             for n, B0 in alignments.items()}
     return StationController(config.order, ctrl)
 
