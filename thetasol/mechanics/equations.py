@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from thetasol.core import validate as V
-from thetasol.core.inertia import inertia_from_moments, second_moments
+from thetasol.core.inertia import inertia_from_moments, moments_from_inertia
 from thetasol.core.so3 import cross, hat, vee
 
 __all__ = [
@@ -44,7 +44,7 @@ def torque(I: np.ndarray, a: np.ndarray, Q: np.ndarray) -> np.ndarray:  # noqa: 
     converted once to the paper's second moments ``J = tr(I)/2 1 - I`` (:func:`thetasol.second_moments`)
     and :func:`torque_from_moments` does the rest.  Shape ``Q.shape[:-2] + (3,)``.
     """
-    return torque_from_moments(second_moments(V.principal_or_tensor(I, "I")), a, Q)
+    return torque_from_moments(moments_from_inertia(V.inertia(I, "I")), a, Q)
 
 
 def torque_from_moments(J: np.ndarray, a: np.ndarray, Q: np.ndarray) -> np.ndarray:
@@ -93,7 +93,7 @@ def invariants(I: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray) -
     ``J = tr(I)/2 1 - I`` (:func:`thetasol.second_moments`), in which the integrals below are written,
     and :func:`invariants_from_moments` computes them (see there for the keys).
     """
-    return invariants_from_moments(second_moments(I), a, Q, omega)
+    return invariants_from_moments(moments_from_inertia(V.inertia(I, "I")), a, Q, omega)
 
 
 def invariants_from_moments(J: np.ndarray, a: np.ndarray, Q: np.ndarray, omega: np.ndarray) -> dict:
@@ -149,7 +149,7 @@ def spectral_coefficients(I: np.ndarray, M: np.ndarray, u: np.ndarray) -> np.nda
     once to ``J = tr(I)/2 1 - I`` (:func:`thetasol.second_moments`) and
     :func:`spectral_coefficients_from_moments` does the rest (shape ``batch + (7, 4)``).
     """
-    return spectral_coefficients_from_moments(second_moments(V.principal_or_tensor(I, "I")), M, u)
+    return spectral_coefficients_from_moments(moments_from_inertia(V.inertia(I, "I")), M, u)
 
 
 def spectral_coefficients_from_moments(J: np.ndarray, M: np.ndarray, u: np.ndarray) -> np.ndarray:

@@ -166,6 +166,7 @@ def gravity_gradient_stability(I: ArrayLike, mean_motion: float) -> GravityGradi
     ('lagrange', 0.866025, [0.681774, 1.69367])
     """
     Iv = V.finite_array(I, "I", (3,))
+    V.inertia(Iv, "I")                       # a physical inertia, or the message naming a J passed as I
     return gravity_gradient_stability_from_moments(second_moments(Iv), mean_motion)
 
 

@@ -49,7 +49,7 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from thetasol.core import validate as V
-from thetasol.core.inertia import inertia_from_moments, second_moments
+from thetasol.core.inertia import inertia_from_moments, moments_from_inertia
 from thetasol.core.so3 import complete_frame, hat
 from thetasol.mechanics.bodies import Body
 from thetasol.mechanics.configuration import CENTRAL_RTOL, Joint
@@ -502,8 +502,8 @@ def gyrostat_energy(I: ArrayLike, I_gyro: ArrayLike, a: np.ndarray, Q: np.ndarra
     moments (:func:`thetasol.second_moments`) for :func:`gyrostat_energy_from_moments`, where the
     potential ``V = 1/2 tr(Q^T a Q J)`` is written.
     """
-    return gyrostat_energy_from_moments(second_moments(V.principal_or_tensor(I, "I")),
-                                        second_moments(V.principal_or_tensor(I_gyro, "I_gyro")), a, Q, omega)
+    return gyrostat_energy_from_moments(moments_from_inertia(V.inertia(I, "I")),
+                                        moments_from_inertia(V.principal_or_tensor(I_gyro, "I_gyro")), a, Q, omega)
 
 
 def gyrostat_energy_from_moments(J: np.ndarray, J_gyro: np.ndarray, a: np.ndarray, Q: np.ndarray,
