@@ -318,10 +318,10 @@ def _break_even(setup: float, per_time: float, rate: float, density: float) -> s
     return f"T > {setup / gain:.3g}" if gain > 0 else "never at this output density"
 
 
-#: Why the break-even above compares costs at equal accuracy; the measured errors of each side are in
-#: docs/bench_theta_rotation.md, written by benchmarks/bench_theta_rotation.py, not here (they depend on the body).
+#: The break-even above compares costs only; this line says why equal accuracy moves it further in the closed
+#: form's favour (errors depend on the body, so the report names the page its benchmark writes them to).
 _ACCURACY = ("accuracy: an integrator's error grows with the horizon and a closed form's stays near its set-up "
-             "accuracy (measured per reference body in docs/bench_theta_rotation.md); matching it over long horizons "
+             "accuracy (docs/bench_theta_rotation.md); matching it over long horizons "
              "costs an integrator a tighter tolerance or extended precision, so at equal accuracy the closed form "
              "pays off before the horizons above")
 
