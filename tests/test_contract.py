@@ -116,33 +116,6 @@ def test_vocabulary_names_what_is_wrong():
     assert "method 'numerical/'" in vocabulary_problem("rotation", "numerical/")
 
 
-def test_numerical_references_speak_the_vocabulary():
-    from thetasol import (
-        integrate_fixed_point,
-        integrate_gyrostat,
-        integrate_heavy_gyrostat,
-        integrate_heavy_top,
-        integrate_neumann,
-        integrate_orbiting_rotation,
-        integrate_rotation,
-    )
-    from thetasol.protocol import vocabulary_problem
-
-    A, I, c = np.diag([1.0, 2.0, 3.0]), [2.0, 3.0, 4.0], [0.0, 0.0, 0.3]
-    orbit = KeplerOrbit(1.0, [1.0, 0, 0], [0, 1.0, 0])
-    refs = ((integrate_rotation(I, A, np.eye(3), W0), "rotation"),
-            (integrate_gyrostat(I, [0.1, 0.2, 0.3], np.eye(3), W0), "gyrostat"),
-            (integrate_heavy_top(I, c, np.eye(3), W0), "heavy-top"),
-            (integrate_heavy_gyrostat(I, c, np.eye(3), W0, N=[0.0, 0.0, 0.1]), "heavy-top"),
-            (integrate_neumann(A, [1.0, 0.0, 0.0], [0.0, 0.5, 0.2]), "neumann"),
-            (integrate_orbiting_rotation(I, orbit, np.eye(3), W0), "orbiting-rotation"),
-            (integrate_fixed_point(I, [0.0, 0.0, 0.1], A, np.zeros(3), np.eye(3), W0), "fixed-point"))
-    for sol, model in refs:
-        assert sol.model == model and sol.method == "numerical/DOP853"
-        assert vocabulary_problem(sol.model, sol.method) == ""
-        assert sol.diagnostics["error_estimate"] == 1e-12 and sol.check()
-
-
 def test_scenes_are_configurations_whose_estimate_is_their_worst_part():
     from thetasol import load_scene
     from thetasol.protocol import worst_error

@@ -16,6 +16,7 @@ from thetasol import (
     integrate_rotation,
 )
 from thetasol.core.so3 import rodrigues
+from thetasol.protocol import vocabulary_problem
 
 I3 = np.array([2.0, 3.0, 4.0])
 A = np.diag([0.3, -0.2, 0.5])
@@ -41,6 +42,7 @@ def test_every_reference_is_a_solution_of_its_model(model):
     assert isinstance(sol, Solution)
     assert sol.model == model.split(" ")[0] and sol.method == "numerical/DOP853"
     assert sol.diagnostics["error_estimate"] == 1e-10 and sol.diagnostics["integrator"] == "DOP853"
+    assert vocabulary_problem(sol.model, sol.method) == "" and sol.check()
     t = np.array([[0.0, 0.5], [-0.25, 1.0]])
     out = sol(t)
     assert all(x.shape[:2] == (2, 2) for x in out)
