@@ -149,7 +149,5 @@ def heyoka_tol(hy: Any, fp_type: Any, rtol: float) -> Any:
 def body_inertia(I: ArrayLike) -> tuple[np.ndarray, np.ndarray]:
     """The checked inertia ``I`` (principal values or a symmetric tensor) as a 3x3 array, and its second
     moments ``J = tr(I)/2 1 - I`` (the form the torque of a quadratic potential takes)."""
-    V.inertia_to_moments(I, "I")      # positive definite, triangle inequalities, symmetry
-    Im = V.finite_array(I, "I")
-    Im = np.diag(Im) if Im.shape == (3,) else V.symmetric_matrix(Im, "I")
+    Im = V.inertia(I, "I")
     return Im, second_moments(Im)
