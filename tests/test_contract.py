@@ -209,7 +209,8 @@ def test_a_composite_warns_once_in_its_own_name(build):
 def test_every_model_has_a_fastest_frequency():
     for name, sol in CLOSED:
         f = sol.fastest_frequency()
-        assert np.isfinite(f) and f >= 0.0, name
+        # only a body at rest has no motion whose phase a time error could move
+        assert np.isfinite(f) and (f > 0.0 or name.endswith("rest")), name
     assert solve_rotation(J_TRI, np.zeros((3, 3)), np.eye(3), [0.0, 0.0, 2.0]).fastest_frequency() == 2.0
 
 

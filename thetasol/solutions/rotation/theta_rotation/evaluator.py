@@ -13,7 +13,7 @@ the integer combinations of a few rates' turns that the exponents are exactly
 (:class:`~.exponents.PhaseRates`): rounded products ``nu t``, and the rounded floats ``nu_sk`` (whose
 exact relations hold only to about one ulp), would make the first integrals drift with ``t``; with the
 combinations, and the flow's phases ``t u`` reduced as exactly
-(:meth:`thetasol.theta.flow.FlowTheta.turns`), the drift far out stays at the level of ``t = 0``
+(:func:`thetasol.core.turns.rate_turns`), the drift far out stays at the level of ``t = 0``
 (tests/test_one_call.py).  After the flow ``Psi`` and its derivative go through one more real product
 (9x9 complex maps folded with ``B``, ``X0^-1``, ``Q0`` and the principal frame, :func:`linear_map`) and
 the 3x3 algebra follows: the polar factor by one Newton-Schulz step (as
