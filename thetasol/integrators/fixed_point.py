@@ -86,7 +86,7 @@ def integrate_fixed_point(I: ArrayLike, R: ArrayLike, a: ArrayLike, b: ArrayLike
     energy = float(fixed_point_energy(Im, Rv, am, bv, Qm, w0))
     return NumericalFixedPoint(J=Jm, a=am, Q0=Qm, omega0=w0, method=f"numerical/{opts.method}",
                                invariants={"energy": energy}, diagnostics=opts.diagnostics(),
-                               I=Im, R=Rv, b=bv, settings=opts)
+                               I_given=Im, R=Rv, b=bv, settings=opts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -97,7 +97,6 @@ class NumericalFixedPoint(RotationSolution):
     ``I`` is the inertia about the fixed point as given, ``J`` its second moments.
     """
 
-    I: np.ndarray = None  # noqa: E741 - the inertia tensor's usual name
     R: np.ndarray = field(default_factory=lambda: np.zeros(3))
     b: np.ndarray = field(default_factory=lambda: np.zeros(3))
     settings: Settings = Settings()

@@ -175,7 +175,7 @@ def integrate_gyrostat(I: ArrayLike, N: ArrayLike | None, Q0: ArrayLike, omega0:
         rn = float(np.linalg.norm(r))
         am = -3.0 * orbit.mu / rn ** 3 * np.outer(r, r) / rn ** 2     # the tidal matrix (7.11) at t = 0
     return NumericalGyrostat(J=Jm, a=am, Q0=Q0m, omega0=w0, method=f"numerical/{opts.method}", invariants=inv,
-                             diagnostics=opts.diagnostics(), I=Im, N=Nv, axes=axes, A=A, p=p, orbit=orbit,
+                             diagnostics=opts.diagnostics(), I_given=Im, N=Nv, axes=axes, A=A, p=p, orbit=orbit,
                              settings=opts)
 
 
@@ -196,7 +196,6 @@ class NumericalGyrostat(RotationSolution):
     torque is the gravity gradient along it and ``a`` its tidal matrix at ``t = 0``.
     """
 
-    I: np.ndarray = None  # noqa: E741 - the inertia tensor's usual name
     N: np.ndarray = None
     axes: np.ndarray = field(default_factory=lambda: np.zeros((0, 3)))
     A: np.ndarray = field(default_factory=lambda: np.zeros(0))
@@ -276,7 +275,7 @@ def integrate_heavy_gyrostat(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, ome
     inv = {"energy": float(first["energy"]), "vertical_momentum": float(Q0m @ (Im @ w0 + Nv) @ up)}
     return NumericalHeavyGyrostat(J=second_moments(Im), a=np.zeros((3, 3)), Q0=Q0m, omega0=w0,
                                   method=f"numerical/{opts.method}", invariants=inv, diagnostics=opts.diagnostics(),
-                                  I=Im, center=c, mass=mass, gravity=g, N=Nv, settings=opts)
+                                  I_given=Im, center=c, mass=mass, gravity=g, N=Nv, settings=opts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -285,7 +284,6 @@ class NumericalHeavyGyrostat(RotationSolution):
     ``sol(t)`` integrates on demand, once per call, from ``t = 0`` (``a`` is zero, the field the uniform
     ``gravity``; ``I`` the inertia about the fixed point without the rotors' axial moments)."""
 
-    I: np.ndarray = None  # noqa: E741 - the inertia tensor's usual name
     center: np.ndarray = None
     mass: float = 1.0
     gravity: np.ndarray = None

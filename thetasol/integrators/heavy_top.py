@@ -87,7 +87,7 @@ def integrate_heavy_top(I: ArrayLike, center: ArrayLike, Q0: ArrayLike, omega0: 
     first = {k: float(v) for k, v in heavy_top_invariants(Im, c, mass, g, w0, Q0m).items()}
     return NumericalHeavyTop(J=second_moments(Im), a=np.zeros((3, 3)), Q0=Q0m, omega0=w0,
                              method=f"numerical/{opts.method}", invariants=first, diagnostics=opts.diagnostics(),
-                             I=Im, center=c, mass=mass, gravity=g, settings=opts)
+                             I_given=Im, center=c, mass=mass, gravity=g, settings=opts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -99,7 +99,6 @@ class NumericalHeavyTop(RotationSolution):
     field is the uniform ``gravity``), ``center`` the mass centre seen from the fixed point.
     """
 
-    I: np.ndarray = None  # noqa: E741 - the inertia tensor's usual name
     center: np.ndarray = None
     mass: float = 1.0
     gravity: np.ndarray = None

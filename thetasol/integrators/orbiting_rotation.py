@@ -103,7 +103,7 @@ def integrate_orbiting_rotation(I: ArrayLike, orbit: Orbit, Q0: ArrayLike, omega
         M = Im @ wm
         inv["jacobi"] = float(0.5 * M @ wm + 1.5 * n * n * g @ Im @ g - n * M @ nb)
     return NumericalOrbitingRotation(J=Jm, a=a, Q0=Qm, omega0=wm, method=f"numerical/{opts.method}", invariants=inv,
-                                     diagnostics=opts.diagnostics(), I=Im, orbit=orbit, settings=opts)
+                                     diagnostics=opts.diagnostics(), I_given=Im, orbit=orbit, settings=opts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -116,7 +116,6 @@ class NumericalOrbitingRotation(RotationSolution):
     ``I`` the inertia as given and ``J`` its second moments.
     """
 
-    I: np.ndarray = None  # noqa: E741 - the inertia tensor's usual name
     orbit: Orbit = field(default=None, repr=False)
     settings: Settings = Settings()
 

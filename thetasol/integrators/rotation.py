@@ -102,7 +102,7 @@ def integrate_rotation(I: ArrayLike, a: ArrayLike, Q0: ArrayLike, omega0: ArrayL
     inv = invariants_from_moments(Jm, am, Qm, wm)
     first = {"energy": float(inv["energy"]), "I2": float(inv["I2"]), "I3": float(inv["I3"]), "curve": inv["curve"]}
     return NumericalRotation(J=Jm, a=am, Q0=Qm, omega0=wm, method=f"numerical/{opts.method}", invariants=first,
-                             diagnostics=opts.diagnostics(), I=Im, settings=opts)
+                             diagnostics=opts.diagnostics(), I_given=Im, settings=opts)
 
 
 @dataclass(frozen=True, eq=False)
@@ -122,7 +122,6 @@ class NumericalRotation(RotationSolution):
         The integrator and its tolerances.
     """
 
-    I: np.ndarray = None  # noqa: E741 - the inertia tensor's usual name
     settings: Settings = Settings()
 
     model: ClassVar[str] = "rotation"
