@@ -46,6 +46,7 @@ from thetasol.scenes.pipeline import ConfigurationSolution, rotation_kind
 from thetasol.scenes.references import (
     ANNOUNCE_SECONDS,
     BUDGET_SECONDS,
+    PER_RADIAN,
     Part,
     announce_fallbacks,
     horizon_tolerance,
@@ -474,4 +475,4 @@ def run(scene: Scene | GyrostatScene, check: bool = True, out: TextIO | None = N
 
 
 _TOLERANCES = ("  (each reference is run twice, and the difference of the runs is its own error estimate; a "
-               "tolerance is 1e-11 per radian turned over the horizon, docs/scene_format.md)")
+               f"tolerance is {PER_RADIAN:g} per radian turned over the horizon, docs/scene_format.md)")
