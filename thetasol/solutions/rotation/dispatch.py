@@ -89,11 +89,11 @@ MIN_POTENTIAL = {"generic": 1e-10, "rank-one": 1e-5, "symmetric": 1e-6}
 MIN_A_GAP = 1e-7
 
 
-def _body_kind(J: np.ndarray, a: np.ndarray) -> str:
+def _body_kind(J: np.ndarray, a_kind: str) -> str:
     """The key of :data:`MIN_POTENTIAL`: a symmetric body, else the kind of ``a`` (not isotropic here)."""
     if symmetry_axis(principal_frame(J, ascending=True)[0]) is not None:
         return "symmetric"
-    return potential_kind(a)
+    return a_kind
 
 
 def _check_potential_size(J, a, omega0):
@@ -103,12 +103,13 @@ def _check_potential_size(J, a, omega0):
     rel = dev / (float(omega0 @ omega0) + dev)
     full = np.linalg.eigvalsh(a)
     gap = float(np.min(np.diff(full))) / float(full[-1] - full[0])
-    if potential_kind(a) != "rank-one" and gap < MIN_A_GAP:     # rank-one: snapped by the spectral curve
+    a_kind = potential_kind(a)
+    if a_kind != "rank-one" and gap < MIN_A_GAP:     # rank-one: snapped by the spectral curve
         raise ClosedFormUnavailable(
             f"nearly rank-one potential (two eigenvalues of a {gap:.1e} apart relative to their spread, "
             f"above the snapping tolerance {SNAP_TOL:g} and below {MIN_A_GAP:g}): the spectral curve is near "
             "the node of the rank-one case, out of the curve engine's reach; use thetasol.integrate_rotation")
-    kind = _body_kind(J, a)
+    kind = _body_kind(J, a_kind)
     if rel < MIN_POTENTIAL[kind]:
         raise ClosedFormUnavailable(
             f"the potential is weak against the spin (|a - c 1| = {rel:.1e} of |omega0|^2; below {MIN_POTENTIAL[kind]:g} for a {kind} body): its spectral curve is within "
