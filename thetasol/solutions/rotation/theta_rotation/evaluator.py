@@ -68,25 +68,25 @@ class PhaseTurns:
         The rates and their integer coefficients.
     pieces : tuple of 4 ndarrays, each (rates,)
         ``c1``, ``c2``, ``c3``, ``c`` of every rate (:func:`thetasol.core.turns.rate_turns`).
-    row_terms : tuple of tuples of (int, float)
-        Per distinct row of coefficients, its non-zero ``(rate, coefficient)`` pairs in rate order.
+    coef : ndarray, shape (rows, rates)
+        The distinct rows of the integer coefficients (as floats), in the order ``row_of`` indexes.
     row_of : ndarray of int, shape (9,)
         The distinct row of each exponent ``m = 3 s + k``.
     """
 
     phase: PhaseRates
     pieces: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
-    row_terms: tuple[tuple[tuple[int, float], ...], ...]
+    coef: np.ndarray
     row_of: np.ndarray
 
     def rows(self, t: np.ndarray) -> np.ndarray:
         """The distinct rows of the turns (rows, n) at the flat times ``t``, not reduced: integer
         combinations of :func:`thetasol.core.turns.rate_turns` (coefficients in rate order)."""
         x = rate_turns(t, *self.pieces)                                  # (rates, n): rows contiguous
-        rows = np.zeros((len(self.row_terms), t.shape[0]))
-        for acc, terms in zip(rows, self.row_terms, strict=True):
-            for j, a in terms:
-                acc += x[j] * a
+        rows = np.zeros((self.coef.shape[0], t.shape[0]))
+        for acc, row in zip(rows, self.coef, strict=True):
+            for j in np.flatnonzero(row):                                # zero coefficients skipped
+                acc += x[j] * row[j]
         return rows
 
     def __call__(self, t: np.ndarray) -> np.ndarray:
@@ -99,8 +99,7 @@ def phase_turns(phase: PhaseRates) -> PhaseTurns:
     pieces (:func:`turn_rates`) and the distinct rows of the coefficients ``[n | e]``."""
     coef = np.hstack([phase.n, phase.e]).astype(float)                  # (9, rates)
     rows, idx = np.unique(coef, axis=0, return_inverse=True)
-    terms = tuple(tuple((j, float(a)) for j, a in enumerate(row) if a != 0) for row in rows)
-    return PhaseTurns(phase=phase, pieces=turn_rates(phase), row_terms=terms, row_of=idx.ravel())
+    return PhaseTurns(phase=phase, pieces=turn_rates(phase), coef=np.ascontiguousarray(rows), row_of=idx.ravel())
 
 
 def turn_rates(phase: PhaseRates) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -238,12 +237,8 @@ def rotation_kernel(flow: FlowTheta, turns: PhaseTurns, amp: np.ndarray, nu: np.
                     P: np.ndarray, spin: float, axis: int | None) -> RotationKernel:
     """The compiled evaluation of these frozen arrays: the turns' pieces and their integer rows (dense,
     zeros skipped by the kernel), the amplitudes as floats (9, 2), ``axis`` -1 for distinct ``J``."""
-    coef = np.zeros((len(turns.row_terms), turns.pieces[0].size))
-    for q, terms in enumerate(turns.row_terms):
-        for j, a in terms:
-            coef[q, j] = a
     f64 = np.ascontiguousarray
-    return RotationKernel(flow.kernel, f64(np.stack(turns.pieces)), coef, f64(turns.row_of, dtype=np.int64),
+    return RotationKernel(flow.kernel, f64(np.stack(turns.pieces)), turns.coef, f64(turns.row_of, dtype=np.int64),
                           f64(np.asarray(amp, complex).reshape(9)).view(float).reshape(9, 2), f64(nu, dtype=float),
                           f64(lin), f64(P, dtype=float), float(spin), -1 if axis is None else int(axis),
                           NEWTON_SCHULZ_MAX)
