@@ -188,10 +188,9 @@ class FlowTheta:
         np.add.at(D, np.concatenate(rows) * len(self.modes) + inv, np.concatenate(terms))
         D = D.reshape(S, len(self.modes))
         self.D = D
-        self.Dd = D * (2j * math.pi * (self.modes @ u))[None, :]
         self.u = u
         self.r = r
-        self._pair(self.modes, D, self.Dd)
+        self._pair(self.modes, D, D * (2j * math.pi * (self.modes @ u))[None, :])    # D and its t-derivative
 
     def _pair(self, modes: np.ndarray, D: np.ndarray, Dd: np.ndarray) -> None:
         """The real form of the series: the modes m and -m share one phase (module docstring).
